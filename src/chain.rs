@@ -1,0 +1,966 @@
+//! The immutable chain model: joints, links, the tree that connects them, constant placements,
+//! limits and names. Every loader builds one through [`ChainBuilder`], the single place where a
+//! model is validated.
+//!
+//! Internally each moving joint becomes a *body*: `world_from_body = world_from_parent_body ·
+//! pre · M(θ, d) · post`, where `pre` and `post` are constant placements (fixed joints folded in)
+//! and `M` is the joint's motion (eq. 2.119). Links are frames fixed to a body (or to the world)
+//! at a constant offset, so a fixed joint costs nothing unless its link is asked for.
+
+use crate::error::{ModelError, NameError};
+use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
+use crate::transform::{NotRigid, Transform};
+use std::collections::HashMap;
+
+/// Index of a link in a [`Chain`] (valid only for the chain that produced it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct LinkId(pub(crate) usize);
+
+impl LinkId {
+    /// Position in [`Chain::links`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// Index of a joint in a [`Chain`] (valid only for the chain that produced it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct JointId(pub(crate) usize);
+
+impl JointId {
+    /// Position in [`Chain::joints`].
+    #[must_use]
+    pub fn index(self) -> usize {
+        self.0
+    }
+}
+
+/// How a mimic joint follows its primary joint: `q = multiplier · q_primary + offset`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MimicSpec {
+    /// Name of the joint to follow.
+    pub joint: String,
+    /// Multiplier.
+    pub multiplier: f64,
+    /// Offset (rad or m).
+    pub offset: f64,
+}
+
+/// A joint as handed to [`ChainBuilder`]: format-independent, checked by
+/// [`ChainBuilder::build`].
+///
+/// The child link's frame is `parent · origin · M(θ, d) · post`, where `M` rotates by θ about
+/// `axis` and translates by `d` along it (eq. 2.119). Revolute and continuous joints have
+/// `θ = q + theta` and constant `d`; prismatic joints `d = q + d` and constant `θ`; cylindrical
+/// joints both; fixed joints neither.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointSpec {
+    /// Joint name, unique among joints.
+    pub name: String,
+    /// Kind.
+    pub kind: JointKind,
+    /// Name of the parent link.
+    pub parent: String,
+    /// Name of the child link.
+    pub child: String,
+    /// Constant placement of the joint frame in the parent link frame.
+    pub origin: Transform,
+    /// Joint axis in the joint frame (normalised by the builder; ignored for fixed joints).
+    pub axis: [f64; 3],
+    /// θ at `q = 0` (rad).
+    pub theta: f64,
+    /// d at `q = 0` (m).
+    pub d: f64,
+    /// Constant placement after the motion (standard DH: `Tx(a) Rx(α)`).
+    pub post: Transform,
+    /// Limits of `q` (for a cylindrical joint: θ then d).
+    pub limits: [Option<Limits>; 2],
+    /// Present for a mimic joint.
+    pub mimic: Option<MimicSpec>,
+}
+
+impl JointSpec {
+    /// A joint with identity placements, axis z, zero offsets, no limits.
+    #[must_use]
+    pub fn new(
+        name: impl Into<String>,
+        kind: JointKind,
+        parent: impl Into<String>,
+        child: impl Into<String>,
+    ) -> Self {
+        JointSpec {
+            name: name.into(),
+            kind,
+            parent: parent.into(),
+            child: child.into(),
+            origin: Transform::IDENTITY,
+            axis: [0.0, 0.0, 1.0],
+            theta: 0.0,
+            d: 0.0,
+            post: Transform::IDENTITY,
+            limits: [None, None],
+            mimic: None,
+        }
+    }
+
+    /// Sets the constant placement of the joint frame in the parent link.
+    #[must_use]
+    pub fn with_origin(mut self, origin: Transform) -> Self {
+        self.origin = origin;
+        self
+    }
+
+    /// Sets the axis (any non-zero length).
+    #[must_use]
+    pub fn with_axis(mut self, axis: [f64; 3]) -> Self {
+        self.axis = axis;
+        self
+    }
+
+    /// Sets θ and d at `q = 0`.
+    #[must_use]
+    pub fn with_offsets(mut self, theta: f64, d: f64) -> Self {
+        self.theta = theta;
+        self.d = d;
+        self
+    }
+
+    /// Sets the constant placement after the motion.
+    #[must_use]
+    pub fn with_post(mut self, post: Transform) -> Self {
+        self.post = post;
+        self
+    }
+
+    /// Sets the limits of the first (or only) coordinate.
+    #[must_use]
+    pub fn with_limits(mut self, lower: f64, upper: f64) -> Self {
+        self.limits[0] = Some(Limits { lower, upper });
+        self
+    }
+
+    /// Makes this a mimic joint.
+    #[must_use]
+    pub fn with_mimic(mut self, joint: impl Into<String>, multiplier: f64, offset: f64) -> Self {
+        self.mimic = Some(MimicSpec {
+            joint: joint.into(),
+            multiplier,
+            offset,
+        });
+        self
+    }
+}
+
+/// Collects links and joints and builds a validated [`Chain`].
+///
+/// # Examples
+/// ```
+/// use kinechain::{ChainBuilder, JointKind, JointSpec, Transform};
+/// use kinechain::nalgebra::Vector3;
+/// let mut b = ChainBuilder::new("pendulum");
+/// b.link("base").link("arm");
+/// b.joint(JointSpec::new("hinge", JointKind::Continuous, "base", "arm").with_axis([0.0, 1.0, 0.0]));
+/// let chain = b.build()?;
+/// assert_eq!(chain.dof(), 1);
+/// # Ok::<(), kinechain::ModelError>(())
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct ChainBuilder {
+    name: String,
+    links: Vec<String>,
+    joints: Vec<JointSpec>,
+    world_from_root: Option<Transform>,
+    warnings: Vec<String>,
+}
+
+impl ChainBuilder {
+    /// An empty builder for a robot called `name`.
+    #[must_use]
+    pub fn new(name: impl Into<String>) -> Self {
+        ChainBuilder {
+            name: name.into(),
+            ..Self::default()
+        }
+    }
+
+    /// Declares a link.
+    pub fn link(&mut self, name: impl Into<String>) -> &mut Self {
+        self.links.push(name.into());
+        self
+    }
+
+    /// Adds a joint.
+    pub fn joint(&mut self, joint: JointSpec) -> &mut Self {
+        self.joints.push(joint);
+        self
+    }
+
+    /// Places the root link in the world (default: identity).
+    pub fn world_from_root(&mut self, placement: Transform) -> &mut Self {
+        self.world_from_root = Some(placement);
+        self
+    }
+
+    /// Records a warning that the built chain will carry (see [`Chain::warnings`]).
+    pub fn warn(&mut self, message: impl Into<String>) -> &mut Self {
+        self.warnings.push(message.into());
+        self
+    }
+
+    /// Validates the model and compiles it.
+    ///
+    /// # Errors
+    /// [`ModelError`] naming the joint or link at fault: duplicate or empty names, a joint
+    /// referring to a missing link, a link with two parents, several roots, a cycle, a mimic
+    /// joint referring to a missing joint or forming a cycle, a zero axis, a non-finite number,
+    /// reversed limits, a placement that is not rigid.
+    pub fn build(&self) -> Result<Chain, ModelError> {
+        build(self)
+    }
+}
+
+/// A joint of a built [`Chain`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    name: String,
+    kind: JointKind,
+    parent: LinkId,
+    child: LinkId,
+    axis: [f64; 3],
+    q_index: Option<usize>,
+    mimic: Option<Mimic>,
+    limits: [Option<Limits>; 2],
+}
+
+/// How a built mimic joint follows its primary: `q = multiplier · q_primary + offset`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mimic {
+    /// The independent joint that drives this one (mimics of mimics are resolved).
+    pub primary: JointId,
+    /// Multiplier.
+    pub multiplier: f64,
+    /// Offset.
+    pub offset: f64,
+}
+
+impl Joint {
+    /// Name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Kind.
+    #[must_use]
+    pub fn kind(&self) -> JointKind {
+        self.kind
+    }
+
+    /// The link this joint hangs from.
+    #[must_use]
+    pub fn parent(&self) -> LinkId {
+        self.parent
+    }
+
+    /// The link this joint moves.
+    #[must_use]
+    pub fn child(&self) -> LinkId {
+        self.child
+    }
+
+    /// Unit axis in the joint frame.
+    #[must_use]
+    pub fn axis(&self) -> [f64; 3] {
+        self.axis
+    }
+
+    /// Index of this joint's first entry in `q`, or `None` for fixed and mimic joints.
+    #[must_use]
+    pub fn q_index(&self) -> Option<usize> {
+        self.q_index
+    }
+
+    /// Entries of `q` this joint takes (0 for fixed and mimic joints).
+    #[must_use]
+    pub fn dof(&self) -> usize {
+        if self.q_index.is_some() {
+            self.kind.dof()
+        } else {
+            0
+        }
+    }
+
+    /// Present for a mimic joint.
+    #[must_use]
+    pub fn mimic(&self) -> Option<&Mimic> {
+        self.mimic.as_ref()
+    }
+
+    /// Limits of each coordinate (θ then d for a cylindrical joint); `None` where unlimited.
+    #[must_use]
+    pub fn limits(&self) -> &[Option<Limits>] {
+        &self.limits[..self.kind.dof()]
+    }
+}
+
+/// A link frame of a built [`Chain`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Link {
+    name: String,
+    parent_joint: Option<JointId>,
+    pub(crate) body: Option<usize>,
+    pub(crate) offset: Placement,
+}
+
+impl Link {
+    /// Name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The joint whose child this link is; `None` for the root.
+    #[must_use]
+    pub fn parent_joint(&self) -> Option<JointId> {
+        self.parent_joint
+    }
+}
+
+/// A constant rigid placement, with the forms the kernels treat specially.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Placement {
+    Identity,
+    /// Pure translation.
+    Translation([f64; 3]),
+    /// `Tx(a) Rx(α) = Rx(α) Tx(a)` with `(c, s) = (cos α, sin α)`: the constant part of a DH row.
+    ScrewX {
+        a: f64,
+        c: f64,
+        s: f64,
+    },
+    General(Transform),
+}
+
+impl Placement {
+    /// Recognises the special forms exactly (no tolerance: a form is used only when it
+    /// reproduces the transform bit for bit).
+    pub(crate) fn from_transform(t: &Transform) -> Placement {
+        let r = &t.r;
+        let identity_rotation = *r == Transform::IDENTITY.r;
+        if identity_rotation && t.p == [0.0; 3] {
+            Placement::Identity
+        } else if identity_rotation {
+            Placement::Translation(t.p)
+        } else if r[0] == [1.0, 0.0, 0.0]
+            && r[1][0] == 0.0
+            && r[2][0] == 0.0
+            && r[1][1] == r[2][2]
+            && r[1][2] == -r[2][1]
+            && t.p[1] == 0.0
+            && t.p[2] == 0.0
+        {
+            Placement::ScrewX {
+                a: t.p[0],
+                c: r[1][1],
+                s: r[1][2],
+            }
+        } else {
+            Placement::General(*t)
+        }
+    }
+
+    pub(crate) fn to_transform(self) -> Transform {
+        match self {
+            Placement::Identity => Transform::IDENTITY,
+            Placement::Translation(p) => Transform {
+                p,
+                ..Transform::IDENTITY
+            },
+            Placement::ScrewX { a, c, s } => Transform {
+                r: [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]],
+                p: [a, 0.0, 0.0],
+            },
+            Placement::General(t) => t,
+        }
+    }
+
+    pub(crate) fn is_identity(&self) -> bool {
+        matches!(self, Placement::Identity)
+    }
+}
+
+/// A moving joint compiled for evaluation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Body {
+    /// Parent body, or `None` when the joint hangs from a link fixed to the world.
+    pub(crate) parent: Option<usize>,
+    /// Parent body frame (or world) to joint frame, fixed joints folded in.
+    pub(crate) pre: Placement,
+    pub(crate) motion: Motion,
+    pub(crate) post: Placement,
+    pub(crate) joint: usize,
+}
+
+/// One entry of `q` and what it drives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LimitCheck {
+    pub(crate) joint: usize,
+    pub(crate) index: usize,
+    pub(crate) component: Option<&'static str>,
+    pub(crate) scale: f64,
+    pub(crate) offset: f64,
+    pub(crate) limits: Limits,
+}
+
+/// An immutable, validated kinematic chain (or tree).
+///
+/// Build one from a file with [`Chain::from_file`], from text with
+/// [`Chain::from_dh_yaml_str`] / [`Chain::from_urdf_str`], or programmatically with
+/// [`ChainBuilder`]. Evaluate it with the free functions of [`crate::kinematics`] into a
+/// [`Data`](crate::Data) buffer.
+#[derive(Clone, Debug)]
+pub struct Chain {
+    name: String,
+    joints: Vec<Joint>,
+    links: Vec<Link>,
+    pub(crate) bodies: Vec<Body>,
+    /// For each entry of `q`: (joint, component name for cylindrical joints).
+    variables: Vec<(usize, Option<&'static str>)>,
+    pub(crate) limit_checks: Vec<LimitCheck>,
+    /// For each body, the largest entry index of `q` it reads + 1 (0 if none).
+    link_index: HashMap<String, usize>,
+    joint_index: HashMap<String, usize>,
+    serial: bool,
+    reach: f64,
+    warnings: Vec<String>,
+}
+
+impl Chain {
+    /// Robot name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of entries of `q`.
+    #[must_use]
+    pub fn dof(&self) -> usize {
+        self.variables.len()
+    }
+
+    /// All joints (fixed and mimic included), from the base outwards (depth first, children in
+    /// file order). Independent joints appear in the order of their entries in `q`.
+    #[must_use]
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// All links, root first, in the same depth-first order as the joints.
+    #[must_use]
+    pub fn links(&self) -> &[Link] {
+        &self.links
+    }
+
+    /// The joint with this id.
+    ///
+    /// # Panics
+    /// If `id` comes from another chain with more joints.
+    #[must_use]
+    pub fn joint(&self, id: JointId) -> &Joint {
+        &self.joints[id.0]
+    }
+
+    /// The link with this id.
+    ///
+    /// # Panics
+    /// If `id` comes from another chain with more links.
+    #[must_use]
+    pub fn link(&self, id: LinkId) -> &Link {
+        &self.links[id.0]
+    }
+
+    /// The link called `name`.
+    ///
+    /// # Errors
+    /// [`NameError::UnknownLink`] if there is none.
+    pub fn link_id(&self, name: &str) -> Result<LinkId, NameError> {
+        self.link_index
+            .get(name)
+            .map(|&i| LinkId(i))
+            .ok_or_else(|| NameError::UnknownLink {
+                name: name.to_string(),
+            })
+    }
+
+    /// The joint called `name`.
+    ///
+    /// # Errors
+    /// [`NameError::UnknownJoint`] if there is none.
+    pub fn joint_id(&self, name: &str) -> Result<JointId, NameError> {
+        self.joint_index
+            .get(name)
+            .map(|&i| JointId(i))
+            .ok_or_else(|| NameError::UnknownJoint {
+                name: name.to_string(),
+            })
+    }
+
+    /// The last link of the chain: the link of the deepest frame along the last branch (for a
+    /// serial chain, the tip).
+    #[must_use]
+    pub fn end_link(&self) -> LinkId {
+        LinkId(self.links.len().saturating_sub(1))
+    }
+
+    /// For each entry of `q`, the joint it drives and, for a cylindrical joint, `theta` or `d`.
+    pub fn variables(&self) -> impl ExactSizeIterator<Item = (JointId, Option<&'static str>)> + '_ {
+        self.variables.iter().map(|&(j, c)| (JointId(j), c))
+    }
+
+    /// True when every moving joint hangs from the previous one (no branches).
+    #[must_use]
+    pub fn is_serial(&self) -> bool {
+        self.serial
+    }
+
+    /// An upper bound on the distance of any link origin from the world origin (m): the sum of
+    /// the constant offsets along the longest path plus prismatic travel. Errors are reported
+    /// relative to it.
+    #[must_use]
+    pub fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    /// Warnings found while loading (e.g. an angle that looks like degrees).
+    #[must_use]
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// Number of moving joints after folding fixed joints away.
+    #[must_use]
+    pub fn moving_joint_count(&self) -> usize {
+        self.bodies.len()
+    }
+
+    pub(crate) fn variable(&self, index: usize) -> (usize, Option<&'static str>) {
+        self.variables[index]
+    }
+}
+
+fn check_finite(joint: &str, field: &'static str, values: &[f64]) -> Result<(), ModelError> {
+    if values.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(ModelError::NonFinite {
+            joint: joint.to_string(),
+            field,
+        })
+    }
+}
+
+fn check_rigid(joint: &str, field: &'static str, t: &Transform) -> Result<(), ModelError> {
+    let rows = t.to_rows();
+    Transform::try_from_rows(&rows).map(|_| ()).map_err(|problem| match problem {
+        NotRigid::NonFinite => ModelError::NonFinite {
+            joint: joint.to_string(),
+            field,
+        },
+        problem => ModelError::NotRigid {
+            joint: joint.to_string(),
+            field,
+            problem,
+        },
+    })
+}
+
+fn compose(a: Placement, b: Placement) -> Placement {
+    match (a, b) {
+        (Placement::Identity, b) => b,
+        (a, Placement::Identity) => a,
+        (a, b) => Placement::from_transform(&(a.to_transform() * b.to_transform())),
+    }
+}
+
+fn norm(p: [f64; 3]) -> f64 {
+    (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+}
+
+fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
+    // Names.
+    let mut link_of: HashMap<&str, usize> = HashMap::new();
+    for (i, name) in spec.links.iter().enumerate() {
+        if name.is_empty() {
+            return Err(ModelError::EmptyName { what: "link" });
+        }
+        if link_of.insert(name.as_str(), i).is_some() {
+            return Err(ModelError::DuplicateLink { name: name.clone() });
+        }
+    }
+    if spec.links.is_empty() {
+        return Err(ModelError::NoLinks);
+    }
+    let mut joint_of: HashMap<&str, usize> = HashMap::new();
+    for (i, j) in spec.joints.iter().enumerate() {
+        if j.name.is_empty() {
+            return Err(ModelError::EmptyName { what: "joint" });
+        }
+        if joint_of.insert(j.name.as_str(), i).is_some() {
+            return Err(ModelError::DuplicateJoint {
+                name: j.name.clone(),
+            });
+        }
+    }
+
+    // Per-joint numbers.
+    let mut axes = Vec::with_capacity(spec.joints.len());
+    for j in &spec.joints {
+        check_rigid(&j.name, "origin", &j.origin)?;
+        check_rigid(&j.name, "post", &j.post)?;
+        check_finite(&j.name, "theta", &[j.theta])?;
+        check_finite(&j.name, "d", &[j.d])?;
+        let axis = if j.kind == JointKind::Fixed {
+            [0.0, 0.0, 1.0]
+        } else {
+            check_finite(&j.name, "axis", &j.axis)?;
+            normalize_axis(j.axis).ok_or_else(|| ModelError::ZeroAxis {
+                joint: j.name.clone(),
+            })?
+        };
+        axes.push(axis);
+        for l in j.limits.iter().flatten() {
+            if l.lower.is_nan() || l.upper.is_nan() {
+                return Err(ModelError::NonFinite {
+                    joint: j.name.clone(),
+                    field: "limits",
+                });
+            }
+            if l.lower > l.upper {
+                return Err(ModelError::ReversedLimits {
+                    joint: j.name.clone(),
+                    lower: l.lower,
+                    upper: l.upper,
+                });
+            }
+        }
+        if let Some(m) = &j.mimic {
+            check_finite(&j.name, "mimic", &[m.multiplier, m.offset])?;
+            if j.kind.dof() != 1 {
+                return Err(ModelError::BadMimicKind {
+                    joint: j.name.clone(),
+                    kind: j.kind.as_str(),
+                });
+            }
+        }
+    }
+    if let Some(root) = &spec.world_from_root {
+        check_rigid("base", "placement", root)?;
+    }
+
+    // Tree: parent joint of every link, children of every link in file order.
+    let mut parent_joint: Vec<Option<usize>> = vec![None; spec.links.len()];
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); spec.links.len()];
+    let mut ends = Vec::with_capacity(spec.joints.len());
+    for (i, j) in spec.joints.iter().enumerate() {
+        let find = |name: &str, role| {
+            link_of
+                .get(name)
+                .copied()
+                .ok_or_else(|| ModelError::UnknownLink {
+                    joint: j.name.clone(),
+                    role,
+                    link: name.to_string(),
+                })
+        };
+        let parent = find(&j.parent, "parent")?;
+        let child = find(&j.child, "child")?;
+        if let Some(first) = parent_joint[child] {
+            return Err(ModelError::TwoParents {
+                link: j.child.clone(),
+                first: spec.joints[first].name.clone(),
+                second: j.name.clone(),
+            });
+        }
+        parent_joint[child] = Some(i);
+        children[parent].push(i);
+        ends.push((parent, child));
+    }
+    let roots: Vec<usize> = (0..spec.links.len())
+        .filter(|&l| parent_joint[l].is_none())
+        .collect();
+    let root = match roots.as_slice() {
+        [] => {
+            return Err(ModelError::Cycle {
+                joint: spec.joints.first().map(|j| j.name.clone()).unwrap_or_default(),
+            });
+        }
+        [r] => *r,
+        _ => {
+            return Err(ModelError::MultipleRoots {
+                roots: roots.iter().map(|&l| spec.links[l].clone()).collect(),
+            });
+        }
+    };
+
+    // Depth-first order of joints from the root (iterative: chains may be very long).
+    let mut joint_order = Vec::with_capacity(spec.joints.len());
+    let mut link_order = Vec::with_capacity(spec.links.len());
+    let mut stack = vec![root];
+    while let Some(l) = stack.pop() {
+        link_order.push(l);
+        if let Some(j) = parent_joint[l] {
+            joint_order.push(j);
+        }
+        // Push children reversed so the first declared child is visited first.
+        stack.extend(children[l].iter().rev().map(|&j| ends[j].1));
+    }
+    if link_order.len() != spec.links.len() {
+        // Every unreached link has a parent joint, so it lies on (or below) a cycle.
+        let unreached = (0..spec.links.len())
+            .find(|l| !link_order.contains(l))
+            .and_then(|l| parent_joint[l])
+            .map(|j| spec.joints[j].name.clone())
+            .unwrap_or_default();
+        return Err(ModelError::Cycle { joint: unreached });
+    }
+
+    // New indices.
+    let mut new_joint = vec![0; spec.joints.len()];
+    for (n, &j) in joint_order.iter().enumerate() {
+        new_joint[j] = n;
+    }
+    let mut new_link = vec![0; spec.links.len()];
+    for (n, &l) in link_order.iter().enumerate() {
+        new_link[l] = n;
+    }
+
+    // q layout: independent joints in depth-first order.
+    let mut q_index: Vec<Option<usize>> = vec![None; spec.joints.len()];
+    let mut variables = Vec::new();
+    for &j in &joint_order {
+        let js = &spec.joints[j];
+        if js.mimic.is_some() || js.kind == JointKind::Fixed {
+            continue;
+        }
+        q_index[j] = Some(variables.len());
+        if js.kind == JointKind::Cylindrical {
+            variables.push((new_joint[j], Some("theta")));
+            variables.push((new_joint[j], Some("d")));
+        } else {
+            variables.push((new_joint[j], None));
+        }
+    }
+
+    // Mimic resolution: (primary joint, multiplier, offset), following mimics of mimics.
+    let mut mimic: Vec<Option<(usize, f64, f64)>> = vec![None; spec.joints.len()];
+    for (i, js) in spec.joints.iter().enumerate() {
+        let Some(m) = &js.mimic else { continue };
+        let (mut multiplier, mut offset) = (m.multiplier, m.offset);
+        let mut target_name = &m.joint;
+        let mut hops = 0;
+        let primary = loop {
+            let t = *joint_of
+                .get(target_name.as_str())
+                .ok_or_else(|| ModelError::UnknownMimicTarget {
+                    joint: js.name.clone(),
+                    target: target_name.clone(),
+                })?;
+            let tj = &spec.joints[t];
+            if tj.kind.dof() != 1 {
+                return Err(ModelError::BadMimicTarget {
+                    joint: js.name.clone(),
+                    target: tj.name.clone(),
+                    kind: tj.kind.as_str(),
+                });
+            }
+            match &tj.mimic {
+                None => break t,
+                Some(next) => {
+                    hops += 1;
+                    if hops > spec.joints.len() {
+                        return Err(ModelError::MimicCycle {
+                            joint: js.name.clone(),
+                        });
+                    }
+                    // q_t = m2 q_next + o2, so q = m (m2 q_next + o2) + o.
+                    offset += multiplier * next.offset;
+                    multiplier *= next.multiplier;
+                    target_name = &next.joint;
+                }
+            }
+        };
+        mimic[i] = Some((primary, multiplier, offset));
+    }
+
+    // Bodies, link carriers, limit checks.
+    let mut link_carrier: Vec<(Option<usize>, Placement)> = vec![(None, Placement::Identity); spec.links.len()];
+    link_carrier[root] = (
+        None,
+        Placement::from_transform(&spec.world_from_root.unwrap_or(Transform::IDENTITY)),
+    );
+    let mut reach_of = vec![0.0; spec.links.len()];
+    reach_of[root] = norm(spec.world_from_root.unwrap_or(Transform::IDENTITY).p);
+    let mut bodies = Vec::new();
+    let mut limit_checks = Vec::new();
+    for &j in &joint_order {
+        let js = &spec.joints[j];
+        let (parent, child) = ends[j];
+        let (carrier, offset) = link_carrier[parent];
+        let origin = Placement::from_transform(&js.origin);
+        let post = Placement::from_transform(&js.post);
+        let axis = axes[j];
+
+        let travel = match (js.kind.translates(), js.limits[js.kind.dof().saturating_sub(1)]) {
+            (true, Some(l)) if l.lower.is_finite() && l.upper.is_finite() => {
+                (js.d + l.lower).abs().max((js.d + l.upper).abs())
+            }
+            _ => js.d.abs(),
+        };
+        reach_of[child] = reach_of[parent] + norm(js.origin.p) + travel + norm(js.post.p);
+
+        let var = |index: usize| -> Term {
+            match mimic[j] {
+                Some((primary, scale, offset)) => Term::Var {
+                    index: q_index[primary].unwrap_or(index),
+                    scale,
+                    offset,
+                },
+                None => Term::Var {
+                    index,
+                    scale: 1.0,
+                    offset: 0.0,
+                },
+            }
+        };
+        let with_offset = |t: Term, base: f64| match t {
+            Term::Var {
+                index,
+                scale,
+                offset,
+            } => Term::Var {
+                index,
+                scale,
+                offset: offset + base,
+            },
+            c => c,
+        };
+        let first = q_index[j].unwrap_or(0);
+        let (theta, d) = match js.kind {
+            JointKind::Fixed => (Term::Const(js.theta), Term::Const(js.d)),
+            JointKind::Revolute | JointKind::Continuous => {
+                (with_offset(var(first), js.theta), Term::Const(js.d))
+            }
+            JointKind::Prismatic => (Term::Const(js.theta), with_offset(var(first), js.d)),
+            JointKind::Cylindrical => (
+                with_offset(var(first), js.theta),
+                with_offset(var(first + 1), js.d),
+            ),
+        };
+
+        if js.kind == JointKind::Fixed {
+            let motion = crate::kinematics::constant_motion(&Motion::new(Axis::from_unit(axis), theta, d));
+            let placement = compose(compose(compose(offset, origin), motion), post);
+            link_carrier[child] = (carrier, placement);
+            continue;
+        }
+
+        let body = bodies.len();
+        bodies.push(Body {
+            parent: carrier,
+            pre: compose(offset, origin),
+            motion: Motion::new(Axis::from_unit(axis), theta, d),
+            post,
+            joint: new_joint[j],
+        });
+        link_carrier[child] = (Some(body), Placement::Identity);
+
+        // Limits apply to the joint's own coordinate: q for an independent joint, the implied
+        // value for a mimic joint.
+        let components: &[Option<&'static str>] = if js.kind == JointKind::Cylindrical {
+            &[Some("theta"), Some("d")]
+        } else {
+            &[None]
+        };
+        for (c, component) in components.iter().enumerate() {
+            let Some(limits) = js.limits[c] else { continue };
+            if js.kind == JointKind::Continuous {
+                continue;
+            }
+            let (index, scale, off) = match mimic[j] {
+                Some((primary, m, o)) => (q_index[primary].unwrap_or(0), m, o),
+                None => (first + c, 1.0, 0.0),
+            };
+            limit_checks.push(LimitCheck {
+                joint: new_joint[j],
+                index,
+                component: *component,
+                scale,
+                offset: off,
+                limits,
+            });
+        }
+    }
+
+    let serial = bodies
+        .iter()
+        .enumerate()
+        .all(|(k, b)| b.parent == k.checked_sub(1));
+
+    let joints: Vec<Joint> = joint_order
+        .iter()
+        .map(|&j| {
+            let js = &spec.joints[j];
+            Joint {
+                name: js.name.clone(),
+                kind: js.kind,
+                parent: LinkId(new_link[ends[j].0]),
+                child: LinkId(new_link[ends[j].1]),
+                axis: axes[j],
+                q_index: q_index[j],
+                mimic: mimic[j].map(|(p, multiplier, offset)| Mimic {
+                    primary: JointId(new_joint[p]),
+                    multiplier,
+                    offset,
+                }),
+                limits: if js.kind == JointKind::Continuous {
+                    [None, None]
+                } else {
+                    js.limits
+                },
+            }
+        })
+        .collect();
+    let links: Vec<Link> = link_order
+        .iter()
+        .map(|&l| Link {
+            name: spec.links[l].clone(),
+            parent_joint: parent_joint[l].map(|j| JointId(new_joint[j])),
+            body: link_carrier[l].0,
+            offset: link_carrier[l].1,
+        })
+        .collect();
+    let reach = reach_of.iter().copied().fold(0.0, f64::max);
+
+    Ok(Chain {
+        name: spec.name.clone(),
+        link_index: links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.name.clone(), i))
+            .collect(),
+        joint_index: joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| (j.name.clone(), i))
+            .collect(),
+        joints,
+        links,
+        bodies,
+        variables,
+        limit_checks,
+        serial,
+        reach,
+        warnings: spec.warnings.clone(),
+    })
+}

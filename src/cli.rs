@@ -1,0 +1,516 @@
+//! The `kinechain` command line: argument parsing, library calls, output. `main.rs` only calls
+//! [`main`].
+
+use crate::chain::{Chain, LinkId};
+use crate::data::{Data, LimitPolicy};
+use crate::input::{InputError, joint_vector_from_json, joint_vector_from_str};
+use crate::kinematics::{
+    LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics, forward_kinematics_to,
+    forward_velocities,
+};
+use crate::transform::Transform;
+use clap::{Parser, Subcommand, ValueEnum};
+use serde_json::{Map, Value, json};
+use std::io::{BufRead, BufWriter, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Forward kinematics of robot chains from DH YAML or URDF files.
+#[derive(Debug, Parser)]
+#[command(name = "kinechain", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List the joints (in q order) and links of a robot.
+    Info {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
+        format: OutputFormat,
+    },
+    /// Poses (and velocities, accelerations) of the links at a configuration.
+    Fk(FkArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct FkArgs {
+    /// Robot file (.yaml/.yml DH table or .urdf).
+    robot: PathBuf,
+    /// Joint positions: JSON array in q order, JSON object keyed by joint name, or a
+    /// comma-separated list.
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "batch", conflicts_with = "batch")]
+    q: Option<String>,
+    /// Joint velocities (same forms as --q); adds "omega" and "v" to the output.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
+    qd: Option<String>,
+    /// Joint accelerations (same forms as --q); adds "alpha" and "a". Needs --qd.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
+    qdd: Option<String>,
+    /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}.
+    #[arg(long)]
+    batch: Option<PathBuf>,
+    /// Only these links (repeatable); only the joints they depend on are evaluated.
+    #[arg(long = "link", value_name = "NAME")]
+    links: Vec<String>,
+    /// Evaluate joint values outside the joints' limits instead of refusing them.
+    #[arg(long)]
+    ignore_limits: bool,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
+    format: OutputFormat,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum OutputFormat {
+    Json,
+    Table,
+}
+
+/// A failure of a CLI command (printed as `error: …` with its source chain).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CliError {
+    /// The robot file could not be loaded.
+    #[error(transparent)]
+    Load(#[from] crate::error::LoadError),
+    /// A joint-space vector could not be read.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// A configuration cannot be evaluated.
+    #[error(transparent)]
+    State(#[from] crate::error::StateError),
+    /// A link name is unknown.
+    #[error(transparent)]
+    Name(#[from] crate::error::NameError),
+    /// `--qdd` without `--qd`.
+    #[error("--qdd needs --qd (accelerations depend on velocities)")]
+    QddWithoutQd,
+    /// A batch line failed.
+    #[error("{}: line {line}", path.display())]
+    BatchLine {
+        /// The batch file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What went wrong.
+        #[source]
+        source: Box<CliError>,
+    },
+    /// A batch line is not a JSON object with a "q" member.
+    #[error("{0}")]
+    BatchShape(&'static str),
+    /// A batch line is not JSON.
+    #[error("not valid JSON: {0}")]
+    BatchJson(String),
+    /// Reading input or writing output failed.
+    #[error("{context}")]
+    Io {
+        /// What was being read or written.
+        context: String,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// Runs the command line and returns the process exit code; errors are printed to stderr as one
+/// line, `error: ` followed by the error and its sources.
+#[must_use]
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("invalid arguments");
+            eprintln!("{} (see --help)", first.trim());
+            return ExitCode::from(2);
+        }
+    };
+    let stdout = std::io::stdout();
+    let mut out = BufWriter::new(stdout.lock());
+    let result = run(cli.command, &mut out).and_then(|()| {
+        out.flush().map_err(|source| CliError::Io {
+            context: "cannot write output".into(),
+            source,
+        })
+    });
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let _ = out.flush();
+            eprintln!("error: {}", error_chain(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `e: source: source…` on one line.
+#[must_use]
+pub fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text.replace('\n', " ")
+}
+
+fn load(path: &PathBuf) -> Result<Chain, CliError> {
+    let chain = Chain::from_file(path)?;
+    for w in chain.warnings() {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(chain)
+}
+
+fn write_line(out: &mut dyn Write, text: &str) -> Result<(), CliError> {
+    writeln!(out, "{text}").map_err(|source| CliError::Io {
+        context: "cannot write output".into(),
+        source,
+    })
+}
+
+fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
+    match command {
+        Command::Info { robot, format } => info(&load(&robot)?, format, out),
+        Command::Fk(args) => fk(&args, out),
+    }
+}
+
+fn limits_json(chain: &Chain, joint: &crate::chain::Joint) -> Value {
+    let _ = chain;
+    let one = |l: &Option<crate::joint::Limits>| match l {
+        Some(l) => json!([l.lower, l.upper]),
+        None => Value::Null,
+    };
+    match joint.limits() {
+        [l] => one(l),
+        [theta, d] => json!({"theta": one(theta), "d": one(d)}),
+        _ => Value::Null,
+    }
+}
+
+fn info(chain: &Chain, format: OutputFormat, out: &mut dyn Write) -> Result<(), CliError> {
+    let independent = chain.joints().iter().filter(|j| j.dof() > 0);
+    let passive = chain.joints().iter().filter(|j| j.dof() == 0);
+    match format {
+        OutputFormat::Json => {
+            let joints: Vec<Value> = independent
+                .map(|j| {
+                    json!({
+                        "name": j.name(),
+                        "type": j.kind().as_str(),
+                        "dof": j.dof(),
+                        "limits": limits_json(chain, j),
+                    })
+                })
+                .collect();
+            let passive: Vec<Value> = passive
+                .map(|j| {
+                    let mut m = Map::new();
+                    m.insert("name".into(), json!(j.name()));
+                    m.insert("type".into(), json!(j.kind().as_str()));
+                    if let Some(mimic) = j.mimic() {
+                        m.insert(
+                            "mimic".into(),
+                            json!({
+                                "joint": chain.joint(mimic.primary).name(),
+                                "multiplier": mimic.multiplier,
+                                "offset": mimic.offset,
+                            }),
+                        );
+                    }
+                    Value::Object(m)
+                })
+                .collect();
+            let links: Vec<&str> = chain.links().iter().map(|l| l.name()).collect();
+            let value = json!({
+                "name": chain.name(),
+                "dof": chain.dof(),
+                "joints": joints,
+                "passive_joints": passive,
+                "links": links,
+            });
+            write_line(out, &value.to_string())
+        }
+        OutputFormat::Table => {
+            let mut text = format!("{}: {} degrees of freedom\n", chain.name(), chain.dof());
+            text.push_str(&format!(
+                "{:>4}  {:<28} {:<12} {}\n",
+                "q", "joint", "type", "limits"
+            ));
+            for j in independent {
+                let limits = limits_json(chain, j);
+                text.push_str(&format!(
+                    "{:>4}  {:<28} {:<12} {}\n",
+                    j.q_index().unwrap_or(0),
+                    j.name(),
+                    j.kind().as_str(),
+                    limits
+                ));
+            }
+            for j in passive {
+                let note = match j.mimic() {
+                    Some(m) => format!(
+                        "mimics {} (x{} {:+})",
+                        chain.joint(m.primary).name(),
+                        m.multiplier,
+                        m.offset
+                    ),
+                    None => String::new(),
+                };
+                text.push_str(&format!(
+                    "{:>4}  {:<28} {:<12} {}\n",
+                    "-",
+                    j.name(),
+                    j.kind().as_str(),
+                    note
+                ));
+            }
+            text.push_str("links:");
+            for l in chain.links() {
+                text.push(' ');
+                text.push_str(l.name());
+            }
+            write_line(out, &text)
+        }
+    }
+}
+
+/// One configuration to evaluate.
+struct Configuration {
+    q: Vec<f64>,
+    qd: Option<Vec<f64>>,
+    qdd: Option<Vec<f64>>,
+}
+
+/// Per link: pose, and velocity/acceleration when asked for.
+type LinkResult = (LinkId, Transform, Option<LinkVelocity>, Option<LinkAcceleration>);
+
+fn evaluate(
+    chain: &Chain,
+    data: &mut Data,
+    c: &Configuration,
+    links: &[LinkId],
+    results: &mut Vec<LinkResult>,
+) -> Result<(), CliError> {
+    results.clear();
+    let all: Vec<LinkId>;
+    let wanted = if links.is_empty() {
+        all = (0..chain.links().len()).map(LinkId).collect();
+        &all[..]
+    } else {
+        links
+    };
+    match (&c.qd, &c.qdd) {
+        (None, Some(_)) => return Err(CliError::QddWithoutQd),
+        (None, None) if !links.is_empty() => {
+            for &l in wanted {
+                let pose = forward_kinematics_to(chain, data, &c.q, l)?;
+                results.push((l, pose, None, None));
+            }
+        }
+        (None, None) => {
+            let poses = forward_kinematics(chain, data, &c.q)?;
+            results.extend(wanted.iter().map(|&l| (l, poses.world_from_link(l), None, None)));
+        }
+        (Some(qd), None) => {
+            let v = forward_velocities(chain, data, &c.q, qd)?;
+            results.extend(
+                wanted
+                    .iter()
+                    .map(|&l| (l, v.world_from_link(l), Some(v.velocity(l)), None)),
+            );
+        }
+        (Some(qd), Some(qdd)) => {
+            let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
+            results.extend(wanted.iter().map(|&l| {
+                (
+                    l,
+                    a.world_from_link(l),
+                    Some(a.velocity(l)),
+                    Some(a.acceleration(l)),
+                )
+            }));
+        }
+    }
+    Ok(())
+}
+
+fn vec_json(v: &nalgebra::Vector3<f64>) -> Value {
+    json!([v.x, v.y, v.z])
+}
+
+fn results_json(chain: &Chain, results: &[LinkResult]) -> Value {
+    let mut links = Map::new();
+    for (l, pose, vel, acc) in results {
+        let mut m = Map::new();
+        m.insert("pose".into(), json!(pose.to_rows()));
+        if let Some(v) = vel {
+            m.insert("omega".into(), vec_json(&v.omega));
+            m.insert("v".into(), vec_json(&v.v));
+        }
+        if let Some(a) = acc {
+            m.insert("alpha".into(), vec_json(&a.alpha));
+            m.insert("a".into(), vec_json(&a.a));
+        }
+        links.insert(chain.link(*l).name().to_string(), Value::Object(m));
+    }
+    json!({ "links": links })
+}
+
+fn results_table(chain: &Chain, results: &[LinkResult]) -> String {
+    let width = results
+        .iter()
+        .map(|(l, ..)| chain.link(*l).name().len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    let mut text = format!(
+        "{:<width$} {:>12} {:>12} {:>12}   rotation (rows)\n",
+        "link", "x", "y", "z"
+    );
+    for (l, pose, vel, acc) in results {
+        let p = pose.translation();
+        let r = pose.rotation();
+        text.push_str(&format!(
+            "{:<width$} {:>12.6} {:>12.6} {:>12.6}   [{:.6} {:.6} {:.6}; {:.6} {:.6} {:.6}; {:.6} {:.6} {:.6}]\n",
+            chain.link(*l).name(),
+            p.x,
+            p.y,
+            p.z,
+            r[(0, 0)],
+            r[(0, 1)],
+            r[(0, 2)],
+            r[(1, 0)],
+            r[(1, 1)],
+            r[(1, 2)],
+            r[(2, 0)],
+            r[(2, 1)],
+            r[(2, 2)]
+        ));
+        let row = |label: &str, v: &nalgebra::Vector3<f64>| {
+            format!(
+                "{:>width$} {:>12.6} {:>12.6} {:>12.6}\n",
+                label, v.x, v.y, v.z
+            )
+        };
+        if let Some(v) = vel {
+            text.push_str(&row("omega", &v.omega));
+            text.push_str(&row("v", &v.v));
+        }
+        if let Some(a) = acc {
+            text.push_str(&row("alpha", &a.alpha));
+            text.push_str(&row("a", &a.a));
+        }
+    }
+    text.pop();
+    text
+}
+
+fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let chain = load(&args.robot)?;
+    let mut data = Data::new(&chain);
+    if args.ignore_limits {
+        data.set_limit_policy(LimitPolicy::Ignore);
+    }
+    let links = args
+        .links
+        .iter()
+        .map(|n| chain.link_id(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut results = Vec::with_capacity(chain.links().len());
+    let mut emit = |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
+        evaluate(&chain, data, c, &links, &mut results)?;
+        let text = match args.format {
+            OutputFormat::Json => results_json(&chain, &results).to_string(),
+            OutputFormat::Table => results_table(&chain, &results),
+        };
+        write_line(out, &text)
+    };
+
+    if let Some(path) = &args.batch {
+        let file = std::fs::File::open(path).map_err(|source| CliError::Io {
+            context: format!("cannot open batch file {}", path.display()),
+            source,
+        })?;
+        for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+            let at = |source: CliError| CliError::BatchLine {
+                path: path.clone(),
+                line: i + 1,
+                source: Box::new(source),
+            };
+            let line = line.map_err(|source| {
+                at(CliError::Io {
+                    context: "cannot read line".into(),
+                    source,
+                })
+            })?;
+            if line.trim().is_empty() {
+                continue;
+            }
+            let c = batch_configuration(&chain, &line).map_err(at)?;
+            emit(out, &c, &mut data).map_err(at)?;
+        }
+        return Ok(());
+    }
+
+    let q = args.q.as_deref().unwrap_or_default();
+    let c = Configuration {
+        q: joint_vector_from_str(&chain, q, "q")?,
+        qd: args
+            .qd
+            .as_deref()
+            .map(|t| joint_vector_from_str(&chain, t, "qd"))
+            .transpose()?,
+        qdd: args
+            .qdd
+            .as_deref()
+            .map(|t| joint_vector_from_str(&chain, t, "qdd"))
+            .transpose()?,
+    };
+    emit(out, &c, &mut data)
+}
+
+/// One batch line: `{"q": .., "qd": .., "qdd": ..}` (qd, qdd optional).
+fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliError> {
+    let value: Value =
+        serde_json::from_str(line).map_err(|e| CliError::BatchJson(e.to_string()))?;
+    let Value::Object(map) = value else {
+        return Err(CliError::BatchShape(
+            "expected a JSON object {\"q\": ..} on each line",
+        ));
+    };
+    if let Some(key) = map.keys().find(|k| !matches!(k.as_str(), "q" | "qd" | "qdd")) {
+        let _ = key;
+        return Err(CliError::BatchShape(
+            "unknown member (a line may have only \"q\", \"qd\" and \"qdd\")",
+        ));
+    }
+    let q = map
+        .get("q")
+        .ok_or(CliError::BatchShape("missing \"q\""))?;
+    Ok(Configuration {
+        q: joint_vector_from_json(chain, q, "q")?,
+        qd: map
+            .get("qd")
+            .map(|v| joint_vector_from_json(chain, v, "qd"))
+            .transpose()?,
+        qdd: map
+            .get("qdd")
+            .map(|v| joint_vector_from_json(chain, v, "qdd"))
+            .transpose()?,
+    })
+}

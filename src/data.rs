@@ -1,0 +1,87 @@
+//! Preallocated evaluation buffers, sized once from a [`Chain`].
+
+use crate::chain::Chain;
+use crate::transform::Transform;
+
+/// Whether evaluation refuses joint values outside the joints' limits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LimitPolicy {
+    /// Values outside the limits are an error naming the joint, the value and the limits
+    /// (default: a common sign of degrees passed as radians).
+    #[default]
+    Enforce,
+    /// Evaluate any finite value.
+    Ignore,
+}
+
+/// The workspace for evaluating one [`Chain`]: per moving joint, the pose of its frame and, when
+/// asked for, its velocity and acceleration. Created once with [`Data::new`]; evaluations then
+/// allocate nothing.
+///
+/// A `Data` belongs to the chain it was created from; passing it with another chain is a
+/// programming error and panics.
+#[derive(Clone, Debug)]
+pub struct Data {
+    pub(crate) world_from_body: Vec<Transform>,
+    /// Angular velocity of each body (world frame).
+    pub(crate) omega: Vec<[f64; 3]>,
+    /// Linear velocity of each body-frame origin (world frame).
+    pub(crate) vel: Vec<[f64; 3]>,
+    /// Angular acceleration of each body (world frame).
+    pub(crate) alpha: Vec<[f64; 3]>,
+    /// Classical acceleration of each body-frame origin (world frame).
+    pub(crate) acc: Vec<[f64; 3]>,
+    /// Scratch: bodies on the path to a queried link, or dirty flags of an incremental update.
+    pub(crate) path: Vec<usize>,
+    pub(crate) dirty: Vec<bool>,
+    /// Joint positions of the last full evaluation, for incremental updates.
+    pub(crate) last_q: Vec<f64>,
+    /// True when `world_from_body` holds every body at `last_q`.
+    pub(crate) poses_valid: bool,
+    pub(crate) limit_policy: LimitPolicy,
+    dof: usize,
+}
+
+impl Data {
+    /// Buffers for `chain`.
+    #[must_use]
+    pub fn new(chain: &Chain) -> Self {
+        let n = chain.bodies.len();
+        Data {
+            world_from_body: vec![Transform::IDENTITY; n],
+            omega: vec![[0.0; 3]; n],
+            vel: vec![[0.0; 3]; n],
+            alpha: vec![[0.0; 3]; n],
+            acc: vec![[0.0; 3]; n],
+            path: Vec::with_capacity(n),
+            dirty: vec![true; n],
+            last_q: vec![0.0; chain.dof()],
+            poses_valid: false,
+            limit_policy: LimitPolicy::Enforce,
+            dof: chain.dof(),
+        }
+    }
+
+    /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
+    pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
+        self.limit_policy = policy;
+    }
+
+    /// The limit policy in force.
+    #[must_use]
+    pub fn limit_policy(&self) -> LimitPolicy {
+        self.limit_policy
+    }
+
+    pub(crate) fn assert_matches(&self, chain: &Chain) {
+        assert!(
+            self.world_from_body.len() == chain.bodies.len() && self.dof == chain.dof(),
+            "kinechain: Data was created for another chain ({} moving joints, dof {}), not '{}' ({} moving joints, dof {})",
+            self.world_from_body.len(),
+            self.dof,
+            chain.name(),
+            chain.bodies.len(),
+            chain.dof()
+        );
+    }
+}

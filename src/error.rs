@@ -1,0 +1,373 @@
+//! Typed errors: what loading a file can fail with ([`LoadError`]), what building a chain can
+//! fail with ([`ModelError`]), and what an evaluation can fail with ([`StateError`]).
+
+use crate::transform::NotRigid;
+use std::path::{Path, PathBuf};
+
+/// A robot file could not be turned into a [`Chain`](crate::Chain).
+///
+/// Its message names the file; its source ([`LoadError::kind`]) says what went wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot load {}", path.display())]
+pub struct LoadError {
+    path: PathBuf,
+    #[source]
+    kind: LoadErrorKind,
+}
+
+impl LoadError {
+    pub(crate) fn new(path: &Path, kind: LoadErrorKind) -> Self {
+        LoadError {
+            path: path.to_path_buf(),
+            kind,
+        }
+    }
+
+    /// The file that failed to load.
+    #[must_use]
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// What went wrong.
+    #[must_use]
+    pub fn kind(&self) -> &LoadErrorKind {
+        &self.kind
+    }
+}
+
+/// What went wrong while loading a robot file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LoadErrorKind {
+    /// The file could not be read.
+    #[error("cannot read file")]
+    Io(#[from] std::io::Error),
+    /// The file is larger than the loader accepts.
+    #[error("file is {size} bytes, more than the {limit}-byte limit for robot files")]
+    TooLarge {
+        /// Size of the file in bytes.
+        size: u64,
+        /// The limit in bytes.
+        limit: u64,
+    },
+    /// The file name has no extension kinechain knows.
+    #[error("unknown robot file type (expected .yaml, .yml or .urdf)")]
+    UnknownFormat,
+    /// The file holds nothing but whitespace or comments.
+    #[error("file is empty")]
+    Empty,
+    /// The file is not valid UTF-8 text.
+    #[error("file is not UTF-8 text (byte {offset})")]
+    NotText {
+        /// Byte offset of the first invalid byte.
+        offset: usize,
+    },
+    /// The YAML parser or the schema rejected the file (syntax error, unknown or missing key,
+    /// wrong type, resource limit).
+    #[error("{}{}{message}", location_prefix(*line, *column), joint_prefix(joint.as_deref()))]
+    Yaml {
+        /// 1-based line of the problem, when known.
+        line: Option<u64>,
+        /// 1-based column of the problem, when known.
+        column: Option<u64>,
+        /// The joint whose entry holds the problem, when known.
+        joint: Option<String>,
+        /// The parser's description.
+        message: String,
+    },
+    /// The URDF parser rejected the file.
+    #[error("invalid URDF: {message}")]
+    Urdf {
+        /// The parser's description.
+        message: String,
+    },
+    /// A field has a value kinechain cannot accept.
+    #[error("{}{field}: {problem}", joint_prefix(joint.as_deref()))]
+    Field {
+        /// The joint whose entry holds the field, if the field belongs to a joint.
+        joint: Option<String>,
+        /// The field, e.g. `alpha` or `origin.matrix`.
+        field: String,
+        /// What is wrong with it.
+        problem: FieldProblem,
+    },
+    /// The joints and links do not form a valid chain or tree.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+fn location_prefix(line: Option<u64>, column: Option<u64>) -> String {
+    match (line, column) {
+        (Some(l), Some(c)) => format!("line {l} column {c}: "),
+        (Some(l), None) => format!("line {l}: "),
+        _ => String::new(),
+    }
+}
+
+fn joint_prefix(joint: Option<&str>) -> String {
+    joint.map(|j| format!("joint '{j}': ")).unwrap_or_default()
+}
+
+/// What is wrong with one field of a robot file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FieldProblem {
+    /// A number is NaN or infinite.
+    #[error("value {value} is not finite")]
+    NonFinite {
+        /// The value read.
+        value: f64,
+    },
+    /// A joint axis has zero length.
+    #[error("axis has zero length")]
+    ZeroAxis,
+    /// A matrix is not a rigid transform.
+    #[error("not a rigid transform: {0}")]
+    NotRigid(NotRigid),
+    /// A limit pair has `lower > upper`.
+    #[error("lower limit {lower} is greater than upper limit {upper}")]
+    ReversedLimits {
+        /// Lower limit read.
+        lower: f64,
+        /// Upper limit read.
+        upper: f64,
+    },
+    /// The field is required here and missing.
+    #[error("missing (required {context})")]
+    Missing {
+        /// Why it is required, e.g. `for convention standard`.
+        context: &'static str,
+    },
+    /// The field exists but does not belong here (e.g. `origin` in a DH joint).
+    #[error("not allowed {context}")]
+    NotAllowed {
+        /// Where it is not allowed, e.g. `for convention standard`.
+        context: &'static str,
+    },
+    /// The value has the wrong shape (e.g. two limits where a cylindrical joint needs a map).
+    #[error("{expected}")]
+    Shape {
+        /// What was expected.
+        expected: &'static str,
+    },
+    /// An angle written as an expression without a unit where `angle_unit: deg` applies.
+    #[error("expression '{text}' has no unit; with angle_unit: deg write a number, deg(..), rad(..) or a !degrees/!radians tag")]
+    AmbiguousAngle {
+        /// The text of the value.
+        text: String,
+    },
+    /// A URDF joint type kinechain does not model.
+    #[error("joint type '{kind}' is not supported (supported: revolute, continuous, prismatic, fixed)")]
+    UnsupportedJointType {
+        /// The type found in the file.
+        kind: String,
+    },
+    /// A revolute or prismatic URDF joint without a `<limit>` element.
+    #[error("{kind} joint has no <limit> element (URDF requires one for revolute and prismatic joints)")]
+    MissingLimit {
+        /// The joint type.
+        kind: &'static str,
+    },
+}
+
+/// The joints and links handed to [`ChainBuilder`](crate::ChainBuilder) do not form a valid
+/// chain or tree.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// Two joints share a name.
+    #[error("duplicate joint name '{name}'")]
+    DuplicateJoint {
+        /// The repeated name.
+        name: String,
+    },
+    /// Two links share a name.
+    #[error("duplicate link name '{name}'")]
+    DuplicateLink {
+        /// The repeated name.
+        name: String,
+    },
+    /// A name is empty.
+    #[error("empty {what} name")]
+    EmptyName {
+        /// `joint` or `link`.
+        what: &'static str,
+    },
+    /// A joint refers to a link that does not exist.
+    #[error("joint '{joint}': {role} link '{link}' does not exist")]
+    UnknownLink {
+        /// The joint.
+        joint: String,
+        /// `parent` or `child`.
+        role: &'static str,
+        /// The missing link.
+        link: String,
+    },
+    /// A link is the child of two joints.
+    #[error("link '{link}' is the child of two joints, '{first}' and '{second}'")]
+    TwoParents {
+        /// The link.
+        link: String,
+        /// First joint naming it as child.
+        first: String,
+        /// Second joint naming it as child.
+        second: String,
+    },
+    /// More than one link has no parent joint.
+    #[error("more than one root link: {}", roots.join(", "))]
+    MultipleRoots {
+        /// The links without a parent joint.
+        roots: Vec<String>,
+    },
+    /// The joints form a cycle (no link without a parent, or links unreachable from the root).
+    #[error("joints form a cycle through joint '{joint}'")]
+    Cycle {
+        /// A joint on the cycle.
+        joint: String,
+    },
+    /// The model has no links.
+    #[error("model has no links")]
+    NoLinks,
+    /// A mimic joint refers to a joint that does not exist.
+    #[error("joint '{joint}' mimics joint '{target}', which does not exist")]
+    UnknownMimicTarget {
+        /// The mimic joint.
+        joint: String,
+        /// The missing joint.
+        target: String,
+    },
+    /// A mimic joint refers to a joint that cannot drive it (fixed or cylindrical).
+    #[error("joint '{joint}' mimics joint '{target}', which is {kind} (must be revolute, continuous or prismatic)")]
+    BadMimicTarget {
+        /// The mimic joint.
+        joint: String,
+        /// The joint it mimics.
+        target: String,
+        /// The target's kind.
+        kind: &'static str,
+    },
+    /// A mimic joint is not revolute, continuous or prismatic.
+    #[error("joint '{joint}' is {kind} and cannot mimic another joint")]
+    BadMimicKind {
+        /// The mimic joint.
+        joint: String,
+        /// Its kind.
+        kind: &'static str,
+    },
+    /// Mimic joints refer to each other in a cycle.
+    #[error("mimic joints form a cycle through joint '{joint}'")]
+    MimicCycle {
+        /// A joint on the cycle.
+        joint: String,
+    },
+    /// A joint has a NaN or infinite number.
+    #[error("joint '{joint}': {field} is not finite")]
+    NonFinite {
+        /// The joint.
+        joint: String,
+        /// The field.
+        field: &'static str,
+    },
+    /// A joint axis has zero length.
+    #[error("joint '{joint}': axis has zero length")]
+    ZeroAxis {
+        /// The joint.
+        joint: String,
+    },
+    /// A joint has `lower > upper` or NaN limits.
+    #[error("joint '{joint}': lower limit {lower} is greater than upper limit {upper}")]
+    ReversedLimits {
+        /// The joint.
+        joint: String,
+        /// Lower limit.
+        lower: f64,
+        /// Upper limit.
+        upper: f64,
+    },
+    /// A constant placement is not a rigid transform.
+    #[error("joint '{joint}': {field} is not a rigid transform: {problem}")]
+    NotRigid {
+        /// The joint (or the base/root name).
+        joint: String,
+        /// The field.
+        field: &'static str,
+        /// What is wrong.
+        problem: NotRigid,
+    },
+}
+
+/// A joint-space vector (`q`, `q_dot`, `q_ddot`) cannot be evaluated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StateError {
+    /// The vector has the wrong number of entries.
+    #[error("{what} has {got} entries, the chain has {expected} degrees of freedom")]
+    WrongLength {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Entries expected (the chain's dof).
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// An entry is NaN or infinite.
+    #[error("{what}[{index}] (joint '{joint}'{}) is {value}, not a finite number", component_suffix(component))]
+    NonFinite {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Index in the vector.
+        index: usize,
+        /// The joint this entry drives.
+        joint: String,
+        /// For a cylindrical joint, `theta` or `d`.
+        component: Option<&'static str>,
+        /// The value given.
+        value: f64,
+    },
+    /// A joint value is outside the joint's limits.
+    #[error("joint '{joint}'{} = {value} is outside its limits [{lower}, {upper}]{}", component_suffix(component), hint(*value, *lower, *upper))]
+    OutOfLimits {
+        /// The joint.
+        joint: String,
+        /// For a cylindrical joint, `theta` or `d`.
+        component: Option<&'static str>,
+        /// The value (for a mimic joint, the value implied by its primary joint).
+        value: f64,
+        /// Lower limit.
+        lower: f64,
+        /// Upper limit.
+        upper: f64,
+    },
+}
+
+fn component_suffix(c: &Option<&'static str>) -> String {
+    c.map(|c| format!(" {c}")).unwrap_or_default()
+}
+
+fn hint(value: f64, lower: f64, upper: f64) -> &'static str {
+    let deg = value.to_radians();
+    if value.abs() > 2.0 * std::f64::consts::PI && deg >= lower && deg <= upper {
+        " (the value looks like degrees; angles are in radians)"
+    } else {
+        ""
+    }
+}
+
+/// A name given to a query is not in the chain.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NameError {
+    /// No link has this name.
+    #[error("no link named '{name}'")]
+    UnknownLink {
+        /// The name asked for.
+        name: String,
+    },
+    /// No joint has this name.
+    #[error("no joint named '{name}'")]
+    UnknownJoint {
+        /// The name asked for.
+        name: String,
+    },
+}

@@ -1,0 +1,494 @@
+//! Denavit–Hartenberg YAML: standard and modified (Craig, eq. 2.129) tables and the axis form
+//! (eq. 2.119). The serde structs of this file never leave it.
+//!
+//! ```yaml
+//! name: puma560
+//! convention: standard        # standard | modified | axis   (required)
+//! angle_unit: rad             # rad (default) | deg
+//! base: {name: base, xyz: [0, 0, 0], rpy: [0, 0, 0]}   # or {name: base, matrix: [[..4 rows..]]}
+//! tool: {name: tool, xyz: [0, 0, 0.1]}
+//! joints:
+//!   - {name: j1, link: link1, type: revolute, a: 0, alpha: 1.5708, d: 0.6718, theta: 0, limits: [-2.79, 2.79]}
+//! ```
+
+use crate::chain::{ChainBuilder, JointSpec};
+use crate::error::{FieldProblem, LoadErrorKind};
+use crate::joint::{JointKind, Limits};
+use crate::transform::Transform;
+use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
+use serde::Deserialize;
+use serde_saphyr::{Spanned, Tagged};
+use std::f64::consts::TAU;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRobot {
+    name: Option<String>,
+    convention: Convention,
+    #[serde(default)]
+    angle_unit: AngleUnit,
+    base: Option<RawFrame>,
+    tool: Option<RawFrame>,
+    joints: Vec<RawJoint>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum Convention {
+    Standard,
+    Modified,
+    Axis,
+}
+
+impl Convention {
+    fn context(self) -> &'static str {
+        match self {
+            Convention::Standard => "for convention standard",
+            Convention::Modified => "for convention modified",
+            Convention::Axis => "for convention axis",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum AngleUnit {
+    #[default]
+    Rad,
+    Deg,
+}
+
+/// A frame: a name and either `xyz`/`rpy` or a 4×4 `matrix`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFrame {
+    name: Option<String>,
+    xyz: Option<[Plain; 3]>,
+    rpy: Option<[Angle; 3]>,
+    matrix: Option<[[Plain; 4]; 4]>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum RawKind {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Cylindrical,
+    Fixed,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawJoint {
+    name: String,
+    link: Option<String>,
+    #[serde(rename = "type")]
+    kind: RawKind,
+    a: Option<Plain>,
+    alpha: Option<Angle>,
+    d: Option<Plain>,
+    theta: Option<Angle>,
+    origin: Option<RawFrame>,
+    axis: Option<[Plain; 3]>,
+    limits: Option<RawLimits>,
+}
+
+/// A number that is not an angle: unit tags are refused.
+#[derive(Debug, Deserialize)]
+#[serde(transparent)]
+struct Plain(Tagged<f64>);
+
+/// An angle: a number in `angle_unit`, a `!degrees`/`!radians` tagged value, or an expression.
+#[derive(Debug, Deserialize)]
+#[serde(transparent)]
+struct Angle(Spanned<Tagged<f64>>);
+
+/// `[lo, hi]`, or `{theta: [lo, hi], d: [lo, hi]}` for a cylindrical joint.
+#[derive(Debug)]
+enum RawLimits {
+    Pair([Angle; 2]),
+    Cylindrical { theta: [Angle; 2], d: [Angle; 2] },
+}
+
+impl<'de> Deserialize<'de> for RawLimits {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct LimitsVisitor;
+        impl<'de> Visitor<'de> for LimitsVisitor {
+            type Value = RawLimits;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("[lower, upper] or {theta: [lower, upper], d: [lower, upper]}")
+            }
+
+            fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<RawLimits, S::Error> {
+                let lo = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(0, &self))?;
+                let hi = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(1, &self))?;
+                if seq.next_element::<IgnoredAny>()?.is_some() {
+                    return Err(de::Error::invalid_length(3, &self));
+                }
+                Ok(RawLimits::Pair([lo, hi]))
+            }
+
+            fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<RawLimits, M::Error> {
+                let (mut theta, mut d) = (None, None);
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        "theta" if theta.is_none() => theta = Some(map.next_value()?),
+                        "d" if d.is_none() => d = Some(map.next_value()?),
+                        "theta" | "d" => return Err(de::Error::duplicate_field("limits key")),
+                        other => return Err(de::Error::unknown_field(other, &["theta", "d"])),
+                    }
+                }
+                Ok(RawLimits::Cylindrical {
+                    theta: theta.ok_or_else(|| de::Error::missing_field("theta"))?,
+                    d: d.ok_or_else(|| de::Error::missing_field("d"))?,
+                })
+            }
+        }
+        deserializer.deserialize_any(LimitsVisitor)
+    }
+}
+
+/// Just enough structure to find which joint entry a parser error falls in.
+#[derive(Deserialize)]
+struct LenientRobot {
+    joints: Option<Vec<Spanned<LenientJoint>>>,
+}
+
+#[derive(Deserialize)]
+struct LenientJoint {
+    name: Option<String>,
+}
+
+const UNIT_TAGS: [&str; 2] = ["!degrees", "!radians"];
+
+/// Reads the fields of one file with the file's angle unit, collecting typed errors.
+struct Reader<'s> {
+    source: &'s str,
+    unit: AngleUnit,
+    /// Joint whose entry is being read (for messages).
+    joint: Option<String>,
+}
+
+impl Reader<'_> {
+    fn problem(&self, field: impl Into<String>, problem: FieldProblem) -> LoadErrorKind {
+        LoadErrorKind::Field {
+            joint: self.joint.clone(),
+            field: field.into(),
+            problem,
+        }
+    }
+
+    fn finite(&self, field: &str, value: f64) -> Result<f64, LoadErrorKind> {
+        if value.is_finite() {
+            Ok(value)
+        } else {
+            Err(self.problem(field, FieldProblem::NonFinite { value }))
+        }
+    }
+
+    fn plain(&self, field: &str, x: &Plain) -> Result<f64, LoadErrorKind> {
+        if let Some(tag) = &x.0.1 {
+            if UNIT_TAGS.contains(&tag.as_str()) {
+                return Err(self.problem(
+                    field,
+                    FieldProblem::Shape {
+                        expected: "a length or plain number (a !degrees/!radians tag does not belong here)",
+                    },
+                ));
+            }
+        }
+        self.finite(field, x.0.0)
+    }
+
+    /// An angle in radians. A `!degrees`/`!radians` tag or a `deg(..)`/`rad(..)` expression
+    /// says its unit; a plain number is in the file's `angle_unit`.
+    fn angle(&self, field: &str, x: &Angle) -> Result<f64, LoadErrorKind> {
+        let Tagged(value, tag) = &x.0.value;
+        let value = self.finite(field, *value)?;
+        if tag.as_deref().is_some_and(|t| UNIT_TAGS.contains(&t)) {
+            return Ok(value);
+        }
+        let span = x.0.referenced.span();
+        let text = span
+            .byte_offset()
+            .zip(span.byte_len())
+            .and_then(|(o, l)| self.source.get(o as usize..(o + l) as usize))
+            .unwrap_or("")
+            .trim();
+        let plain = !text.is_empty()
+            && text
+                .chars()
+                .all(|c| c.is_ascii_digit() || matches!(c, '+' | '-' | '.' | 'e' | 'E' | '_'));
+        if plain {
+            return Ok(match self.unit {
+                AngleUnit::Rad => value,
+                AngleUnit::Deg => value.to_radians(),
+            });
+        }
+        if text.contains("deg(") || text.contains("rad(") || self.unit == AngleUnit::Rad {
+            return Ok(value);
+        }
+        Err(self.problem(
+            field,
+            FieldProblem::AmbiguousAngle {
+                text: text.to_string(),
+            },
+        ))
+    }
+
+    fn limits(&self, values: &[Angle; 2], angular: bool) -> Result<Limits, LoadErrorKind> {
+        let read = |x: &Angle| {
+            if angular {
+                self.angle("limits", x)
+            } else {
+                self.plain(
+                    "limits",
+                    &Plain(Tagged(x.0.value.0, x.0.value.1.clone())),
+                )
+            }
+        };
+        let (lower, upper) = (read(&values[0])?, read(&values[1])?);
+        if lower > upper {
+            return Err(self.problem("limits", FieldProblem::ReversedLimits { lower, upper }));
+        }
+        Ok(Limits { lower, upper })
+    }
+
+    fn frame(&self, field: &str, f: &RawFrame) -> Result<Transform, LoadErrorKind> {
+        let sub = |k: &str| format!("{field}.{k}");
+        match (&f.matrix, &f.xyz, &f.rpy) {
+            (Some(m), None, None) => {
+                let mut rows = [[0.0; 4]; 4];
+                for (i, row) in m.iter().enumerate() {
+                    for (j, x) in row.iter().enumerate() {
+                        rows[i][j] = self.plain(&sub("matrix"), x)?;
+                    }
+                }
+                Transform::try_from_rows(&rows)
+                    .map_err(|e| self.problem(sub("matrix"), FieldProblem::NotRigid(e)))
+            }
+            (Some(_), _, _) => Err(self.problem(
+                sub("xyz"),
+                FieldProblem::NotAllowed {
+                    context: "together with matrix (give xyz/rpy or matrix)",
+                },
+            )),
+            (None, xyz, rpy) => {
+                let mut p = [0.0; 3];
+                if let Some(xyz) = xyz {
+                    for (k, x) in xyz.iter().enumerate() {
+                        p[k] = self.plain(&sub("xyz"), x)?;
+                    }
+                }
+                let mut a = [0.0; 3];
+                if let Some(rpy) = rpy {
+                    for (k, x) in rpy.iter().enumerate() {
+                        a[k] = self.angle(&sub("rpy"), x)?;
+                    }
+                }
+                Ok(Transform::from_xyz_rpy(p, a))
+            }
+        }
+    }
+}
+
+/// Parses DH YAML text into a chain description.
+pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, LoadErrorKind> {
+    let options = serde_saphyr::options! {
+        angle_conversions: true,
+        reject_unsupported_tags: true,
+    };
+    let raw: RawRobot = serde_saphyr::from_str_with_options(source, options)
+        .map_err(|e| yaml_error(source, &e))?;
+    let unit = raw.angle_unit;
+    let mut r = Reader {
+        source,
+        unit,
+        joint: None,
+    };
+
+    let mut b = ChainBuilder::new(raw.name.clone().unwrap_or_else(|| default_name.to_string()));
+    let base_name = raw
+        .base
+        .as_ref()
+        .and_then(|f| f.name.clone())
+        .unwrap_or_else(|| "base".to_string());
+    b.link(base_name.clone());
+    if let Some(base) = &raw.base {
+        b.world_from_root(r.frame("base", base)?);
+    }
+
+    let mut parent = base_name;
+    for (i, j) in raw.joints.iter().enumerate() {
+        r.joint = Some(j.name.clone());
+        let link = j.link.clone().unwrap_or_else(|| format!("link{}", i + 1));
+        let kind = match j.kind {
+            RawKind::Revolute => JointKind::Revolute,
+            RawKind::Continuous => JointKind::Continuous,
+            RawKind::Prismatic => JointKind::Prismatic,
+            RawKind::Cylindrical => JointKind::Cylindrical,
+            RawKind::Fixed => JointKind::Fixed,
+        };
+        let mut spec = JointSpec::new(j.name.clone(), kind, parent.clone(), link.clone());
+        let context = raw.convention.context();
+        let missing = |field: &str| r.problem(field, FieldProblem::Missing { context });
+        let not_allowed = |field: &str| r.problem(field, FieldProblem::NotAllowed { context });
+        match raw.convention {
+            Convention::Standard | Convention::Modified => {
+                if j.origin.is_some() {
+                    return Err(not_allowed("origin"));
+                }
+                if j.axis.is_some() {
+                    return Err(not_allowed("axis"));
+                }
+                let a = r.plain("a", j.a.as_ref().ok_or_else(|| missing("a"))?)?;
+                let alpha = r.angle("alpha", j.alpha.as_ref().ok_or_else(|| missing("alpha"))?)?;
+                let d = r.plain("d", j.d.as_ref().ok_or_else(|| missing("d"))?)?;
+                let theta = r.angle("theta", j.theta.as_ref().ok_or_else(|| missing("theta"))?)?;
+                for (field, value) in [("alpha", alpha), ("theta", theta)] {
+                    if unit == AngleUnit::Rad && value.abs() > TAU {
+                        b.warn(format!(
+                            "joint '{}': {field} = {value} rad is larger than 2π in magnitude; is it in degrees? (set angle_unit: deg)",
+                            j.name
+                        ));
+                    }
+                }
+                // Tx(a) Rx(α): the constant part of a DH row, before (modified) or after
+                // (standard) the joint's motion about z.
+                let screw = Transform {
+                    p: [a, 0.0, 0.0],
+                    ..Transform::rot_x(alpha)
+                };
+                spec = spec.with_offsets(theta, d);
+                spec = if raw.convention == Convention::Standard {
+                    spec.with_post(screw)
+                } else {
+                    spec.with_origin(screw)
+                };
+            }
+            Convention::Axis => {
+                for (field, present) in [
+                    ("a", j.a.is_some()),
+                    ("alpha", j.alpha.is_some()),
+                    ("d", j.d.is_some()),
+                    ("theta", j.theta.is_some()),
+                ] {
+                    if present {
+                        return Err(not_allowed(field));
+                    }
+                }
+                let origin = j.origin.as_ref().ok_or_else(|| missing("origin"))?;
+                if origin.name.is_some() {
+                    return Err(not_allowed("origin.name"));
+                }
+                spec = spec.with_origin(r.frame("origin", origin)?);
+                match (&j.axis, kind) {
+                    (Some(axis), _) => {
+                        let mut v = [0.0; 3];
+                        for (k, x) in axis.iter().enumerate() {
+                            v[k] = r.plain("axis", x)?;
+                        }
+                        if v == [0.0; 3] {
+                            return Err(r.problem("axis", FieldProblem::ZeroAxis));
+                        }
+                        spec = spec.with_axis(v);
+                    }
+                    (None, JointKind::Fixed) => {}
+                    (None, _) => return Err(missing("axis")),
+                }
+            }
+        }
+        match (&j.limits, kind) {
+            (None, _) => {}
+            (Some(_), JointKind::Fixed | JointKind::Continuous) => {
+                return Err(r.problem(
+                    "limits",
+                    FieldProblem::NotAllowed {
+                        context: "for a fixed or continuous joint",
+                    },
+                ));
+            }
+            (Some(RawLimits::Pair(pair)), JointKind::Revolute | JointKind::Prismatic) => {
+                spec.limits[0] = Some(r.limits(pair, kind == JointKind::Revolute)?);
+            }
+            (Some(RawLimits::Cylindrical { theta, d }), JointKind::Cylindrical) => {
+                spec.limits = [Some(r.limits(theta, true)?), Some(r.limits(d, false)?)];
+            }
+            (Some(RawLimits::Pair(_)), _) => {
+                return Err(r.problem(
+                    "limits",
+                    FieldProblem::Shape {
+                        expected: "a cylindrical joint needs {theta: [lower, upper], d: [lower, upper]}",
+                    },
+                ));
+            }
+            (Some(RawLimits::Cylindrical { .. }), _) => {
+                return Err(r.problem(
+                    "limits",
+                    FieldProblem::Shape {
+                        expected: "a one-coordinate joint needs [lower, upper]",
+                    },
+                ));
+            }
+        }
+        b.link(link.clone());
+        b.joint(spec);
+        parent = link;
+    }
+    r.joint = None;
+    if let Some(tool) = &raw.tool {
+        let name = tool.name.clone().unwrap_or_else(|| "tool".to_string());
+        let placement = r.frame("tool", tool)?;
+        b.link(name.clone());
+        b.joint(JointSpec::new(name.clone(), JointKind::Fixed, parent, name).with_origin(placement));
+    }
+    Ok(b)
+}
+
+/// Turns a parser error into [`LoadErrorKind::Yaml`], naming the joint entry it falls in.
+fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
+    let location = e.location();
+    let (line, column) = (location.map(|l| l.line()), location.map(|l| l.column()));
+    let joint = line.zip(column).and_then(|(l, c)| joint_at(source, l, c));
+    let mut message = e.without_snippet().to_string();
+    // The parser appends its own " at line L, column C"; the location is reported separately.
+    if let Some(i) = message.rfind(" at line ") {
+        message.truncate(i);
+    }
+    LoadErrorKind::Yaml {
+        line,
+        column,
+        joint,
+        message,
+    }
+}
+
+/// The name of the joint entry that holds (line, column), if the file parses leniently.
+fn joint_at(source: &str, line: u64, column: u64) -> Option<String> {
+    let lenient: LenientRobot = serde_saphyr::from_str_with_options(
+        source,
+        serde_saphyr::options! { angle_conversions: true },
+    )
+    .ok()?;
+    let joints = lenient.joints?;
+    let starts: Vec<(u64, u64)> = joints
+        .iter()
+        .map(|j| (j.referenced.line(), j.referenced.column()))
+        .collect();
+    let i = starts.iter().rposition(|&start| start <= (line, column))?;
+    // After the last entry, only positions indented at least as deep belong to it.
+    if i + 1 == starts.len() && line > starts[i].0 && column < starts[i].1 {
+        return None;
+    }
+    joints[i]
+        .value
+        .name
+        .clone()
+        .or_else(|| Some(format!("#{}", i + 1)))
+}

@@ -1,0 +1,117 @@
+//! Loading robot files: DH YAML (`.yaml`, `.yml`) and URDF (`.urdf`).
+
+mod dh;
+mod urdf;
+
+use crate::chain::Chain;
+use crate::error::{LoadError, LoadErrorKind};
+use std::io::Read;
+use std::path::Path;
+
+/// Largest robot file accepted, in bytes. URDFs of real robots are well under 1 MiB.
+pub const MAX_FILE_BYTES: u64 = 16 * 1024 * 1024;
+
+/// The formats kinechain reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Format {
+    /// Denavit–Hartenberg YAML (standard, modified or axis convention).
+    DhYaml,
+    /// URDF (XML).
+    Urdf,
+}
+
+impl Format {
+    /// The format a file name's extension says (`.yaml`/`.yml`: DH YAML, `.urdf`: URDF).
+    #[must_use]
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "yaml" | "yml" => Some(Format::DhYaml),
+            "urdf" => Some(Format::Urdf),
+            _ => None,
+        }
+    }
+}
+
+impl Chain {
+    /// Loads a robot file, its format chosen by extension (`.yaml`/`.yml`: DH YAML, `.urdf`:
+    /// URDF). Files larger than [`MAX_FILE_BYTES`] are refused.
+    ///
+    /// # Errors
+    /// [`LoadError`] naming the file and, where it applies, the line, joint and field.
+    ///
+    /// # Examples
+    /// ```
+    /// let chain = kinechain::Chain::from_file("robots/puma560.yaml")?;
+    /// assert_eq!(chain.dof(), 6);
+    /// # Ok::<(), kinechain::LoadError>(())
+    /// ```
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Chain, LoadError> {
+        let path = path.as_ref();
+        let fail = |kind| LoadError::new(path, kind);
+        let format = Format::from_path(path).ok_or_else(|| fail(LoadErrorKind::UnknownFormat))?;
+        let file = std::fs::File::open(path).map_err(|e| fail(LoadErrorKind::Io(e)))?;
+        let mut bytes = Vec::new();
+        // Read one byte past the limit to tell "at the limit" from "over it" without trusting
+        // metadata (which a pipe or a growing file does not have).
+        file.take(MAX_FILE_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| fail(LoadErrorKind::Io(e)))?;
+        if bytes.len() as u64 > MAX_FILE_BYTES {
+            let size = std::fs::metadata(path).map_or(bytes.len() as u64, |m| m.len());
+            return Err(fail(LoadErrorKind::TooLarge {
+                size,
+                limit: MAX_FILE_BYTES,
+            }));
+        }
+        let text = std::str::from_utf8(&bytes).map_err(|e| {
+            fail(LoadErrorKind::NotText {
+                offset: e.valid_up_to(),
+            })
+        })?;
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("robot");
+        parse(text, format, stem).map_err(fail)
+    }
+
+    /// Builds a chain from DH YAML text (see the README for the format).
+    ///
+    /// # Errors
+    /// [`LoadError`] with path `<string>`.
+    pub fn from_dh_yaml_str(text: &str) -> Result<Chain, LoadError> {
+        parse(text, Format::DhYaml, "robot").map_err(|k| LoadError::new(Path::new("<string>"), k))
+    }
+
+    /// Builds a chain from URDF text.
+    ///
+    /// # Errors
+    /// [`LoadError`] with path `<string>`.
+    pub fn from_urdf_str(text: &str) -> Result<Chain, LoadError> {
+        parse(text, Format::Urdf, "robot").map_err(|k| LoadError::new(Path::new("<string>"), k))
+    }
+}
+
+fn parse(text: &str, format: Format, default_name: &str) -> Result<Chain, LoadErrorKind> {
+    if is_blank(text, format) {
+        return Err(LoadErrorKind::Empty);
+    }
+    let builder = match format {
+        Format::DhYaml => dh::parse(text, default_name)?,
+        Format::Urdf => urdf::parse(text)?,
+    };
+    Ok(builder.build()?)
+}
+
+/// Nothing but whitespace (and, for YAML, comments).
+fn is_blank(text: &str, format: Format) -> bool {
+    match format {
+        Format::DhYaml => text
+            .lines()
+            .map(str::trim)
+            .all(|l| l.is_empty() || l.starts_with('#') || l == "---" || l == "..."),
+        Format::Urdf => text.trim().is_empty(),
+    }
+}

@@ -1,0 +1,196 @@
+//! URDF through `urdf-rs` (its `package://` expansion, which runs ROS tools, is never used: mesh
+//! paths do not matter for kinematics). The `urdf_rs` types never leave this file.
+
+use crate::chain::{ChainBuilder, JointSpec};
+use crate::error::{FieldProblem, LoadErrorKind};
+use crate::joint::{JointKind, Limits};
+use crate::transform::Transform;
+
+/// Deepest element nesting accepted (real URDFs nest about 6 deep); a limit keeps a hostile file
+/// from exhausting the parser's stack.
+pub(crate) const MAX_XML_DEPTH: usize = 100;
+
+/// Parses URDF text into a chain description.
+pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
+    check_depth(source)?;
+    check_vector_attributes(source)?;
+    let robot = urdf_rs::read_from_string(source).map_err(|e| LoadErrorKind::Urdf {
+        message: e.to_string(),
+    })?;
+    let mut b = ChainBuilder::new(robot.name.clone());
+    for link in &robot.links {
+        b.link(link.name.clone());
+    }
+    for j in &robot.joints {
+        let field = |field: &str, problem| LoadErrorKind::Field {
+            joint: Some(j.name.clone()),
+            field: field.to_string(),
+            problem,
+        };
+        let finite = |name: &str, values: &[f64]| match values.iter().find(|x| !x.is_finite()) {
+            Some(&value) => Err(field(name, FieldProblem::NonFinite { value })),
+            None => Ok(()),
+        };
+        let kind = match j.joint_type {
+            urdf_rs::JointType::Revolute => JointKind::Revolute,
+            urdf_rs::JointType::Continuous => JointKind::Continuous,
+            urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+            urdf_rs::JointType::Fixed => JointKind::Fixed,
+            ref other => {
+                return Err(field(
+                    "type",
+                    FieldProblem::UnsupportedJointType {
+                        kind: format!("{other:?}").to_lowercase(),
+                    },
+                ));
+            }
+        };
+        finite("origin.xyz", &j.origin.xyz.0)?;
+        finite("origin.rpy", &j.origin.rpy.0)?;
+        let mut spec = JointSpec::new(j.name.clone(), kind, j.parent.link.clone(), j.child.link.clone())
+            .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
+        if kind != JointKind::Fixed {
+            finite("axis.xyz", &j.axis.xyz.0)?;
+            if j.axis.xyz.0 == [0.0; 3] {
+                return Err(field("axis.xyz", FieldProblem::ZeroAxis));
+            }
+            spec = spec.with_axis(j.axis.xyz.0);
+        }
+        if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
+            let l = &j.limit;
+            // urdf-rs fills a missing <limit> with zeros; a real one needs a velocity.
+            if l.lower == 0.0 && l.upper == 0.0 && l.velocity == 0.0 && l.effort == 0.0 {
+                return Err(field(
+                    "limit",
+                    FieldProblem::MissingLimit {
+                        kind: kind.as_str(),
+                    },
+                ));
+            }
+            if l.lower.is_nan() || l.upper.is_nan() {
+                return Err(field(
+                    "limit",
+                    FieldProblem::NonFinite {
+                        value: f64::NAN,
+                    },
+                ));
+            }
+            if l.lower > l.upper {
+                return Err(field(
+                    "limit",
+                    FieldProblem::ReversedLimits {
+                        lower: l.lower,
+                        upper: l.upper,
+                    },
+                ));
+            }
+            spec.limits[0] = Some(Limits {
+                lower: l.lower,
+                upper: l.upper,
+            });
+        }
+        if let Some(m) = &j.mimic {
+            let (multiplier, offset) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+            finite("mimic", &[multiplier, offset])?;
+            spec = spec.with_mimic(m.joint.clone(), multiplier, offset);
+        }
+        b.joint(spec);
+    }
+    Ok(b)
+}
+
+/// The tags of an XML text, skipping comments, CDATA sections, declarations and processing
+/// instructions: yields (byte offset, tag text from `<` to `>`).
+fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        loop {
+            let off = source[i..].find('<')?;
+            i += off;
+            let rest = &source[i..];
+            let skip_to = |end: &str| rest.find(end).map_or(rest.len(), |e| e + end.len());
+            let (len, is_tag) = if rest.starts_with("<!--") {
+                (skip_to("-->"), false)
+            } else if rest.starts_with("<![CDATA[") {
+                (skip_to("]]>"), false)
+            } else if rest.starts_with("<?") || rest.starts_with("<!") {
+                (skip_to(">"), false)
+            } else {
+                (skip_to(">"), true)
+            };
+            let start = i;
+            i += len;
+            if is_tag {
+                return Some((start, &source[start..i]));
+            }
+        }
+    })
+}
+
+/// Refuses element nesting deeper than [`MAX_XML_DEPTH`] before the recursive XML parser sees
+/// the file.
+fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
+    let mut depth = 0usize;
+    for (_, tag) in tags(source) {
+        if tag.starts_with("</") {
+            depth = depth.saturating_sub(1);
+        } else if !tag.ends_with("/>") {
+            depth += 1;
+            if depth > MAX_XML_DEPTH {
+                return Err(LoadErrorKind::Urdf {
+                    message: format!("elements nest deeper than {MAX_XML_DEPTH} levels"),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `urdf-rs` reads `xyz`/`rpy` attributes by dropping tokens that are not numbers
+/// (`"1 x 2 3"` reads as `[1, 2, 3]`); refuse such attributes of `<origin>` and `<axis>` instead
+/// of guessing.
+fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
+    for (offset, tag) in tags(source) {
+        let name = tag[1..]
+            .split(|c: char| c.is_whitespace() || c == '/' || c == '>')
+            .next()
+            .unwrap_or("");
+        if name != "origin" && name != "axis" {
+            continue;
+        }
+        for attr in ["xyz", "rpy"] {
+            let Some(value) = attribute(tag, attr) else { continue };
+            let tokens: Vec<&str> = value.split_whitespace().collect();
+            if tokens.len() != 3 || tokens.iter().any(|t| t.parse::<f64>().is_err()) {
+                let line = source[..offset].matches('\n').count() + 1;
+                return Err(LoadErrorKind::Urdf {
+                    message: format!(
+                        "line {line}: <{name}> attribute {attr}=\"{value}\" is not three numbers"
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The value of attribute `name` in a tag's text.
+fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let mut from = 0;
+    while let Some(off) = tag[from..].find(name) {
+        let at = from + off;
+        from = at + name.len();
+        let before_ok = tag[..at].ends_with(|c: char| c.is_whitespace());
+        let rest = tag[from..].trim_start();
+        let Some(rest) = rest.strip_prefix('=') else { continue };
+        let rest = rest.trim_start();
+        let Some(quote) = rest.chars().next().filter(|c| *c == '"' || *c == '\'') else {
+            continue;
+        };
+        if !before_ok {
+            continue;
+        }
+        return rest[1..].find(quote).map(|end| &rest[1..1 + end]);
+    }
+    None
+}

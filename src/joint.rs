@@ -1,0 +1,313 @@
+//! Joint kinds and a joint's own motion: a rotation θ about a unit axis `v` and a translation `d`
+//! along it, the cylindrical joint of Shabana eq. (2.119) of which revolute and prismatic joints
+//! are the special cases with `d` or `θ` constant.
+
+use crate::arith::Arith;
+
+/// The closed set of joint kinds kinechain models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum JointKind {
+    /// Rotation about the axis, with limits.
+    Revolute,
+    /// Rotation about the axis, without limits.
+    Continuous,
+    /// Translation along the axis.
+    Prismatic,
+    /// Rotation θ about and translation d along the same axis (eq. 2.119); two entries of `q`,
+    /// θ then d.
+    Cylindrical,
+    /// No motion.
+    Fixed,
+}
+
+impl JointKind {
+    /// Number of entries of `q` an independent joint of this kind takes.
+    #[must_use]
+    pub const fn dof(self) -> usize {
+        match self {
+            JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => 1,
+            JointKind::Cylindrical => 2,
+            JointKind::Fixed => 0,
+        }
+    }
+
+    /// Lower-case name as used in robot files (`revolute`, `continuous`, ...).
+    #[must_use]
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
+            JointKind::Prismatic => "prismatic",
+            JointKind::Cylindrical => "cylindrical",
+            JointKind::Fixed => "fixed",
+        }
+    }
+
+    /// Whether the joint rotates (revolute, continuous, cylindrical).
+    #[must_use]
+    pub const fn rotates(self) -> bool {
+        matches!(
+            self,
+            JointKind::Revolute | JointKind::Continuous | JointKind::Cylindrical
+        )
+    }
+
+    /// Whether the joint translates (prismatic, cylindrical).
+    #[must_use]
+    pub const fn translates(self) -> bool {
+        matches!(self, JointKind::Prismatic | JointKind::Cylindrical)
+    }
+}
+
+impl std::fmt::Display for JointKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Closed interval of allowed values of one joint coordinate (rad or m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Smallest allowed value.
+    pub lower: f64,
+    /// Largest allowed value.
+    pub upper: f64,
+}
+
+impl Limits {
+    /// Whether `value` lies in `[lower, upper]`.
+    #[must_use]
+    pub fn contains(&self, value: f64) -> bool {
+        value >= self.lower && value <= self.upper
+    }
+}
+
+/// The unit axis of a joint, with the coordinate axes recognised so that the kernels can use
+/// their exact, cheaper form.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Axis {
+    X,
+    Y,
+    Z,
+    NegX,
+    NegY,
+    NegZ,
+    /// Any other unit vector.
+    General([f64; 3]),
+}
+
+impl Axis {
+    /// Classifies a unit vector (exact comparisons: only an exact ±e_i is special).
+    pub(crate) fn from_unit(v: [f64; 3]) -> Axis {
+        match v {
+            [1.0, 0.0, 0.0] => Axis::X,
+            [0.0, 1.0, 0.0] => Axis::Y,
+            [0.0, 0.0, 1.0] => Axis::Z,
+            [-1.0, 0.0, 0.0] => Axis::NegX,
+            [0.0, -1.0, 0.0] => Axis::NegY,
+            [0.0, 0.0, -1.0] => Axis::NegZ,
+            _ => Axis::General(v),
+        }
+    }
+
+    /// The unit vector.
+    pub(crate) fn vector(&self) -> [f64; 3] {
+        match *self {
+            Axis::X => [1.0, 0.0, 0.0],
+            Axis::Y => [0.0, 1.0, 0.0],
+            Axis::Z => [0.0, 0.0, 1.0],
+            Axis::NegX => [-1.0, 0.0, 0.0],
+            Axis::NegY => [0.0, -1.0, 0.0],
+            Axis::NegZ => [0.0, 0.0, -1.0],
+            Axis::General(v) => v,
+        }
+    }
+}
+
+/// Normalises an axis given in a file or by a caller; `None` if it is zero or not finite.
+pub(crate) fn normalize_axis(v: [f64; 3]) -> Option<[f64; 3]> {
+    if v.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    // Exact coordinate axes stay exact (a norm computed in floating point could round).
+    let nonzero = v.iter().filter(|x| **x != 0.0).count();
+    if nonzero == 1 {
+        return Some(v.map(|x| if x == 0.0 { 0.0 } else { x.signum() }));
+    }
+    let scale = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if scale == 0.0 {
+        return None;
+    }
+    // Scale first so that tiny or huge components neither underflow nor overflow.
+    let w = v.map(|x| x / scale);
+    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    Some(w.map(|x| x / n))
+}
+
+/// One scalar of a joint's motion (θ or d): a constant, or `scale * q[index] + offset`.
+///
+/// Independent joints have `scale = 1`; a mimic joint reads its primary joint's entry with the
+/// mimic multiplier and offset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Term {
+    Const(f64),
+    Var { index: usize, scale: f64, offset: f64 },
+}
+
+impl Term {
+    /// Value at `q`.
+    #[inline(always)]
+    pub(crate) fn value<A: Arith>(&self, q: &[f64]) -> f64 {
+        match *self {
+            Term::Const(v) => v,
+            Term::Var {
+                index,
+                scale,
+                offset,
+            } => A::mul_add(scale, q[index], offset),
+        }
+    }
+
+    /// Time derivative given the rates (`q_dot` or `q_ddot`).
+    #[inline(always)]
+    pub(crate) fn rate(&self, rates: &[f64]) -> f64 {
+        match *self {
+            Term::Const(_) => 0.0,
+            Term::Var { index, scale, .. } => scale * rates[index],
+        }
+    }
+
+    pub(crate) fn is_var(&self) -> bool {
+        matches!(self, Term::Var { .. })
+    }
+}
+
+/// The moving part of a joint: `[A(v, θ), v d; 0, 1]` (eq. 2.119) with θ and d each a [`Term`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Motion {
+    pub(crate) axis: Axis,
+    pub(crate) theta: Term,
+    pub(crate) d: Term,
+    /// `(sin θ, cos θ)` when θ is constant, computed once at load time.
+    pub(crate) const_sin_cos: (f64, f64),
+}
+
+impl Motion {
+    pub(crate) fn new(axis: Axis, theta: Term, d: Term) -> Motion {
+        let const_sin_cos = match theta {
+            Term::Const(t) => t.sin_cos(),
+            Term::Var { .. } => (0.0, 1.0),
+        };
+        Motion {
+            axis,
+            theta,
+            d,
+            const_sin_cos,
+        }
+    }
+}
+
+/// Replaces the rotation columns `r` by `r · A(axis, θ)` given `s = sin θ`, `c = cos θ`, where `A`
+/// is Rodrigues' rotation (eq. 2.112); for a coordinate axis this is a plane rotation of two
+/// columns.
+#[inline(always)]
+pub(crate) fn rotate_columns<A: Arith>(r: &mut [[f64; 3]; 3], axis: &Axis, s: f64, c: f64) {
+    // Rotating about +e_k by θ mixes the other two columns (i, j) in cyclic order:
+    // col_i' = c col_i + s col_j, col_j' = c col_j − s col_i. About −e_k, s changes sign.
+    let plane = |r: &mut [[f64; 3]; 3], i: usize, j: usize, s: f64| {
+        let (ci, cj) = (r[i], r[j]);
+        for k in 0..3 {
+            r[i][k] = A::mul_add(c, ci[k], s * cj[k]);
+            r[j][k] = A::mul_add(c, cj[k], -(s * ci[k]));
+        }
+    };
+    match *axis {
+        Axis::X => plane(r, 1, 2, s),
+        Axis::Y => plane(r, 2, 0, s),
+        Axis::Z => plane(r, 0, 1, s),
+        Axis::NegX => plane(r, 1, 2, -s),
+        Axis::NegY => plane(r, 2, 0, -s),
+        Axis::NegZ => plane(r, 0, 1, -s),
+        Axis::General(v) => {
+            let a = rodrigues::<A>(v, s, c);
+            let old = *r;
+            for (j, col) in r.iter_mut().enumerate() {
+                for (k, x) in col.iter_mut().enumerate() {
+                    *x = A::mul_add(
+                        old[0][k],
+                        a[j][0],
+                        A::mul_add(old[1][k], a[j][1], old[2][k] * a[j][2]),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Rodrigues' formula (eq. 2.112), `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`, written as
+/// `A = c I + s [v]x + (1 − c) v vᵀ`; returns columns.
+#[inline(always)]
+pub(crate) fn rodrigues<A: Arith>(v: [f64; 3], s: f64, c: f64) -> [[f64; 3]; 3] {
+    let w = 1.0 - c;
+    let [x, y, z] = v;
+    let (wx, wy, wz) = (w * x, w * y, w * z);
+    let (sx, sy, sz) = (s * x, s * y, s * z);
+    [
+        [A::mul_add(wx, x, c), A::mul_add(wx, y, sz), A::mul_add(wx, z, -sy)],
+        [A::mul_add(wy, x, -sz), A::mul_add(wy, y, c), A::mul_add(wy, z, sx)],
+        [A::mul_add(wz, x, sy), A::mul_add(wz, y, -sx), A::mul_add(wz, z, c)],
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arith::Separate;
+    use crate::transform::Transform;
+
+    fn max_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn coordinate_axes_match_the_general_formula() {
+        let base = Transform::from_xyz_rpy([0.0; 3], [0.3, -0.7, 1.9]).r;
+        let theta: f64 = 0.83;
+        let (s, c) = theta.sin_cos();
+        for v in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, -1.0],
+        ] {
+            let mut special = base;
+            rotate_columns::<Separate>(&mut special, &Axis::from_unit(v), s, c);
+            let mut general = base;
+            rotate_columns::<Separate>(&mut general, &Axis::General(v), s, c);
+            assert!(max_diff(&special, &general) < 4.0 * f64::EPSILON, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn rodrigues_about_z_is_rot_z() {
+        let (s, c) = 0.4_f64.sin_cos();
+        let a = rodrigues::<Separate>([0.0, 0.0, 1.0], s, c);
+        assert!(max_diff(&a, &Transform::rot_z(0.4).r) < f64::EPSILON);
+    }
+
+    #[test]
+    fn axes_normalise_and_zero_axes_are_refused() {
+        assert_eq!(normalize_axis([0.0, -3.0, 0.0]), Some([0.0, -1.0, 0.0]));
+        let v = normalize_axis([1e-300, 1e-300, 0.0]).unwrap_or([0.0; 3]);
+        assert!((v[0] - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-16);
+        assert_eq!(normalize_axis([0.0; 3]), None);
+        assert_eq!(normalize_axis([f64::NAN, 1.0, 0.0]), None);
+    }
+}
