@@ -384,10 +384,6 @@ impl Placement {
             Placement::General(t) => t,
         }
     }
-
-    pub(crate) fn is_identity(&self) -> bool {
-        matches!(self, Placement::Identity)
-    }
 }
 
 /// A moving joint compiled for evaluation.
@@ -562,17 +558,19 @@ fn check_finite(joint: &str, field: &'static str, values: &[f64]) -> Result<(), 
 
 fn check_rigid(joint: &str, field: &'static str, t: &Transform) -> Result<(), ModelError> {
     let rows = t.to_rows();
-    Transform::try_from_rows(&rows).map(|_| ()).map_err(|problem| match problem {
-        NotRigid::NonFinite => ModelError::NonFinite {
-            joint: joint.to_string(),
-            field,
-        },
-        problem => ModelError::NotRigid {
-            joint: joint.to_string(),
-            field,
-            problem,
-        },
-    })
+    Transform::try_from_rows(&rows)
+        .map(|_| ())
+        .map_err(|problem| match problem {
+            NotRigid::NonFinite => ModelError::NonFinite {
+                joint: joint.to_string(),
+                field,
+            },
+            problem => ModelError::NotRigid {
+                joint: joint.to_string(),
+                field,
+                problem,
+            },
+        })
 }
 
 fn compose(a: Placement, b: Placement) -> Placement {
@@ -692,7 +690,11 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     let root = match roots.as_slice() {
         [] => {
             return Err(ModelError::Cycle {
-                joint: spec.joints.first().map(|j| j.name.clone()).unwrap_or_default(),
+                joint: spec
+                    .joints
+                    .first()
+                    .map(|j| j.name.clone())
+                    .unwrap_or_default(),
             });
         }
         [r] => *r,
@@ -760,12 +762,12 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         let mut target_name = &m.joint;
         let mut hops = 0;
         let primary = loop {
-            let t = *joint_of
-                .get(target_name.as_str())
-                .ok_or_else(|| ModelError::UnknownMimicTarget {
+            let t = *joint_of.get(target_name.as_str()).ok_or_else(|| {
+                ModelError::UnknownMimicTarget {
                     joint: js.name.clone(),
                     target: target_name.clone(),
-                })?;
+                }
+            })?;
             let tj = &spec.joints[t];
             if tj.kind.dof() != 1 {
                 return Err(ModelError::BadMimicTarget {
@@ -794,7 +796,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     }
 
     // Bodies, link carriers, limit checks.
-    let mut link_carrier: Vec<(Option<usize>, Placement)> = vec![(None, Placement::Identity); spec.links.len()];
+    let mut link_carrier: Vec<(Option<usize>, Placement)> =
+        vec![(None, Placement::Identity); spec.links.len()];
     link_carrier[root] = (
         None,
         Placement::from_transform(&spec.world_from_root.unwrap_or(Transform::IDENTITY)),
@@ -811,7 +814,10 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         let post = Placement::from_transform(&js.post);
         let axis = axes[j];
 
-        let travel = match (js.kind.translates(), js.limits[js.kind.dof().saturating_sub(1)]) {
+        let travel = match (
+            js.kind.translates(),
+            js.limits[js.kind.dof().saturating_sub(1)],
+        ) {
             (true, Some(l)) if l.lower.is_finite() && l.upper.is_finite() => {
                 (js.d + l.lower).abs().max((js.d + l.upper).abs())
             }
@@ -859,7 +865,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         };
 
         if js.kind == JointKind::Fixed {
-            let motion = crate::kinematics::constant_motion(&Motion::new(Axis::from_unit(axis), theta, d));
+            let motion =
+                crate::kinematics::constant_motion(&Motion::new(Axis::from_unit(axis), theta, d));
             let placement = compose(compose(compose(offset, origin), motion), post);
             link_carrier[child] = (carrier, placement);
             continue;

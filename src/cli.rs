@@ -5,8 +5,8 @@ use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
 use crate::input::{InputError, joint_vector_from_json, joint_vector_from_str};
 use crate::kinematics::{
-    LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics, forward_kinematics_to,
-    forward_velocities,
+    LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics,
+    forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -43,7 +43,12 @@ struct FkArgs {
     robot: PathBuf,
     /// Joint positions: JSON array in q order, JSON object keyed by joint name, or a
     /// comma-separated list.
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "batch", conflicts_with = "batch")]
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "batch",
+        conflicts_with = "batch"
+    )]
     q: Option<String>,
     /// Joint velocities (same forms as --q); adds "omega" and "v" to the output.
     #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
@@ -130,9 +135,15 @@ pub fn main() -> ExitCode {
                 let _ = e.print();
                 return ExitCode::SUCCESS;
             }
+            // clap's message spans several lines; keep what precedes the usage text, on one.
             let text = e.to_string();
-            let first = text.lines().next().unwrap_or("invalid arguments");
-            eprintln!("{} (see --help)", first.trim());
+            let message: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
+                .filter(|l| !l.is_empty())
+                .collect();
+            eprintln!("{} (see --help)", message.join(" "));
             return ExitCode::from(2);
         }
     };
@@ -297,7 +308,12 @@ struct Configuration {
 }
 
 /// Per link: pose, and velocity/acceleration when asked for.
-type LinkResult = (LinkId, Transform, Option<LinkVelocity>, Option<LinkAcceleration>);
+type LinkResult = (
+    LinkId,
+    Transform,
+    Option<LinkVelocity>,
+    Option<LinkAcceleration>,
+);
 
 fn evaluate(
     chain: &Chain,
@@ -324,7 +340,11 @@ fn evaluate(
         }
         (None, None) => {
             let poses = forward_kinematics(chain, data, &c.q)?;
-            results.extend(wanted.iter().map(|&l| (l, poses.world_from_link(l), None, None)));
+            results.extend(
+                wanted
+                    .iter()
+                    .map(|&l| (l, poses.world_from_link(l), None, None)),
+            );
         }
         (Some(qd), None) => {
             let v = forward_velocities(chain, data, &c.q, qd)?;
@@ -432,14 +452,15 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .map(|n| chain.link_id(n))
         .collect::<Result<Vec<_>, _>>()?;
     let mut results = Vec::with_capacity(chain.links().len());
-    let mut emit = |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
-        evaluate(&chain, data, c, &links, &mut results)?;
-        let text = match args.format {
-            OutputFormat::Json => results_json(&chain, &results).to_string(),
-            OutputFormat::Table => results_table(&chain, &results),
+    let mut emit =
+        |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
+            evaluate(&chain, data, c, &links, &mut results)?;
+            let text = match args.format {
+                OutputFormat::Json => results_json(&chain, &results).to_string(),
+                OutputFormat::Table => results_table(&chain, &results),
+            };
+            write_line(out, &text)
         };
-        write_line(out, &text)
-    };
 
     if let Some(path) = &args.batch {
         let file = std::fs::File::open(path).map_err(|source| CliError::Io {
@@ -493,15 +514,16 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
             "expected a JSON object {\"q\": ..} on each line",
         ));
     };
-    if let Some(key) = map.keys().find(|k| !matches!(k.as_str(), "q" | "qd" | "qdd")) {
+    if let Some(key) = map
+        .keys()
+        .find(|k| !matches!(k.as_str(), "q" | "qd" | "qdd"))
+    {
         let _ = key;
         return Err(CliError::BatchShape(
             "unknown member (a line may have only \"q\", \"qd\" and \"qdd\")",
         ));
     }
-    let q = map
-        .get("q")
-        .ok_or(CliError::BatchShape("missing \"q\""))?;
+    let q = map.get("q").ok_or(CliError::BatchShape("missing \"q\""))?;
     Ok(Configuration {
         q: joint_vector_from_json(chain, q, "q")?,
         qd: map

@@ -120,7 +120,7 @@ pub enum FieldProblem {
         value: f64,
     },
     /// A joint axis has zero length.
-    #[error("axis has zero length")]
+    #[error("zero length")]
     ZeroAxis,
     /// A matrix is not a rigid transform.
     #[error("not a rigid transform: {0}")]
@@ -152,19 +152,25 @@ pub enum FieldProblem {
         expected: &'static str,
     },
     /// An angle written as an expression without a unit where `angle_unit: deg` applies.
-    #[error("expression '{text}' has no unit; with angle_unit: deg write a number, deg(..), rad(..) or a !degrees/!radians tag")]
+    #[error(
+        "expression '{text}' has no unit; with angle_unit: deg write a number, deg(..), rad(..) or a !degrees/!radians tag"
+    )]
     AmbiguousAngle {
         /// The text of the value.
         text: String,
     },
     /// A URDF joint type kinechain does not model.
-    #[error("joint type '{kind}' is not supported (supported: revolute, continuous, prismatic, fixed)")]
+    #[error(
+        "joint type '{kind}' is not supported (supported: revolute, continuous, prismatic, fixed)"
+    )]
     UnsupportedJointType {
         /// The type found in the file.
         kind: String,
     },
     /// A revolute or prismatic URDF joint without a `<limit>` element.
-    #[error("{kind} joint has no <limit> element (URDF requires one for revolute and prismatic joints)")]
+    #[error(
+        "{kind} joint has no <limit> element (URDF requires one for revolute and prismatic joints)"
+    )]
     MissingLimit {
         /// The joint type.
         kind: &'static str,
@@ -238,7 +244,9 @@ pub enum ModelError {
         target: String,
     },
     /// A mimic joint refers to a joint that cannot drive it (fixed or cylindrical).
-    #[error("joint '{joint}' mimics joint '{target}', which is {kind} (must be revolute, continuous or prismatic)")]
+    #[error(
+        "joint '{joint}' mimics joint '{target}', which is {kind} (must be revolute, continuous or prismatic)"
+    )]
     BadMimicTarget {
         /// The mimic joint.
         joint: String,
@@ -312,7 +320,10 @@ pub enum StateError {
         got: usize,
     },
     /// An entry is NaN or infinite.
-    #[error("{what}[{index}] (joint '{joint}'{}) is {value}, not a finite number", component_suffix(component))]
+    #[error(
+        "{what}[{index}] (joint '{joint}'{}) is {value}, not a finite number",
+        component_suffix(component)
+    )]
     NonFinite {
         /// `q`, `q_dot` or `q_ddot`.
         what: &'static str,

@@ -213,7 +213,11 @@ impl<'a> Accelerations<'a> {
 }
 
 /// Checks length and finiteness of a joint-space vector.
-pub(crate) fn check_values(chain: &Chain, values: &[f64], what: &'static str) -> Result<(), StateError> {
+pub(crate) fn check_values(
+    chain: &Chain,
+    values: &[f64],
+    what: &'static str,
+) -> Result<(), StateError> {
     if values.len() != chain.dof() {
         return Err(StateError::WrongLength {
             what,
@@ -413,7 +417,11 @@ fn place<A: Arith>(f: &mut Transform, placement: &Placement) {
 fn apply_add<A: Arith>(r: &[[f64; 3]; 3], u: [f64; 3], p: [f64; 3]) -> [f64; 3] {
     let mut out = [0.0; 3];
     for (k, o) in out.iter_mut().enumerate() {
-        *o = A::mul_add(r[0][k], u[0], A::mul_add(r[1][k], u[1], A::mul_add(r[2][k], u[2], p[k])));
+        *o = A::mul_add(
+            r[0][k],
+            u[0],
+            A::mul_add(r[1][k], u[1], A::mul_add(r[2][k], u[2], p[k])),
+        );
     }
     out
 }
@@ -421,7 +429,11 @@ fn apply_add<A: Arith>(r: &[[f64; 3]; 3], u: [f64; 3], p: [f64; 3]) -> [f64; 3] 
 /// `s x + y`.
 #[inline(always)]
 fn axpy<A: Arith>(s: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
-    [A::mul_add(s, x[0], y[0]), A::mul_add(s, x[1], y[1]), A::mul_add(s, x[2], y[2])]
+    [
+        A::mul_add(s, x[0], y[0]),
+        A::mul_add(s, x[1], y[1]),
+        A::mul_add(s, x[2], y[2]),
+    ]
 }
 
 /// `a · b` for rigid transforms.
@@ -457,11 +469,11 @@ fn axis_world<A: Arith>(r: &[[f64; 3]; 3], axis: &Axis) -> [f64; 3] {
 #[inline(always)]
 fn apply_motion<A: Arith>(f: &mut Transform, m: &Motion, q: &[f64], z: &[f64; 3]) {
     match m.d {
-        Term::Const(d) if d == 0.0 => {}
+        Term::Const(0.0) => {}
         d => f.p = axpy::<A>(d.value::<A>(q), *z, f.p),
     }
     let (s, c) = match m.theta {
-        Term::Const(t) if t == 0.0 => return,
+        Term::Const(0.0) => return,
         Term::Const(_) => m.const_sin_cos,
         theta => theta.value::<A>(q).sin_cos(),
     };
@@ -486,7 +498,7 @@ fn joint_frame<A: Arith>(world_from_body: &[Transform], body: &Body) -> Transfor
 fn pose_step<A: Arith>(world_from_body: &[Transform], body: &Body, q: &[f64]) -> Transform {
     let mut f = joint_frame::<A>(world_from_body, body);
     let z = match body.motion.d {
-        Term::Const(d) if d == 0.0 => [0.0; 3],
+        Term::Const(0.0) => [0.0; 3],
         _ => axis_world::<A>(&f.r, &body.motion.axis),
     };
     apply_motion::<A>(&mut f, &body.motion, q, &z);
@@ -533,18 +545,33 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
     }
 }
 
-/// Rates of the body's parent (zero for a body hanging from the world).
+/// Origin, ω, v, α and a of a body's parent (all zero for a body hanging from the world).
+#[derive(Clone, Copy)]
+struct ParentMotion {
+    origin: [f64; 3],
+    omega: [f64; 3],
+    v: [f64; 3],
+    alpha: [f64; 3],
+    a: [f64; 3],
+}
+
 #[inline(always)]
-fn parent_rates(data: &Data, body: &Body) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
+fn parent_motion(data: &Data, body: &Body) -> ParentMotion {
     match body.parent {
-        Some(p) => (
-            data.world_from_body[p].p,
-            data.omega[p],
-            data.vel[p],
-            data.alpha[p],
-            data.acc[p],
-        ),
-        None => ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]),
+        Some(p) => ParentMotion {
+            origin: data.world_from_body[p].p,
+            omega: data.omega[p],
+            v: data.vel[p],
+            alpha: data.alpha[p],
+            a: data.acc[p],
+        },
+        None => ParentMotion {
+            origin: [0.0; 3],
+            omega: [0.0; 3],
+            v: [0.0; 3],
+            alpha: [0.0; 3],
+            a: [0.0; 3],
+        },
     }
 }
 
@@ -564,7 +591,13 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
         place::<A>(&mut f, &body.post);
         data.world_from_body[k] = f;
 
-        let (p_parent, w_p, v_p, al_p, a_p) = parent_rates(data, body);
+        let ParentMotion {
+            origin: p_parent,
+            omega: w_p,
+            v: v_p,
+            alpha: al_p,
+            a: a_p,
+        } = parent_motion(data, body);
         let m = &body.motion;
         let (th_d, d_d) = (m.theta.rate(q_dot), m.d.rate(q_dot));
         let u = sub3(f.p, p_joint);

@@ -1,6 +1,9 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
-#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used, clippy::panic))]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 mod arith;
 pub mod chain;
@@ -20,7 +23,8 @@ pub use data::{Data, LimitPolicy};
 pub use error::{FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
 pub use joint::{JointKind, Limits};
 pub use kinematics::{
-    Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q, forward_accelerations,
-    forward_kinematics, forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
+    Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
+    forward_accelerations, forward_kinematics, forward_kinematics_incremental,
+    forward_kinematics_to, forward_velocities,
 };
 pub use transform::{NotRigid, Transform};

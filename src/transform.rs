@@ -45,7 +45,9 @@ pub enum NotRigid {
         deviation: f64,
     },
     /// `RᵀR` differs from the identity by more than the tolerance.
-    #[error("rotation block is not orthonormal: max |RᵀR − I| = {deviation:e} (tolerance {tolerance:e})")]
+    #[error(
+        "rotation block is not orthonormal: max |RᵀR − I| = {deviation:e} (tolerance {tolerance:e})"
+    )]
     NotOrthonormal {
         /// Largest entry of `|RᵀR − I|`.
         deviation: f64,
@@ -302,12 +304,6 @@ impl Transform {
             r[0][2] * u[0] + r[1][2] * u[1] + r[2][2] * u[2],
         ]
     }
-
-    /// `Rᵀ u` on plain arrays.
-    #[inline(always)]
-    pub(crate) fn apply_transpose(&self, u: [f64; 3]) -> [f64; 3] {
-        [dot3(self.r[0], u), dot3(self.r[1], u), dot3(self.r[2], u)]
-    }
 }
 
 impl Mul for Transform {
@@ -315,7 +311,7 @@ impl Mul for Transform {
 
     /// Composition: `(a * b)` maps through `b` first, then `a`.
     fn mul(self, rhs: Transform) -> Transform {
-        &self * &rhs
+        compose(&self, &rhs)
     }
 }
 
@@ -323,14 +319,14 @@ impl Mul<&Transform> for &Transform {
     type Output = Transform;
 
     fn mul(self, rhs: &Transform) -> Transform {
-        Transform {
-            r: [
-                self.apply(rhs.r[0]),
-                self.apply(rhs.r[1]),
-                self.apply(rhs.r[2]),
-            ],
-            p: add3(self.p, self.apply(rhs.p)),
-        }
+        compose(self, rhs)
+    }
+}
+
+fn compose(a: &Transform, b: &Transform) -> Transform {
+    Transform {
+        r: [a.apply(b.r[0]), a.apply(b.r[1]), a.apply(b.r[2])],
+        p: add3(a.p, a.apply(b.p)),
     }
 }
 
@@ -384,7 +380,8 @@ mod tests {
     fn rpy_is_rz_ry_rx() {
         let rpy = [0.4, -1.1, 2.9];
         let direct = Transform::from_xyz_rpy([0.0; 3], rpy);
-        let product = Transform::rot_z(rpy[2]) * Transform::rot_y(rpy[1]) * Transform::rot_x(rpy[0]);
+        let product =
+            Transform::rot_z(rpy[2]) * Transform::rot_y(rpy[1]) * Transform::rot_x(rpy[0]);
         assert_relative_eq!(
             direct.rotation(),
             product.rotation(),

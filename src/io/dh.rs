@@ -15,8 +15,8 @@ use crate::chain::{ChainBuilder, JointSpec};
 use crate::error::{FieldProblem, LoadErrorKind};
 use crate::joint::{JointKind, Limits};
 use crate::transform::Transform;
-use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
+use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde_saphyr::{Spanned, Tagged};
 use std::f64::consts::TAU;
 
@@ -193,15 +193,15 @@ impl Reader<'_> {
     }
 
     fn plain(&self, field: &str, x: &Plain) -> Result<f64, LoadErrorKind> {
-        if let Some(tag) = &x.0.1 {
-            if UNIT_TAGS.contains(&tag.as_str()) {
-                return Err(self.problem(
-                    field,
-                    FieldProblem::Shape {
-                        expected: "a length or plain number (a !degrees/!radians tag does not belong here)",
-                    },
-                ));
-            }
+        if let Some(tag) = &x.0.1
+            && UNIT_TAGS.contains(&tag.as_str())
+        {
+            return Err(self.problem(
+                field,
+                FieldProblem::Shape {
+                    expected: "a length or plain number (a !degrees/!radians tag does not belong here)",
+                },
+            ));
         }
         self.finite(field, x.0.0)
     }
@@ -247,10 +247,7 @@ impl Reader<'_> {
             if angular {
                 self.angle("limits", x)
             } else {
-                self.plain(
-                    "limits",
-                    &Plain(Tagged(x.0.value.0, x.0.value.1.clone())),
-                )
+                self.plain("limits", &Plain(Tagged(x.0.value.0, x.0.value.1.clone())))
             }
         };
         let (lower, upper) = (read(&values[0])?, read(&values[1])?);
@@ -304,8 +301,8 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
         angle_conversions: true,
         reject_unsupported_tags: true,
     };
-    let raw: RawRobot = serde_saphyr::from_str_with_options(source, options)
-        .map_err(|e| yaml_error(source, &e))?;
+    let raw: RawRobot =
+        serde_saphyr::from_str_with_options(source, options).map_err(|e| yaml_error(source, &e))?;
     let unit = raw.angle_unit;
     let mut r = Reader {
         source,
@@ -446,7 +443,9 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
         let name = tool.name.clone().unwrap_or_else(|| "tool".to_string());
         let placement = r.frame("tool", tool)?;
         b.link(name.clone());
-        b.joint(JointSpec::new(name.clone(), JointKind::Fixed, parent, name).with_origin(placement));
+        b.joint(
+            JointSpec::new(name.clone(), JointKind::Fixed, parent, name).with_origin(placement),
+        );
     }
     Ok(b)
 }

@@ -70,10 +70,7 @@ impl Chain {
                 offset: e.valid_up_to(),
             })
         })?;
-        let stem = path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("robot");
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
         parse(text, format, stem).map_err(fail)
     }
 

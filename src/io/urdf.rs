@@ -47,8 +47,13 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         };
         finite("origin.xyz", &j.origin.xyz.0)?;
         finite("origin.rpy", &j.origin.rpy.0)?;
-        let mut spec = JointSpec::new(j.name.clone(), kind, j.parent.link.clone(), j.child.link.clone())
-            .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
+        let mut spec = JointSpec::new(
+            j.name.clone(),
+            kind,
+            j.parent.link.clone(),
+            j.child.link.clone(),
+        )
+        .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
         if kind != JointKind::Fixed {
             finite("axis.xyz", &j.axis.xyz.0)?;
             if j.axis.xyz.0 == [0.0; 3] {
@@ -68,12 +73,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
                 ));
             }
             if l.lower.is_nan() || l.upper.is_nan() {
-                return Err(field(
-                    "limit",
-                    FieldProblem::NonFinite {
-                        value: f64::NAN,
-                    },
-                ));
+                return Err(field("limit", FieldProblem::NonFinite { value: f64::NAN }));
             }
             if l.lower > l.upper {
                 return Err(field(
@@ -159,7 +159,9 @@ fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
             continue;
         }
         for attr in ["xyz", "rpy"] {
-            let Some(value) = attribute(tag, attr) else { continue };
+            let Some(value) = attribute(tag, attr) else {
+                continue;
+            };
             let tokens: Vec<&str> = value.split_whitespace().collect();
             if tokens.len() != 3 || tokens.iter().any(|t| t.parse::<f64>().is_err()) {
                 let line = source[..offset].matches('\n').count() + 1;
@@ -182,7 +184,9 @@ fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
         from = at + name.len();
         let before_ok = tag[..at].ends_with(|c: char| c.is_whitespace());
         let rest = tag[from..].trim_start();
-        let Some(rest) = rest.strip_prefix('=') else { continue };
+        let Some(rest) = rest.strip_prefix('=') else {
+            continue;
+        };
         let rest = rest.trim_start();
         let Some(quote) = rest.chars().next().filter(|c| *c == '"' || *c == '\'') else {
             continue;

@@ -1,0 +1,263 @@
+//! The `kinechain` command line, through the built binary.
+
+mod common;
+
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Output};
+
+fn kinechain(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+fn ok_json(args: &[&str]) -> Vec<Value> {
+    let out = kinechain(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// Runs a command that must fail; returns its one-line stderr.
+fn error(args: &[&str]) -> String {
+    let out = kinechain(args);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{args:?}: stderr is not one line: {stderr}");
+    assert!(lines[0].starts_with("error: "), "{args:?}: {stderr}");
+    lines[0].to_string()
+}
+
+fn position(result: &Value, link: &str) -> [f64; 3] {
+    let pose = &result["links"][link]["pose"];
+    [0, 1, 2].map(|i| pose[i][3].as_f64().unwrap())
+}
+
+#[test]
+fn info_lists_joints_in_q_order_and_links() {
+    let v = &ok_json(&["info", "robots/panda.urdf"])[0];
+    assert_eq!(v["name"], "panda");
+    assert_eq!(v["dof"], 8);
+    let joints = v["joints"].as_array().unwrap();
+    assert_eq!(joints.len(), 8);
+    assert_eq!(joints[0]["name"], "panda_joint1");
+    assert_eq!(joints[0]["type"], "revolute");
+    assert_eq!(joints[0]["dof"], 1);
+    assert_eq!(joints[3]["limits"], serde_json::json!([-3.0718, -0.0698]));
+    assert_eq!(joints[7]["name"], "panda_finger_joint1");
+    let passive = v["passive_joints"].as_array().unwrap();
+    assert!(passive.iter().any(
+        |j| j["name"] == "panda_finger_joint2" && j["mimic"]["joint"] == "panda_finger_joint1"
+    ));
+    let links = v["links"].as_array().unwrap();
+    assert_eq!(links.len(), 13);
+    assert_eq!(links[0], "panda_link0");
+
+    let cyl = &ok_json(&["info", "robots/cylindrical.yaml"])[0];
+    assert_eq!(cyl["dof"], 2);
+    assert_eq!(cyl["joints"][0]["type"], "cylindrical");
+    assert_eq!(cyl["joints"][0]["dof"], 2);
+    assert_eq!(
+        cyl["joints"][0]["limits"]["d"],
+        serde_json::json!([-5.0, 5.0])
+    );
+
+    let out = kinechain(&["info", "robots/puma560.yaml", "--format", "table"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("puma560: 6 degrees of freedom"), "{text}");
+}
+
+#[test]
+fn fk_with_array_and_object_q_agree() {
+    let q = "[0.1, -0.4, 0.3, 0.2, 0.5, -0.6]";
+    let object = r#"{"j1": 0.1, "j2": -0.4, "j3": 0.3, "j4": 0.2, "j5": 0.5, "j6": -0.6}"#;
+    let a = &ok_json(&["fk", "robots/puma560.yaml", "--q", q])[0];
+    let b = &ok_json(&["fk", "robots/puma560.yaml", "--q", object])[0];
+    let c = &ok_json(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        "0.1,-0.4,0.3,0.2,0.5,-0.6",
+    ])[0];
+    assert_eq!(a, b);
+    assert_eq!(a, c);
+    let links = a["links"].as_object().unwrap();
+    assert_eq!(links.len(), 8, "link0..link6 and tool");
+    assert!(links.keys().eq([
+        "link0", "link1", "link2", "link3", "link4", "link5", "link6", "tool"
+    ]));
+    let pose = links["tool"]["pose"].as_array().unwrap();
+    assert_eq!(pose[3], serde_json::json!([0.0, 0.0, 0.0, 1.0]));
+    // No rates unless asked for.
+    assert!(links["tool"].get("omega").is_none());
+}
+
+#[test]
+fn fk_output_round_trips_and_matches_the_library() {
+    use kinechain::{Chain, Data, forward_kinematics};
+    let chain = Chain::from_file("robots/panda_mdh.yaml").unwrap();
+    let q = [0.3, -0.2, 0.1, -1.9, 0.4, 1.6, -0.7];
+    let arg = serde_json::to_string(&q).unwrap();
+    let v = &ok_json(&["fk", "robots/panda_mdh.yaml", "--q", &arg])[0];
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+    for link in chain.links() {
+        let want = poses
+            .world_from_link(chain.link_id(link.name()).unwrap())
+            .to_rows();
+        let got = &v["links"][link.name()]["pose"];
+        for i in 0..4 {
+            for j in 0..4 {
+                // Bit for bit: the JSON numbers round-trip.
+                assert_eq!(got[i][j].as_f64().unwrap().to_bits(), want[i][j].to_bits());
+            }
+        }
+    }
+}
+
+#[test]
+fn fk_link_prints_only_the_named_links() {
+    let q = "[0.1, -0.4, 0.3, 0.2, 0.5, -0.6]";
+    let all = &ok_json(&["fk", "robots/puma560.yaml", "--q", q])[0];
+    let some = &ok_json(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        q,
+        "--link",
+        "tool",
+        "--link",
+        "link2",
+    ])[0];
+    let links = some["links"].as_object().unwrap();
+    assert!(links.keys().eq(["tool", "link2"]));
+    assert_eq!(links["tool"], all["links"]["tool"]);
+    assert_eq!(links["link2"], all["links"]["link2"]);
+}
+
+#[test]
+fn fk_batch_writes_one_line_per_configuration() {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let batch = dir.join("batch.jsonl");
+    let mut f = std::fs::File::create(&batch).unwrap();
+    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
+    writeln!(f).unwrap();
+    writeln!(
+        f,
+        r#"{{"q": {{"j1": 1.5707963267948966, "j2": 0, "j3": 0}}}}"#
+    )
+    .unwrap();
+    writeln!(f, r#"{{"q": [0, 0, 0], "qd": [1, 0, 0]}}"#).unwrap();
+    drop(f);
+    let batch_arg = batch.to_str().unwrap();
+    let lines = ok_json(&["fk", "robots/planar3.yaml", "--batch", batch_arg]);
+    assert_eq!(lines.len(), 3, "the blank line is skipped");
+    assert_eq!(position(&lines[0], "link3"), [9.0, 0.0, 0.0]);
+    let p = position(&lines[1], "link3");
+    assert!(p[0].abs() < 1e-15 && (p[1] - 9.0).abs() < 1e-15);
+    // ω = (0,0,1) at every link; the tip moves at 9 m/s along y.
+    assert_eq!(
+        lines[2]["links"]["link3"]["omega"],
+        serde_json::json!([0.0, 0.0, 1.0])
+    );
+    assert_eq!(
+        lines[2]["links"]["link3"]["v"],
+        serde_json::json!([0.0, 9.0, 0.0])
+    );
+
+    // A bad line: earlier results are written, the error names the line.
+    let mut f = std::fs::File::create(&batch).unwrap();
+    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
+    writeln!(f, r#"{{"q": [0, 0]}}"#).unwrap();
+    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
+    drop(f);
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", batch_arg]);
+    assert!(!out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.starts_with("error: "), "{stderr}");
+    assert!(stderr.contains("line 2"), "{stderr}");
+    assert!(stderr.contains("2 values given"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn failures_are_one_line_errors() {
+    let m = error(&["fk", "robots/puma560.yaml", "--q", "[0, 0]"]);
+    assert!(
+        m.contains("2 values given") && m.contains("6 degrees of freedom"),
+        "{m}"
+    );
+
+    let m = error(&["fk", "robots/puma560.yaml", "--q", "[90, 0, 0, 0, 0, 0]"]);
+    assert!(m.contains("joint 'j1'") && m.contains("limits"), "{m}");
+    assert!(m.contains("degrees"), "a hint about degrees: {m}");
+    // --ignore-limits evaluates it anyway.
+    ok_json(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        "[90, 0, 0, 0, 0, 0]",
+        "--ignore-limits",
+    ]);
+
+    let m = error(&["fk", "robots/puma560.yaml", "--q", "[nan, 0, 0, 0, 0, 0]"]);
+    assert!(m.contains("not valid JSON"), "{m}");
+    let m = error(&["fk", "robots/puma560.yaml", "--q", "NaN,0,0,0,0,0"]);
+    assert!(
+        m.contains("not a finite number") && m.contains("'j1'"),
+        "{m}"
+    );
+
+    let m = error(&["fk", "robots/puma560.yaml", "--q", r#"{"j1": 0}"#]);
+    assert!(m.contains("no value for joint 'j2'"), "{m}");
+    let m = error(&["fk", "robots/puma560.yaml", "--q", r#"{"elbow": 0}"#]);
+    assert!(m.contains("no joint named 'elbow'"), "{m}");
+
+    let m = error(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        "[0,0,0,0,0,0]",
+        "--link",
+        "hand",
+    ]);
+    assert!(m.contains("no link named 'hand'"), "{m}");
+
+    let m = error(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        "[0,0,0,0,0,0]",
+        "--qdd",
+        "[0,0,0,0,0,0]",
+    ]);
+    assert!(m.contains("--qdd needs --qd"), "{m}");
+
+    let m = error(&["fk", "robots/nothing.yaml", "--q", "[]"]);
+    assert!(
+        m.contains("robots/nothing.yaml") && m.contains("cannot read"),
+        "{m}"
+    );
+
+    let m = error(&["info", "tests/data/bad/yaml/unknown_key.yaml"]);
+    assert!(m.contains("alhpa") && m.contains("joint 'j2'"), "{m}");
+
+    // Usage errors: one line too, exit code 2.
+    let out = kinechain(&["fk", "robots/puma560.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(String::from_utf8(out.stderr).unwrap().lines().count(), 1);
+}

@@ -1,0 +1,253 @@
+//! Helpers shared by the integration tests: the reference data of `tests/data/reference/`
+//! (see its README), turned into chains and joint vectors.
+#![allow(dead_code)]
+
+use kinechain::{Chain, Transform};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Root of the copied reference data.
+pub fn reference_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/reference")
+}
+
+/// The bundled robot files.
+pub fn robots_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("robots")
+}
+
+/// Every double-precision reference file (`*.json`, not `*.hp.json`), sorted.
+pub fn reference_files() -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for kind in ["axis", "dh", "stress", "urdf"] {
+        let dir = reference_dir().join(kind);
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+            .map(|e| e.unwrap().path())
+            .filter(|p| {
+                let name = p.file_name().unwrap().to_str().unwrap();
+                name.ends_with(".json") && !name.ends_with(".hp.json")
+            })
+            .collect();
+        files.sort();
+        out.extend(files);
+    }
+    assert!(out.len() >= 15, "reference data missing: {out:?}");
+    out
+}
+
+pub fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The high-precision companion of a reference file.
+pub fn hp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .unwrap()
+        .to_str()
+        .unwrap()
+        .replace(".json", ".hp.json");
+    path.with_file_name(name)
+}
+
+/// A number of the reference (double files hold numbers, `.hp.json` files strings).
+pub fn num(v: &Value) -> f64 {
+    match v {
+        Value::Number(n) => n.as_f64().unwrap(),
+        Value::String(s) => s.parse().unwrap(),
+        other => panic!("not a number: {other}"),
+    }
+}
+
+pub fn vec3(v: &Value) -> [f64; 3] {
+    let a = v.as_array().unwrap();
+    [num(&a[0]), num(&a[1]), num(&a[2])]
+}
+
+pub fn matrix4(v: &Value) -> [[f64; 4]; 4] {
+    let mut m = [[0.0; 4]; 4];
+    for (i, row) in v.as_array().unwrap().iter().enumerate() {
+        for (j, x) in row.as_array().unwrap().iter().enumerate() {
+            m[i][j] = num(x);
+        }
+    }
+    m
+}
+
+/// Shortest round-trip text of a float, as YAML accepts it.
+fn f(x: f64) -> String {
+    assert!(x.is_finite());
+    format!("{x:?}")
+}
+
+fn matrix_yaml(v: &Value) -> String {
+    let rows: Vec<String> = matrix4(v)
+        .iter()
+        .map(|r| {
+            format!(
+                "[{}]",
+                r.iter().map(|x| f(*x)).collect::<Vec<_>>().join(", ")
+            )
+        })
+        .collect();
+    format!("[{}]", rows.join(", "))
+}
+
+/// A reference `dh` or `axis` model written in kinechain's DH YAML format (as documented in the
+/// README), following the reference README's conventions.
+pub fn model_yaml(reference: &Value) -> String {
+    let m = &reference["model"];
+    let mut out = vec![format!("name: {}", reference["robot"].as_str().unwrap())];
+    match m["kind"].as_str().unwrap() {
+        "dh" => {
+            out.push(format!("convention: {}", m["convention"].as_str().unwrap()));
+            out.push(format!(
+                "base: {{name: link0, matrix: {}}}",
+                matrix_yaml(&m["base"])
+            ));
+            out.push(format!(
+                "tool: {{name: tool, matrix: {}}}",
+                matrix_yaml(&m["tool"])
+            ));
+            out.push("joints:".into());
+            for j in m["joints"].as_array().unwrap() {
+                assert_eq!(
+                    j["flip"],
+                    Value::Bool(false),
+                    "flipped joints are not modelled"
+                );
+                let kind = j["type"].as_str().unwrap();
+                // Revolute: theta = q + offset, d constant; prismatic: d = q + offset.
+                let (theta, d) = match kind {
+                    "revolute" => (num(&j["offset"]), num(&j["d"])),
+                    "prismatic" => (num(&j["theta"]), num(&j["offset"])),
+                    other => panic!("{other}"),
+                };
+                let lim = j["qlim"].as_array().unwrap();
+                out.push(format!(
+                    "  - {{name: {}, link: {}, type: {kind}, a: {}, alpha: {}, d: {}, theta: {}, limits: [{}, {}]}}",
+                    j["name"].as_str().unwrap(),
+                    j["link"].as_str().unwrap(),
+                    f(num(&j["a"])),
+                    f(num(&j["alpha"])),
+                    f(d),
+                    f(theta),
+                    f(num(&lim[0])),
+                    f(num(&lim[1])),
+                ));
+            }
+        }
+        "axis" => {
+            out.push("convention: axis".into());
+            out.push(format!(
+                "base: {{name: {}}}",
+                m["base_link"].as_str().unwrap()
+            ));
+            out.push("joints:".into());
+            for j in m["joints"].as_array().unwrap() {
+                let axis = vec3(&j["axis"]);
+                out.push(format!("  - name: {}", j["name"].as_str().unwrap()));
+                out.push(format!("    link: {}", j["link"].as_str().unwrap()));
+                out.push(format!("    type: {}", j["type"].as_str().unwrap()));
+                out.push(format!(
+                    "    origin: {{matrix: {}}}",
+                    matrix_yaml(&j["origin"])
+                ));
+                out.push(format!(
+                    "    axis: [{}, {}, {}]",
+                    f(axis[0]),
+                    f(axis[1]),
+                    f(axis[2])
+                ));
+            }
+        }
+        other => panic!("no YAML form for model kind {other}"),
+    }
+    out.join("\n") + "\n"
+}
+
+/// The chain a reference file describes.
+pub fn reference_chain(path: &Path, reference: &Value) -> Chain {
+    let m = &reference["model"];
+    let chain = if m["kind"] == "urdf" {
+        Chain::from_file(path.with_file_name(m["file"].as_str().unwrap()))
+    } else {
+        Chain::from_dh_yaml_str(&model_yaml(reference))
+    };
+    chain.unwrap_or_else(|e| panic!("{}: {}", path.display(), kinechain::cli::error_chain(&e)))
+}
+
+/// A `{joint: value}` map of a sample (`q`, `qd` or `qdd`) in the chain's `q` order.
+pub fn joint_vector(chain: &Chain, map: &Value) -> Vec<f64> {
+    kinechain::input::joint_vector_from_json(chain, map, "q").unwrap()
+}
+
+/// Largest absolute difference between the top three rows of two poses.
+pub fn pose_error(a: &Transform, b: &[[f64; 4]; 4]) -> f64 {
+    let a = a.to_rows();
+    let mut worst: f64 = 0.0;
+    for i in 0..3 {
+        for j in 0..4 {
+            worst = worst.max((a[i][j] - b[i][j]).abs());
+        }
+    }
+    worst
+}
+
+pub fn vec_error(a: &kinechain::nalgebra::Vector3<f64>, b: [f64; 3]) -> f64 {
+    (0..3).map(|i| (a[i] - b[i]).abs()).fold(0.0, f64::max)
+}
+
+/// The largest magnitude of a link quantity over every sample and link of a reference file
+/// (at least 1): errors are reported relative to it.
+pub fn scale_of(reference: &Value, field: &str) -> f64 {
+    let mut s: f64 = 1.0;
+    for sample in reference["samples"].as_array().unwrap() {
+        for link in sample["links"].as_object().unwrap().values() {
+            let v = &link[field];
+            if field == "pose" {
+                for row in v.as_array().unwrap().iter().take(3) {
+                    s = s.max(num(&row[3]).abs());
+                }
+            } else {
+                for x in v.as_array().unwrap() {
+                    s = s.max(num(x).abs());
+                }
+            }
+        }
+    }
+    s
+}
+
+/// A deterministic generator for test inputs.
+pub fn rng(seed: u64) -> rand_chacha::ChaCha8Rng {
+    use rand::SeedableRng;
+    rand_chacha::ChaCha8Rng::seed_from_u64(seed)
+}
+
+/// A random configuration within the joints' limits (±π where a joint has none).
+pub fn random_q(chain: &Chain, rng: &mut impl rand::Rng) -> Vec<f64> {
+    let mut q = vec![0.0; chain.dof()];
+    for joint in chain.joints() {
+        let Some(first) = joint.q_index() else {
+            continue;
+        };
+        for (k, limits) in joint.limits().iter().enumerate() {
+            let (lo, hi) = match limits {
+                Some(l) if l.lower.is_finite() && l.upper.is_finite() => (l.lower, l.upper),
+                _ => (-std::f64::consts::PI, std::f64::consts::PI),
+            };
+            q[first + k] = lo + (hi - lo) * rng.random::<f64>();
+        }
+    }
+    q
+}
+
+/// A random vector with entries uniform in [-scale, scale].
+pub fn random_vec(n: usize, scale: f64, rng: &mut impl rand::Rng) -> Vec<f64> {
+    (0..n)
+        .map(|_| scale * (2.0 * rng.random::<f64>() - 1.0))
+        .collect()
+}

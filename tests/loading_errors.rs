@@ -1,0 +1,389 @@
+//! One bad file per failure mode (`tests/data/bad/`): each load fails with the expected error
+//! kind, naming the file, the joint or link, and the field.
+
+use kinechain::{Chain, FieldProblem, LoadError, LoadErrorKind, ModelError, NotRigid};
+use std::path::Path;
+
+fn load(relative: &str) -> LoadError {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/bad")
+        .join(relative);
+    match Chain::from_file(&path) {
+        Ok(chain) => panic!(
+            "{relative}: loaded ({} dof) instead of failing",
+            chain.dof()
+        ),
+        Err(e) => {
+            assert_eq!(e.path(), path);
+            let message = kinechain::cli::error_chain(&e);
+            assert!(
+                message.contains(relative),
+                "{relative}: message '{message}' does not name the file"
+            );
+            assert!(
+                !message.contains('\n'),
+                "{relative}: multi-line message '{message}'"
+            );
+            e
+        }
+    }
+}
+
+fn message(e: &LoadError) -> String {
+    kinechain::cli::error_chain(e)
+}
+
+fn field(e: &LoadError) -> (Option<&str>, &str, &FieldProblem) {
+    match e.kind() {
+        LoadErrorKind::Field {
+            joint,
+            field,
+            problem,
+        } => (joint.as_deref(), field.as_str(), problem),
+        other => panic!("expected a field error, got {other:?}"),
+    }
+}
+
+fn yaml(e: &LoadError) -> (Option<&str>, Option<u64>, &str) {
+    match e.kind() {
+        LoadErrorKind::Yaml {
+            joint,
+            line,
+            message,
+            ..
+        } => (joint.as_deref(), *line, message.as_str()),
+        other => panic!("expected a YAML error, got {other:?}"),
+    }
+}
+
+fn model(e: &LoadError) -> &ModelError {
+    match e.kind() {
+        LoadErrorKind::Model(m) => m,
+        other => panic!("expected a model error, got {other:?}"),
+    }
+}
+
+#[test]
+fn yaml_unknown_keys_name_the_key_and_the_joint() {
+    let e = load("yaml/unknown_key.yaml");
+    let (joint, line, msg) = yaml(&e);
+    assert_eq!(joint, Some("j2"));
+    assert_eq!(line, Some(7));
+    assert!(msg.contains("unknown field `alhpa`"), "{msg}");
+    assert!(message(&e).contains("joint 'j2'"));
+
+    let e = load("yaml/unknown_top_key.yaml");
+    let (joint, _, msg) = yaml(&e);
+    assert_eq!(joint, None);
+    assert!(msg.contains("`convension`"), "{msg}");
+}
+
+#[test]
+fn yaml_missing_and_mistyped_fields() {
+    let e = load("yaml/missing_field.yaml");
+    let (joint, name, problem) = field(&e);
+    assert_eq!((joint, name), (Some("j1"), "d"));
+    assert!(matches!(problem, FieldProblem::Missing { .. }));
+
+    let e = load("yaml/missing_convention.yaml");
+    assert!(yaml(&e).2.contains("missing field `convention`"));
+
+    let e = load("yaml/wrong_type.yaml");
+    assert_eq!(yaml(&e).0, Some("j1"));
+
+    let e = load("yaml/axis_without_origin.yaml");
+    let (joint, name, problem) = field(&e);
+    assert_eq!((joint, name), (Some("j1"), "origin"));
+    assert!(matches!(problem, FieldProblem::Missing { .. }));
+}
+
+#[test]
+fn yaml_non_finite_numbers() {
+    for (file, name) in [("yaml/nan.yaml", "d"), ("yaml/inf.yaml", "a")] {
+        let e = load(file);
+        let (joint, f, problem) = field(&e);
+        assert_eq!((joint, f), (Some("j1"), name), "{file}");
+        assert!(matches!(problem, FieldProblem::NonFinite { .. }), "{file}");
+    }
+}
+
+#[test]
+fn yaml_bad_axes() {
+    let e = load("yaml/zero_axis.yaml");
+    let (joint, f, problem) = field(&e);
+    assert_eq!(
+        (joint, f, problem),
+        (Some("j1"), "axis", &FieldProblem::ZeroAxis)
+    );
+
+    let e = load("yaml/malformed_axis.yaml");
+    let (joint, _, msg) = yaml(&e);
+    assert_eq!(joint, Some("j1"));
+    assert!(msg.contains("invalid length"), "{msg}");
+}
+
+#[test]
+fn yaml_duplicate_names() {
+    assert_eq!(
+        model(&load("yaml/duplicate_joint.yaml")),
+        &ModelError::DuplicateJoint { name: "j1".into() }
+    );
+    assert_eq!(
+        model(&load("yaml/duplicate_link.yaml")),
+        &ModelError::DuplicateLink { name: "arm".into() }
+    );
+    assert_eq!(
+        model(&load("yaml/empty_name.yaml")),
+        &ModelError::EmptyName { what: "joint" }
+    );
+    let e = load("yaml/duplicate_key.yaml");
+    assert!(
+        yaml(&e).2.contains("duplicate mapping key"),
+        "{}",
+        message(&e)
+    );
+}
+
+#[test]
+fn yaml_reversed_limits() {
+    let e = load("yaml/reversed_limits.yaml");
+    let (joint, f, problem) = field(&e);
+    assert_eq!((joint, f), (Some("j1"), "limits"));
+    assert_eq!(
+        problem,
+        &FieldProblem::ReversedLimits {
+            lower: 1.0,
+            upper: -1.0
+        }
+    );
+}
+
+#[test]
+fn yaml_matrices_must_be_rigid() {
+    let e = load("yaml/non_rigid_matrix.yaml");
+    let (joint, f, problem) = field(&e);
+    assert_eq!((joint, f), (None, "base.matrix"));
+    assert!(matches!(
+        problem,
+        FieldProblem::NotRigid(NotRigid::NotOrthonormal { .. })
+    ));
+
+    let e = load("yaml/reflection_matrix.yaml");
+    let (_, f, problem) = field(&e);
+    assert_eq!(f, "tool.matrix");
+    assert!(matches!(
+        problem,
+        FieldProblem::NotRigid(NotRigid::Reflection { .. })
+    ));
+
+    let e = load("yaml/matrix_and_xyz.yaml");
+    assert!(matches!(field(&e).2, FieldProblem::NotAllowed { .. }));
+}
+
+#[test]
+fn yaml_keys_that_do_not_belong() {
+    let e = load("yaml/dh_with_origin.yaml");
+    let (joint, f, problem) = field(&e);
+    assert_eq!((joint, f), (Some("j1"), "origin"));
+    assert!(matches!(problem, FieldProblem::NotAllowed { .. }));
+
+    let e = load("yaml/cylindrical_pair_limits.yaml");
+    assert!(matches!(field(&e).2, FieldProblem::Shape { .. }));
+
+    let e = load("yaml/limits_on_fixed.yaml");
+    assert!(matches!(field(&e).2, FieldProblem::NotAllowed { .. }));
+
+    let e = load("yaml/degrees_tag_on_length.yaml");
+    let (joint, f, problem) = field(&e);
+    assert_eq!((joint, f), (Some("j1"), "d"));
+    assert!(matches!(problem, FieldProblem::Shape { .. }));
+}
+
+#[test]
+fn yaml_unknown_values_and_tags() {
+    for file in [
+        "yaml/unknown_convention.yaml",
+        "yaml/unknown_joint_type.yaml",
+        "yaml/unknown_angle_unit.yaml",
+    ] {
+        let e = load(file);
+        assert!(
+            yaml(&e).2.contains("unknown variant"),
+            "{file}: {}",
+            message(&e)
+        );
+    }
+    let e = load("yaml/unknown_tag.yaml");
+    let (joint, _, msg) = yaml(&e);
+    assert_eq!(joint, Some("j1"));
+    assert!(msg.contains("!foo"), "{msg}");
+
+    let e = load("yaml/ambiguous_angle.yaml");
+    assert!(matches!(field(&e).2, FieldProblem::AmbiguousAngle { .. }));
+}
+
+#[test]
+fn yaml_empty_syntax_and_garbage() {
+    assert!(matches!(
+        load("yaml/empty.yaml").kind(),
+        LoadErrorKind::Empty
+    ));
+    assert!(matches!(
+        load("yaml/comment_only.yaml").kind(),
+        LoadErrorKind::Empty
+    ));
+    let e = load("yaml/syntax_error.yaml");
+    assert!(yaml(&e).1.is_some(), "{}", message(&e));
+    assert!(matches!(
+        load("yaml/binary.yaml").kind(),
+        LoadErrorKind::NotText { .. }
+    ));
+}
+
+#[test]
+fn urdf_unsupported_joint_types_are_refused_not_made_fixed() {
+    for (file, kind) in [
+        ("urdf/floating.urdf", "floating"),
+        ("urdf/planar.urdf", "planar"),
+    ] {
+        let e = load(file);
+        let (joint, f, problem) = field(&e);
+        assert_eq!(f, "type", "{file}");
+        assert!(joint.is_some(), "{file}");
+        assert_eq!(
+            problem,
+            &FieldProblem::UnsupportedJointType { kind: kind.into() }
+        );
+    }
+}
+
+#[test]
+fn urdf_topology_errors_name_the_joint_or_link() {
+    assert!(
+        matches!(model(&load("urdf/cycle.urdf")), ModelError::TwoParents { link, .. } if link == "a")
+    );
+    assert!(matches!(
+        model(&load("urdf/loop_without_root.urdf")),
+        ModelError::Cycle { .. }
+    ));
+    assert_eq!(
+        model(&load("urdf/multiple_roots.urdf")),
+        &ModelError::MultipleRoots {
+            roots: vec!["base".into(), "other_base".into()]
+        }
+    );
+    assert_eq!(
+        model(&load("urdf/dangling.urdf")),
+        &ModelError::UnknownLink {
+            joint: "j1".into(),
+            role: "child",
+            link: "ghost".into()
+        }
+    );
+    assert!(matches!(
+        model(&load("urdf/two_parents.urdf")),
+        ModelError::TwoParents { link, first, second } if link == "b" && first == "j2" && second == "j3"
+    ));
+    assert_eq!(model(&load("urdf/no_links.urdf")), &ModelError::NoLinks);
+}
+
+#[test]
+fn urdf_mimic_errors() {
+    assert!(matches!(
+        model(&load("urdf/mimic_cycle.urdf")),
+        ModelError::MimicCycle { .. }
+    ));
+    assert_eq!(
+        model(&load("urdf/mimic_missing.urdf")),
+        &ModelError::UnknownMimicTarget {
+            joint: "ja".into(),
+            target: "nowhere".into()
+        }
+    );
+}
+
+#[test]
+fn urdf_bad_numbers_and_axes() {
+    let e = load("urdf/zero_axis.urdf");
+    assert_eq!(field(&e), (Some("ja"), "axis.xyz", &FieldProblem::ZeroAxis));
+    let e = load("urdf/nan_origin.urdf");
+    let (joint, f, problem) = field(&e);
+    assert_eq!((joint, f), (Some("ja"), "origin.xyz"));
+    assert!(matches!(problem, FieldProblem::NonFinite { .. }));
+    let e = load("urdf/inf_axis.urdf");
+    assert!(matches!(
+        field(&e),
+        (Some("ja"), "axis.xyz", FieldProblem::NonFinite { .. })
+    ));
+    let e = load("urdf/malformed_xyz.urdf");
+    assert!(
+        matches!(e.kind(), LoadErrorKind::Urdf { message } if message.contains("1 x 2 3")),
+        "{}",
+        message(&e)
+    );
+}
+
+#[test]
+fn urdf_limits() {
+    let e = load("urdf/missing_limit.urdf");
+    assert_eq!(
+        field(&e),
+        (
+            Some("ja"),
+            "limit",
+            &FieldProblem::MissingLimit { kind: "revolute" }
+        )
+    );
+    let e = load("urdf/reversed_limits.urdf");
+    assert!(matches!(
+        field(&e),
+        (Some("ja"), "limit", FieldProblem::ReversedLimits { .. })
+    ));
+}
+
+#[test]
+fn urdf_duplicates_syntax_and_empty() {
+    assert_eq!(
+        model(&load("urdf/duplicate_joint.urdf")),
+        &ModelError::DuplicateJoint { name: "j".into() }
+    );
+    assert_eq!(
+        model(&load("urdf/duplicate_link.urdf")),
+        &ModelError::DuplicateLink { name: "a".into() }
+    );
+    assert!(matches!(
+        load("urdf/syntax_error.urdf").kind(),
+        LoadErrorKind::Urdf { .. }
+    ));
+    assert!(matches!(
+        load("urdf/empty.urdf").kind(),
+        LoadErrorKind::Empty
+    ));
+}
+
+#[test]
+fn files_that_cannot_be_read() {
+    let missing = Chain::from_file("tests/data/bad/does_not_exist.yaml").unwrap_err();
+    assert!(matches!(missing.kind(), LoadErrorKind::Io(_)));
+    let unknown = Chain::from_file("tests/data/bad/robot.sdf").unwrap_err();
+    assert!(matches!(unknown.kind(), LoadErrorKind::UnknownFormat));
+}
+
+#[test]
+fn every_bad_file_is_exercised() {
+    // Keeps the corpus and this test in step: a new bad file needs an assertion above.
+    let source = include_str!("loading_errors.rs");
+    for dir in ["yaml", "urdf"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/bad")
+            .join(dir);
+        for entry in std::fs::read_dir(path).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            let needle = format!("{dir}/{name}\"");
+            assert!(
+                source.contains(&needle),
+                "tests/data/bad/{dir}/{name} has no test"
+            );
+        }
+    }
+}
