@@ -1,0 +1,141 @@
+//! The evaluation modes agree bit for bit: one link (only the joints on its path), incremental
+//! (only the joints whose inputs changed), and full evaluation.
+
+mod common;
+
+use common::*;
+use kinechain::{
+    Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics,
+    forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
+};
+
+fn chains() -> Vec<Chain> {
+    let mut out: Vec<Chain> = [
+        "puma560.yaml",
+        "panda.urdf",
+        "cylindrical.yaml",
+        "snake50.yaml",
+        "stanford.yaml",
+    ]
+    .iter()
+    .map(|f| Chain::from_file(robots_dir().join(f)).unwrap())
+    .collect();
+    // A tree with fixed frames, a prismatic torso and two branches.
+    out.push(Chain::from_file(reference_dir().join("urdf/tiago_no_hand.urdf")).unwrap());
+    out
+}
+
+#[test]
+fn one_link_equals_the_full_evaluation() {
+    let mut rng = rng(11);
+    for chain in chains() {
+        let (mut full, mut partial) = (Data::new(&chain), Data::new(&chain));
+        full.set_limit_policy(LimitPolicy::Ignore);
+        partial.set_limit_policy(LimitPolicy::Ignore);
+        for _ in 0..10 {
+            let q = random_q(&chain, &mut rng);
+            let poses = forward_kinematics(&chain, &mut full, &q).unwrap();
+            for (i, link) in chain.links().iter().enumerate() {
+                let id = chain.link_id(link.name()).unwrap();
+                assert_eq!(id.index(), i);
+                let one = forward_kinematics_to(&chain, &mut partial, &q, id).unwrap();
+                assert_eq!(
+                    one,
+                    poses.world_from_link(id),
+                    "{} {}",
+                    chain.name(),
+                    link.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn incremental_updates_equal_fresh_evaluations() {
+    let mut rng = rng(12);
+    for chain in chains() {
+        let (mut fresh, mut inc) = (Data::new(&chain), Data::new(&chain));
+        fresh.set_limit_policy(LimitPolicy::Ignore);
+        inc.set_limit_policy(LimitPolicy::Ignore);
+        let mut q = random_q(&chain, &mut rng);
+        for step in 0..200 {
+            // Change one entry, sometimes several, sometimes none.
+            if chain.dof() > 0 && step % 7 != 0 {
+                let i = step * 31 % chain.dof();
+                q[i] += 0.01 * (step as f64).sin();
+            }
+            if step % 13 == 0 {
+                q = random_q(&chain, &mut rng);
+            }
+            let a = forward_kinematics_incremental(&chain, &mut inc, &q).unwrap();
+            let a: Vec<_> = (0..chain.links().len())
+                .map(|i| a.world_from_link(chain.link_id(chain.links()[i].name()).unwrap()))
+                .collect();
+            let b = forward_kinematics(&chain, &mut fresh, &q).unwrap();
+            for (i, pose) in a.iter().enumerate() {
+                let id = chain.link_id(chain.links()[i].name()).unwrap();
+                assert_eq!(*pose, b.world_from_link(id), "{} step {step}", chain.name());
+            }
+        }
+    }
+}
+
+#[test]
+fn a_partial_evaluation_does_not_leave_stale_poses_for_incremental_use() {
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let mut data = Data::new(&chain);
+    let tool = chain.link_id("tool").unwrap();
+    let link2 = chain.link_id("link2").unwrap();
+    let q0 = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+    let q1 = [0.2, 0.3, 0.3, 0.4, 0.5, 0.6];
+    forward_kinematics_incremental(&chain, &mut data, &q0).unwrap();
+    // Moves only the path to link2 to q1.
+    forward_kinematics_to(&chain, &mut data, &q1, link2).unwrap();
+    let inc = forward_kinematics_incremental(&chain, &mut data, &q1)
+        .unwrap()
+        .world_from_link(tool);
+    let mut fresh = Data::new(&chain);
+    let full = forward_kinematics(&chain, &mut fresh, &q1)
+        .unwrap()
+        .world_from_link(tool);
+    assert_eq!(inc, full);
+}
+
+#[test]
+fn every_level_gives_the_same_poses() {
+    let mut rng = rng(13);
+    for chain in chains() {
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let q = random_q(&chain, &mut rng);
+        let qd = random_vec(chain.dof(), 1.0, &mut rng);
+        let qdd = random_vec(chain.dof(), 1.0, &mut rng);
+        let poses: Vec<_> = {
+            let p = forward_kinematics(&chain, &mut data, &q).unwrap();
+            chain
+                .links()
+                .iter()
+                .map(|l| p.world_from_link(chain.link_id(l.name()).unwrap()))
+                .collect()
+        };
+        let vel: Vec<_> = {
+            let v = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
+            chain
+                .links()
+                .iter()
+                .map(|l| {
+                    let id = chain.link_id(l.name()).unwrap();
+                    (v.world_from_link(id), v.velocity(id))
+                })
+                .collect()
+        };
+        let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+        for (i, l) in chain.links().iter().enumerate() {
+            let id = chain.link_id(l.name()).unwrap();
+            assert_eq!(poses[i], vel[i].0);
+            assert_eq!(poses[i], acc.world_from_link(id));
+            assert_eq!(vel[i].1, acc.velocity(id));
+        }
+    }
+}

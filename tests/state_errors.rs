@@ -1,0 +1,243 @@
+//! Joint-space vectors that cannot be evaluated: each rule returns its typed error naming the
+//! joint (and for a cylindrical joint the coordinate), never a panic or a NaN result.
+
+mod common;
+
+use kinechain::input::{InputError, joint_vector_from_json, joint_vector_from_str};
+use kinechain::{
+    Chain, Data, LimitPolicy, StateError, forward_accelerations, forward_kinematics,
+    forward_kinematics_to, forward_velocities,
+};
+use serde_json::json;
+
+fn robot(name: &str) -> Chain {
+    Chain::from_file(common::robots_dir().join(name)).unwrap()
+}
+
+#[test]
+fn wrong_lengths() {
+    let chain = robot("puma560.yaml");
+    let mut data = Data::new(&chain);
+    let e = forward_kinematics(&chain, &mut data, &[0.0; 5]).unwrap_err();
+    assert_eq!(
+        e,
+        StateError::WrongLength {
+            what: "q",
+            expected: 6,
+            got: 5
+        }
+    );
+    let e = forward_velocities(&chain, &mut data, &[0.0; 6], &[0.0; 7]).unwrap_err();
+    assert!(matches!(
+        e,
+        StateError::WrongLength {
+            what: "q_dot",
+            got: 7,
+            ..
+        }
+    ));
+    let e = forward_accelerations(&chain, &mut data, &[0.0; 6], &[0.0; 6], &[]).unwrap_err();
+    assert!(matches!(
+        e,
+        StateError::WrongLength {
+            what: "q_ddot",
+            got: 0,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn non_finite_entries_name_the_joint_and_coordinate() {
+    let chain = robot("puma560.yaml");
+    let mut data = Data::new(&chain);
+    let mut q = [0.0; 6];
+    q[2] = f64::NAN;
+    let e = forward_kinematics(&chain, &mut data, &q).unwrap_err();
+    assert!(
+        matches!(&e, StateError::NonFinite { what: "q", index: 2, joint, component: None, .. } if joint == "j3"),
+        "{e:?}"
+    );
+    let e = forward_velocities(
+        &chain,
+        &mut data,
+        &[0.0; 6],
+        &[0.0, 0.0, 0.0, f64::INFINITY, 0.0, 0.0],
+    )
+    .unwrap_err();
+    assert!(matches!(&e, StateError::NonFinite { what: "q_dot", joint, .. } if joint == "j4"));
+
+    let cyl = robot("cylindrical.yaml");
+    let mut data = Data::new(&cyl);
+    let e = forward_kinematics(&cyl, &mut data, &[0.0, f64::NEG_INFINITY]).unwrap_err();
+    assert!(
+        matches!(&e, StateError::NonFinite { joint, component: Some("d"), .. } if joint == "joint"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("joint' d)"), "{e}");
+}
+
+#[test]
+fn limits_are_enforced_by_default_and_can_be_ignored() {
+    let chain = robot("puma560.yaml");
+    let mut data = Data::new(&chain);
+    // 90 passed where 90° (1.57 rad) was meant.
+    let q = [0.0, 90.0, 0.0, 0.0, 0.0, 0.0];
+    let e = forward_kinematics(&chain, &mut data, &q).unwrap_err();
+    match &e {
+        StateError::OutOfLimits {
+            joint,
+            component,
+            value,
+            lower,
+            upper,
+        } => {
+            assert_eq!((joint.as_str(), *component, *value), ("j2", None, 90.0));
+            assert!((lower - (-45f64).to_radians()).abs() < 1e-15);
+            assert!((upper - 225f64.to_radians()).abs() < 1e-15);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(e.to_string().contains("looks like degrees"), "{e}");
+    // The same value is evaluated when the caller asks for it.
+    data.set_limit_policy(LimitPolicy::Ignore);
+    assert!(forward_kinematics(&chain, &mut data, &q).is_ok());
+
+    // Cylindrical limits name the coordinate.
+    let cyl = robot("cylindrical.yaml");
+    let mut data = Data::new(&cyl);
+    let e =
+        forward_kinematics_to(&cyl, &mut data, &[0.0, 6.0], cyl.link_id("P").unwrap()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            StateError::OutOfLimits {
+                component: Some("d"),
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn mimic_joints_are_checked_against_their_own_limits() {
+    let text = r#"<?xml version="1.0"?>
+<robot name="gripper">
+  <link name="palm"/><link name="left"/><link name="right"/>
+  <joint name="left_finger" type="prismatic"><parent link="palm"/><child link="left"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
+  <joint name="right_finger" type="prismatic"><parent link="palm"/><child link="right"/>
+    <axis xyz="0 1 0"/><limit lower="-0.04" upper="0" effort="1" velocity="1"/>
+    <mimic joint="left_finger" multiplier="-1" offset="0.01"/></joint>
+</robot>"#;
+    let chain = Chain::from_urdf_str(text).unwrap();
+    assert_eq!(chain.dof(), 1);
+    let mut data = Data::new(&chain);
+    // q = 0.03 puts the mimic at −0.02: fine. q = 0.005 puts it at +0.005 > 0: refused.
+    let poses = forward_kinematics(&chain, &mut data, &[0.03]).unwrap();
+    let right = poses.world_from_link(chain.link_id("right").unwrap());
+    assert!((right.translation().y - (-0.02)).abs() < 1e-17);
+    let e = forward_kinematics(&chain, &mut data, &[0.005]).unwrap_err();
+    assert!(
+        matches!(&e, StateError::OutOfLimits { joint, value, .. } if joint == "right_finger" && (*value - 0.005).abs() < 1e-17),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn json_vectors() {
+    let chain = robot("cylindrical.yaml");
+    let ok = joint_vector_from_json(&chain, &json!({"joint": [0.5, 1.0]}), "q").unwrap();
+    assert_eq!(ok, vec![0.5, 1.0]);
+    assert_eq!(
+        joint_vector_from_json(&chain, &json!({"joint": 0.5}), "q").unwrap_err(),
+        InputError::Shape {
+            what: "q",
+            name: "joint".into(),
+            expected: "[theta, d] (two numbers)"
+        }
+    );
+    assert!(matches!(
+        joint_vector_from_json(&chain, &json!([0.5, "x"]), "qd").unwrap_err(),
+        InputError::NotANumber {
+            what: "qd",
+            index: 1,
+            found: "a string"
+        }
+    ));
+    assert!(matches!(
+        joint_vector_from_json(&chain, &json!(3), "q").unwrap_err(),
+        InputError::NotArrayOrObject {
+            found: "a number",
+            ..
+        }
+    ));
+    assert!(matches!(
+        joint_vector_from_json(&chain, &json!([1, 2, 3]), "q").unwrap_err(),
+        InputError::WrongLength {
+            expected: 2,
+            got: 3,
+            ..
+        }
+    ));
+
+    let panda = robot("panda.urdf");
+    let mut q = serde_json::Map::new();
+    for j in panda.joints().iter().filter(|j| j.dof() > 0) {
+        q.insert(j.name().into(), json!(0.01));
+    }
+    assert!(joint_vector_from_json(&panda, &json!(q.clone()), "q").is_ok());
+    let mut with_mimic = q.clone();
+    with_mimic.insert("panda_finger_joint2".into(), json!(0.01));
+    assert_eq!(
+        joint_vector_from_json(&panda, &json!(with_mimic), "q").unwrap_err(),
+        InputError::NotIndependent {
+            what: "q",
+            name: "panda_finger_joint2".into(),
+            reason: "a mimic of 'panda_finger_joint1'".into()
+        }
+    );
+    let mut with_fixed = q.clone();
+    with_fixed.insert("panda_joint8".into(), json!(0.0));
+    assert!(matches!(
+        joint_vector_from_json(&panda, &json!(with_fixed), "q").unwrap_err(),
+        InputError::NotIndependent { reason, .. } if reason == "fixed"
+    ));
+    let mut missing = q.clone();
+    missing.remove("panda_joint4");
+    assert_eq!(
+        joint_vector_from_json(&panda, &json!(missing), "q").unwrap_err(),
+        InputError::MissingJoint {
+            what: "q",
+            name: "panda_joint4".into()
+        }
+    );
+    q.insert("panda_joint9".into(), json!(0.0));
+    assert!(matches!(
+        joint_vector_from_json(&panda, &json!(q), "q").unwrap_err(),
+        InputError::UnknownJoint { name, .. } if name == "panda_joint9"
+    ));
+
+    assert!(matches!(
+        joint_vector_from_str(&chain, "[0.5, 1", "q").unwrap_err(),
+        InputError::Json { .. }
+    ));
+    assert!(matches!(
+        joint_vector_from_str(&chain, "0.5, abc", "q").unwrap_err(),
+        InputError::Json { .. }
+    ));
+    assert_eq!(
+        joint_vector_from_str(&chain, " 0.5 , -1e-3 ", "q").unwrap(),
+        vec![0.5, -1e-3]
+    );
+}
+
+#[test]
+#[should_panic(expected = "Data was created for another chain")]
+fn data_of_another_chain_is_a_programming_error() {
+    let puma = robot("puma560.yaml");
+    let planar = robot("planar3.yaml");
+    let mut data = Data::new(&planar);
+    let _ = forward_kinematics(&puma, &mut data, &[0.0; 6]);
+}
