@@ -7,9 +7,10 @@
 //! and `M` is the joint's motion (eq. 2.119). Links are frames fixed to a body (or to the world)
 //! at a constant offset, so a fixed joint costs nothing unless its link is asked for.
 
-use crate::error::{ModelError, NameError};
+use crate::error::{ModelError, NameError, StateError};
 use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
 use crate::transform::{NotRigid, Transform};
+use nalgebra::{Matrix4, Unit, Vector3};
 use std::collections::HashMap;
 
 /// Index of a link in a [`Chain`] (valid only for the chain that produced it).
@@ -231,6 +232,53 @@ pub struct Joint {
     q_index: Option<usize>,
     mimic: Option<Mimic>,
     limits: [Option<Limits>; 2],
+    theta0: f64,
+    d0: f64,
+}
+
+/// θ and d of one joint's motion (eq. 2.119) and their first and second time derivatives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointScrew {
+    /// Unit axis in the joint frame.
+    pub axis: Unit<Vector3<f64>>,
+    /// Rotation about the axis (rad).
+    pub theta: f64,
+    /// Translation along the axis (m).
+    pub d: f64,
+    /// dθ/dt.
+    pub theta_dot: f64,
+    /// dd/dt.
+    pub d_dot: f64,
+    /// d²θ/dt².
+    pub theta_ddot: f64,
+    /// d²d/dt².
+    pub d_ddot: f64,
+}
+
+impl JointScrew {
+    /// `T` of eq. (2.119).
+    #[must_use]
+    pub fn transform(&self) -> Matrix4<f64> {
+        crate::joint::joint_transform(&self.axis, self.theta, self.d)
+    }
+
+    /// `Ṫ` of eq. (2.122).
+    #[must_use]
+    pub fn transform_dot(&self) -> Matrix4<f64> {
+        crate::joint::joint_transform_dot(&self.axis, self.theta, self.theta_dot, self.d_dot)
+    }
+
+    /// `T̈` of eq. (2.127).
+    #[must_use]
+    pub fn transform_ddot(&self) -> Matrix4<f64> {
+        crate::joint::joint_transform_ddot(
+            &self.axis,
+            self.theta,
+            self.theta_dot,
+            self.theta_ddot,
+            self.d_ddot,
+        )
+    }
 }
 
 /// How a built mimic joint follows its primary: `q = multiplier · q_primary + offset`.
@@ -301,6 +349,12 @@ impl Joint {
     #[must_use]
     pub fn limits(&self) -> &[Option<Limits>] {
         &self.limits[..self.kind.dof()]
+    }
+
+    /// θ and d at `q = 0` (the DH `theta` and `d`, zero for URDF joints).
+    #[must_use]
+    pub fn offsets(&self) -> (f64, f64) {
+        (self.theta0, self.d0)
     }
 }
 
@@ -542,6 +596,61 @@ impl Chain {
 
     pub(crate) fn variable(&self, index: usize) -> (usize, Option<&'static str>) {
         self.variables[index]
+    }
+
+    /// θ, d and their rates for one joint at `(q, q_dot, q_ddot)`, from which its relative 4×4
+    /// transform and derivatives follow (eqs. 2.119, 2.122, 2.127). A fixed joint has constant θ
+    /// and d; a mimic joint follows its primary.
+    ///
+    /// # Errors
+    /// [`StateError::WrongLength`] if a vector does not have [`Chain::dof`] entries.
+    ///
+    /// # Panics
+    /// If `joint` comes from another chain with more joints.
+    pub fn joint_screw(
+        &self,
+        joint: JointId,
+        q: &[f64],
+        q_dot: &[f64],
+        q_ddot: &[f64],
+    ) -> Result<JointScrew, StateError> {
+        for (what, v) in [("q", q), ("q_dot", q_dot), ("q_ddot", q_ddot)] {
+            if v.len() != self.dof() {
+                return Err(StateError::WrongLength {
+                    what,
+                    expected: self.dof(),
+                    got: v.len(),
+                });
+            }
+        }
+        let j = &self.joints[joint.0];
+        // (index, multiplier, offset) of the joint's own coordinate(s).
+        let source = match (j.q_index, j.mimic) {
+            (Some(i), _) => Some((i, 1.0, 0.0)),
+            (None, Some(m)) => self.joints[m.primary.0]
+                .q_index
+                .map(|i| (i, m.multiplier, m.offset)),
+            (None, None) => None,
+        };
+        let coordinate = |k: usize| match source {
+            Some((i, m, o)) => (m * q[i + k] + o, m * q_dot[i + k], m * q_ddot[i + k]),
+            None => (0.0, 0.0, 0.0),
+        };
+        let (rot, slide) = match j.kind {
+            JointKind::Revolute | JointKind::Continuous => (coordinate(0), (0.0, 0.0, 0.0)),
+            JointKind::Prismatic => ((0.0, 0.0, 0.0), coordinate(0)),
+            JointKind::Cylindrical => (coordinate(0), coordinate(1)),
+            JointKind::Fixed => ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+        };
+        Ok(JointScrew {
+            axis: Unit::new_unchecked(Vector3::from(j.axis)),
+            theta: rot.0 + j.theta0,
+            d: slide.0 + j.d0,
+            theta_dot: rot.1,
+            d_dot: slide.1,
+            theta_ddot: rot.2,
+            d_ddot: slide.2,
+        })
     }
 }
 
@@ -935,6 +1044,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
                 } else {
                     js.limits
                 },
+                theta0: js.theta,
+                d0: js.d,
             }
         })
         .collect();

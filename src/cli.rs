@@ -5,11 +5,12 @@ use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
 use crate::input::{InputError, joint_vector_from_json, joint_vector_from_str};
 use crate::kinematics::{
-    LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics,
+    AccelerationParts, LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics,
     forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
+use nalgebra::Vector3;
 use serde_json::{Map, Value, json};
 use std::io::{BufRead, BufWriter, Write};
 use std::path::PathBuf;
@@ -62,6 +63,10 @@ struct FkArgs {
     /// Only these links (repeatable); only the joints they depend on are evaluated.
     #[arg(long = "link", value_name = "NAME")]
     links: Vec<String>,
+    /// A point fixed on a link, in link coordinates (m): prints its position, and its velocity and
+    /// acceleration when --qd/--qdd are given (repeatable).
+    #[arg(long = "point", value_name = "LINK:X,Y,Z", allow_hyphen_values = true)]
+    points: Vec<String>,
     /// Evaluate joint values outside the joints' limits instead of refusing them.
     #[arg(long)]
     ignore_limits: bool,
@@ -95,6 +100,9 @@ pub enum CliError {
     /// `--qdd` without `--qd`.
     #[error("--qdd needs --qd (accelerations depend on velocities)")]
     QddWithoutQd,
+    /// A `--point` argument is not `LINK:x,y,z`.
+    #[error("--point '{0}': expected LINK:x,y,z (three numbers, link coordinates in metres)")]
+    Point(String),
     /// A batch line failed.
     #[error("{}: line {line}", path.display())]
     BatchLine {
@@ -315,14 +323,47 @@ type LinkResult = (
     Option<LinkAcceleration>,
 );
 
+/// A point fixed on a link.
+struct Point {
+    link: LinkId,
+    u: Vector3<f64>,
+}
+
+/// Per point: position, velocity, acceleration and its parts, as far as asked for.
+struct PointResult {
+    position: Vector3<f64>,
+    velocity: Option<Vector3<f64>>,
+    acceleration: Option<(Vector3<f64>, AccelerationParts)>,
+}
+
+fn parse_point(chain: &Chain, text: &str) -> Result<Point, CliError> {
+    let bad = || CliError::Point(text.to_string());
+    let (link, coords) = text.rsplit_once(':').ok_or_else(bad)?;
+    let values: Vec<f64> = coords
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    if values.len() != 3 || values.iter().any(|v| !v.is_finite()) {
+        return Err(bad());
+    }
+    Ok(Point {
+        link: chain.link_id(link)?,
+        u: Vector3::new(values[0], values[1], values[2]),
+    })
+}
+
 fn evaluate(
     chain: &Chain,
     data: &mut Data,
     c: &Configuration,
     links: &[LinkId],
+    points: &[Point],
     results: &mut Vec<LinkResult>,
+    point_results: &mut Vec<PointResult>,
 ) -> Result<(), CliError> {
     results.clear();
+    point_results.clear();
     let all: Vec<LinkId>;
     let wanted = if links.is_empty() {
         all = (0..chain.links().len()).map(LinkId).collect();
@@ -332,7 +373,7 @@ fn evaluate(
     };
     match (&c.qd, &c.qdd) {
         (None, Some(_)) => return Err(CliError::QddWithoutQd),
-        (None, None) if !links.is_empty() => {
+        (None, None) if !links.is_empty() && points.is_empty() => {
             for &l in wanted {
                 let pose = forward_kinematics_to(chain, data, &c.q, l)?;
                 results.push((l, pose, None, None));
@@ -345,6 +386,16 @@ fn evaluate(
                     .iter()
                     .map(|&l| (l, poses.world_from_link(l), None, None)),
             );
+            point_results.extend(points.iter().map(|p| {
+                PointResult {
+                    position: poses
+                        .world_from_link(p.link)
+                        .transform_point(&p.u.into())
+                        .coords,
+                    velocity: None,
+                    acceleration: None,
+                }
+            }));
         }
         (Some(qd), None) => {
             let v = forward_velocities(chain, data, &c.q, qd)?;
@@ -353,6 +404,14 @@ fn evaluate(
                     .iter()
                     .map(|&l| (l, v.world_from_link(l), Some(v.velocity(l)), None)),
             );
+            point_results.extend(points.iter().map(|p| {
+                let m = v.point(p.link, &p.u);
+                PointResult {
+                    position: m.position,
+                    velocity: Some(m.velocity),
+                    acceleration: None,
+                }
+            }));
         }
         (Some(qd), Some(qdd)) => {
             let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
@@ -364,13 +423,72 @@ fn evaluate(
                     Some(a.acceleration(l)),
                 )
             }));
+            point_results.extend(points.iter().map(|p| {
+                let m = a.point(p.link, &p.u);
+                PointResult {
+                    position: m.position,
+                    velocity: Some(m.velocity),
+                    acceleration: Some((m.acceleration, m.parts)),
+                }
+            }));
         }
     }
     Ok(())
 }
 
-fn vec_json(v: &nalgebra::Vector3<f64>) -> Value {
+fn points_table(chain: &Chain, points: &[Point], results: &[PointResult]) -> String {
+    let mut text = String::new();
+    let v3 = |v: &Vector3<f64>| format!("({:.6}, {:.6}, {:.6})", v.x, v.y, v.z);
+    for (p, r) in points.iter().zip(results) {
+        text.push_str(&format!(
+            "\npoint {} ({}, {}, {}): position {}",
+            chain.link(p.link).name(),
+            p.u.x,
+            p.u.y,
+            p.u.z,
+            v3(&r.position)
+        ));
+        if let Some(v) = &r.velocity {
+            text.push_str(&format!(", velocity {}", v3(v)));
+        }
+        if let Some((a, _)) = &r.acceleration {
+            text.push_str(&format!(", acceleration {}", v3(a)));
+        }
+    }
+    text
+}
+
+fn vec_json(v: &Vector3<f64>) -> Value {
     json!([v.x, v.y, v.z])
+}
+
+fn points_json(chain: &Chain, points: &[Point], results: &[PointResult]) -> Value {
+    let list: Vec<Value> = points
+        .iter()
+        .zip(results)
+        .map(|(p, r)| {
+            let mut m = Map::new();
+            m.insert("link".into(), json!(chain.link(p.link).name()));
+            m.insert("u".into(), vec_json(&p.u));
+            m.insert("position".into(), vec_json(&r.position));
+            if let Some(v) = &r.velocity {
+                m.insert("velocity".into(), vec_json(v));
+            }
+            if let Some((a, parts)) = &r.acceleration {
+                m.insert("acceleration".into(), vec_json(a));
+                m.insert(
+                    "acceleration_parts".into(),
+                    json!({
+                        "origin": vec_json(&parts.origin),
+                        "tangential": vec_json(&parts.tangential),
+                        "normal": vec_json(&parts.normal),
+                    }),
+                );
+            }
+            Value::Object(m)
+        })
+        .collect();
+    Value::Array(list)
 }
 
 fn results_json(chain: &Chain, results: &[LinkResult]) -> Value {
@@ -451,13 +569,37 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .iter()
         .map(|n| chain.link_id(n))
         .collect::<Result<Vec<_>, _>>()?;
+    let points = args
+        .points
+        .iter()
+        .map(|p| parse_point(&chain, p))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut results = Vec::with_capacity(chain.links().len());
+    let mut point_results = Vec::with_capacity(points.len());
     let mut emit =
         |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
-            evaluate(&chain, data, c, &links, &mut results)?;
+            evaluate(
+                &chain,
+                data,
+                c,
+                &links,
+                &points,
+                &mut results,
+                &mut point_results,
+            )?;
             let text = match args.format {
-                OutputFormat::Json => results_json(&chain, &results).to_string(),
-                OutputFormat::Table => results_table(&chain, &results),
+                OutputFormat::Json => {
+                    let mut value = results_json(&chain, &results);
+                    if !points.is_empty() {
+                        value["points"] = points_json(&chain, &points, &point_results);
+                    }
+                    value.to_string()
+                }
+                OutputFormat::Table => {
+                    let mut text = results_table(&chain, &results);
+                    text.push_str(&points_table(&chain, &points, &point_results));
+                    text
+                }
             };
             write_line(out, &text)
         };

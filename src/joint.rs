@@ -3,6 +3,7 @@
 //! are the special cases with `d` or `θ` constant.
 
 use crate::arith::Arith;
+use nalgebra::{Matrix3, Matrix4, Unit, Vector3};
 
 /// The closed set of joint kinds kinechain models.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -257,6 +258,69 @@ pub(crate) fn rodrigues<A: Arith>(v: [f64; 3], s: f64, c: f64) -> [[f64; 3]; 3] 
             A::mul_add(wz, z, c),
         ],
     ]
+}
+
+/// The skew matrix `[v]x` of eq. (2.6): `[v]x u = v × u`.
+#[must_use]
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Rodrigues' formula (eq. 2.112): `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`.
+#[must_use]
+pub fn rotation_about(axis: &Unit<Vector3<f64>>, theta: f64) -> Matrix3<f64> {
+    let k = skew(axis);
+    let half = (0.5 * theta).sin();
+    Matrix3::identity() + k * theta.sin() + k * k * (2.0 * half * half)
+}
+
+/// The 4×4 transform of a joint that turns by θ about and slides by `d` along the unit axis `v`
+/// (eq. 2.119): `T = [[A(v, θ), v d], [0, 1]]`. A revolute joint has `d` constant, a prismatic
+/// joint θ constant.
+#[must_use]
+pub fn joint_transform(axis: &Unit<Vector3<f64>>, theta: f64, d: f64) -> Matrix4<f64> {
+    let mut t = Matrix4::identity();
+    t.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&rotation_about(axis, theta));
+    t.fixed_view_mut::<3, 1>(0, 3)
+        .copy_from(&(axis.into_inner() * d));
+    t
+}
+
+/// Time derivative of [`joint_transform`] (eqs. 2.121–2.122):
+/// `Ṫ = [[θ̇ [v]x A, v ḋ], [0, 0]]`.
+#[must_use]
+pub fn joint_transform_dot(
+    axis: &Unit<Vector3<f64>>,
+    theta: f64,
+    theta_dot: f64,
+    d_dot: f64,
+) -> Matrix4<f64> {
+    let mut t = Matrix4::zeros();
+    let a_dot = skew(axis) * rotation_about(axis, theta) * theta_dot; // eq. (2.117)
+    t.fixed_view_mut::<3, 3>(0, 0).copy_from(&a_dot);
+    t.fixed_view_mut::<3, 1>(0, 3)
+        .copy_from(&(axis.into_inner() * d_dot));
+    t
+}
+
+/// Second time derivative of [`joint_transform`] (eqs. 2.126–2.127):
+/// `T̈ = [[A ([v]x θ̈ + [v]x² θ̇²), v d̈], [0, 0]]` (using `[v]x A = A [v]x`, eq. 2.128).
+#[must_use]
+pub fn joint_transform_ddot(
+    axis: &Unit<Vector3<f64>>,
+    theta: f64,
+    theta_dot: f64,
+    theta_ddot: f64,
+    d_ddot: f64,
+) -> Matrix4<f64> {
+    let k = skew(axis);
+    let a_ddot = rotation_about(axis, theta) * (k * theta_ddot + k * k * (theta_dot * theta_dot));
+    let mut t = Matrix4::zeros();
+    t.fixed_view_mut::<3, 3>(0, 0).copy_from(&a_ddot);
+    t.fixed_view_mut::<3, 1>(0, 3)
+        .copy_from(&(axis.into_inner() * d_ddot));
+    t
 }
 
 #[cfg(test)]

@@ -59,6 +59,43 @@ pub struct LinkAcceleration {
     pub a: Vector3<f64>,
 }
 
+/// Position and velocity of a point of a link (world frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointVelocity {
+    /// Position `r = R + A ū` (eq. 2.52).
+    pub position: Vector3<f64>,
+    /// Velocity `ṙ = Ṙ + ω × u (+ A dū/dt for a moving point)` (eq. 2.55), `u = A ū`.
+    pub velocity: Vector3<f64>,
+}
+
+/// The parts of a point's acceleration (eq. 2.75), world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelerationParts {
+    /// Classical acceleration of the link-frame origin, `R̈`.
+    pub origin: Vector3<f64>,
+    /// Tangential part `α × u`.
+    pub tangential: Vector3<f64>,
+    /// Normal (centripetal) part `ω × (ω × u)`.
+    pub normal: Vector3<f64>,
+    /// Coriolis part `2 ω × (A dū/dt)` (zero for a point fixed on the link).
+    pub coriolis: Vector3<f64>,
+    /// Local part `A d²ū/dt²`, the point's acceleration relative to the link (zero for a fixed point).
+    pub local: Vector3<f64>,
+}
+
+/// Position, velocity and acceleration of a point of a link (world frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointMotion {
+    /// Position `r = R + A ū` (eq. 2.52).
+    pub position: Vector3<f64>,
+    /// Velocity (eq. 2.55, plus `A dū/dt` for a moving point).
+    pub velocity: Vector3<f64>,
+    /// Classical acceleration, the sum of [`PointMotion::parts`] (eq. 2.75).
+    pub acceleration: Vector3<f64>,
+    /// The acceleration's parts.
+    pub parts: AccelerationParts,
+}
+
 /// Poses of every link after [`forward_kinematics`] or [`forward_kinematics_incremental`].
 #[derive(Clone, Copy, Debug)]
 pub struct Poses<'a> {
@@ -129,6 +166,60 @@ impl<'a> Poses<'a> {
         }
     }
 
+    /// Link pose, ω, and `u = A ū` for a point `u_bar` of the link.
+    fn point_frame(&self, link: LinkId, u_bar: &Vector3<f64>) -> (Transform, [f64; 3]) {
+        let pose = self.world_from_link(link);
+        let u = pose.apply((*u_bar).into());
+        (pose, u)
+    }
+
+    fn point_velocity(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+    ) -> PointVelocity {
+        let (pose, u) = self.point_frame(link, u_bar);
+        let v = self.velocity(link);
+        let relative = pose.apply((*u_bar_dot).into());
+        PointVelocity {
+            position: Vector3::from(add3(pose.p, u)),
+            velocity: Vector3::from(add3(add3(v.v.into(), cross3(v.omega.into(), u)), relative)),
+        }
+    }
+
+    fn point_motion(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+        u_bar_ddot: &Vector3<f64>,
+    ) -> PointMotion {
+        let (pose, u) = self.point_frame(link, u_bar);
+        let pv = self.point_velocity(link, u_bar, u_bar_dot);
+        let w: [f64; 3] = self.velocity(link).omega.into();
+        let acc = self.acceleration(link);
+        let v_rel = pose.apply((*u_bar_dot).into());
+        // eq. (2.75): local, Coriolis, tangential and normal terms, plus the origin's acceleration.
+        let parts = AccelerationParts {
+            origin: acc.a,
+            tangential: Vector3::from(cross3(acc.alpha.into(), u)),
+            normal: Vector3::from(cross3(w, cross3(w, u))),
+            coriolis: Vector3::from(scale3(2.0, cross3(w, v_rel))),
+            local: Vector3::from(pose.apply((*u_bar_ddot).into())),
+        };
+        PointMotion {
+            position: pv.position,
+            velocity: pv.velocity,
+            acceleration: parts.origin
+                + parts.tangential
+                + parts.normal
+                + parts.coriolis
+                + parts.local,
+            parts,
+        }
+    }
+
     fn acceleration(&self, link: LinkId) -> LinkAcceleration {
         let (alpha, a) = match self.carrier(link) {
             None => ([0.0; 3], [0.0; 3]),
@@ -172,6 +263,24 @@ impl<'a> Velocities<'a> {
     pub fn velocity(&self, link: LinkId) -> LinkVelocity {
         self.poses.velocity(link)
     }
+
+    /// The same as [`Velocities::velocity`] with components in the link's own frame:
+    /// `ω̄ = Aᵀ ω` (eq. 2.41) and `v̄ = Aᵀ v`.
+    #[must_use]
+    pub fn velocity_local(&self, link: LinkId) -> LinkVelocity {
+        let pose = self.world_from_link(link);
+        let v = self.velocity(link);
+        LinkVelocity {
+            omega: pose.rotation().transpose() * v.omega,
+            v: pose.rotation().transpose() * v.v,
+        }
+    }
+
+    /// Position and velocity of the point with link coordinates `u_bar` (eqs. 2.52, 2.55).
+    #[must_use]
+    pub fn point(&self, link: LinkId, u_bar: &Vector3<f64>) -> PointVelocity {
+        self.poses.point_velocity(link, u_bar, &Vector3::zeros())
+    }
 }
 
 impl<'a> Accelerations<'a> {
@@ -209,6 +318,47 @@ impl<'a> Accelerations<'a> {
     #[must_use]
     pub fn acceleration(&self, link: LinkId) -> LinkAcceleration {
         self.poses.acceleration(link)
+    }
+
+    /// The same as [`Accelerations::velocity`] with components in the link's own frame.
+    #[must_use]
+    pub fn velocity_local(&self, link: LinkId) -> LinkVelocity {
+        self.velocities().velocity_local(link)
+    }
+
+    /// The same as [`Accelerations::acceleration`] with components in the link's own frame:
+    /// `ᾱ = Aᵀ α`, `ā = Aᵀ a`.
+    #[must_use]
+    pub fn acceleration_local(&self, link: LinkId) -> LinkAcceleration {
+        let rt = self.world_from_link(link).rotation().transpose();
+        let a = self.acceleration(link);
+        LinkAcceleration {
+            alpha: rt * a.alpha,
+            a: rt * a.a,
+        }
+    }
+
+    /// Position, velocity and acceleration of the point fixed at link coordinates `u_bar`:
+    /// `r̈ = R̈ + α × u + ω × (ω × u)` with `u = A ū` (eqs. 2.52, 2.55 and the fixed-point case
+    /// of 2.75).
+    #[must_use]
+    pub fn point(&self, link: LinkId, u_bar: &Vector3<f64>) -> PointMotion {
+        let zero = Vector3::zeros();
+        self.poses.point_motion(link, u_bar, &zero, &zero)
+    }
+
+    /// A point moving in the link frame, at `u_bar` with velocity `u_bar_dot` and acceleration
+    /// `u_bar_ddot` relative to the link (link coordinates): eq. (2.75),
+    /// `r̈ = R̈ + A ü + 2 ω × (A u̇) + α × u + ω × (ω × u)`.
+    #[must_use]
+    pub fn moving_point(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+        u_bar_ddot: &Vector3<f64>,
+    ) -> PointMotion {
+        self.poses.point_motion(link, u_bar, u_bar_dot, u_bar_ddot)
     }
 }
 

@@ -18,7 +18,9 @@ pub mod transform;
 
 pub use nalgebra;
 
-pub use chain::{Chain, ChainBuilder, Joint, JointId, JointSpec, Link, LinkId, Mimic, MimicSpec};
+pub use chain::{
+    Chain, ChainBuilder, Joint, JointId, JointScrew, JointSpec, Link, LinkId, Mimic, MimicSpec,
+};
 pub use data::{Data, LimitPolicy};
 pub use error::{FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
 pub use joint::{JointKind, Limits};

@@ -261,3 +261,85 @@ fn failures_are_one_line_errors() {
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(String::from_utf8(out.stderr).unwrap().lines().count(), 1);
 }
+
+#[test]
+fn fk_rates_appear_only_when_asked_for() {
+    let q = r#"{"joint": [0.5235987755982988, 3]}"#;
+    let v = &ok_json(&[
+        "fk",
+        "robots/cylindrical.yaml",
+        "--q",
+        q,
+        "--qd",
+        r#"{"joint": [5, 2]}"#,
+    ])[0];
+    let p = &v["links"]["P"];
+    assert!(p.get("omega").is_some() && p.get("v").is_some());
+    assert!(p.get("alpha").is_none() && p.get("a").is_none());
+    // Ex. 2.8: velocity of P.
+    let vel: Vec<f64> = p["v"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    for (got, want) in vel.iter().zip([-0.51197, -0.51197, 4.48803]) {
+        assert!((got - want).abs() < 5e-6, "{vel:?}");
+    }
+
+    let a = &ok_json(&[
+        "fk",
+        "robots/cylindrical.yaml",
+        "--q",
+        q,
+        "--qd",
+        "[5, 2]",
+        "--qdd",
+        "[0, 0]",
+        "--point",
+        "arm:0,1,0",
+    ])[0];
+    let p = &a["links"]["P"];
+    assert!(p.get("alpha").is_some() && p.get("a").is_some());
+    // The point (0,1,0) of the arm is the tool frame P: same position, velocity, acceleration.
+    let point = &a["points"][0];
+    assert_eq!(point["link"], "arm");
+    for (field, link_field) in [("velocity", "v"), ("acceleration", "a")] {
+        let got: Vec<f64> = point[field]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let want: Vec<f64> = p[link_field]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).abs() < 1e-14,
+                "{field}: {got:?} vs {want:?}"
+            );
+        }
+    }
+    let m = error(&[
+        "fk",
+        "robots/cylindrical.yaml",
+        "--q",
+        q,
+        "--point",
+        "arm:0,1",
+    ]);
+    assert!(m.contains("LINK:x,y,z"), "{m}");
+    let m = error(&[
+        "fk",
+        "robots/cylindrical.yaml",
+        "--q",
+        q,
+        "--point",
+        "hand:0,1,0",
+    ]);
+    assert!(m.contains("no link named 'hand'"), "{m}");
+}

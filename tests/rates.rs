@@ -1,0 +1,519 @@
+//! Velocities and accelerations (eqs. 2.120–2.127): finite differences of poses on every bundled
+//! robot, the joint's 4×4 forms against their vector forms, points on links (eqs. 2.52, 2.55,
+//! 2.75), link-frame components, algebraic properties, a closed form, and the `k` Jacobian.
+
+mod common;
+
+use common::*;
+use kinechain::nalgebra::{Matrix3, Vector3, Vector4};
+use kinechain::{
+    Chain, Data, LimitPolicy, LinkId, Transform, forward_accelerations, forward_kinematics,
+    forward_velocities,
+};
+use proptest::prelude::*;
+
+fn robots() -> Vec<(String, Chain)> {
+    let mut files: Vec<_> = std::fs::read_dir(robots_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, Chain::from_file(&p).unwrap())
+        })
+        .collect()
+}
+
+/// Poses of every link along `q(t) = q + q̇ t + q̈ t²/2`.
+fn poses_at(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+    t: f64,
+) -> Vec<Transform> {
+    let qt: Vec<f64> = (0..q.len())
+        .map(|i| q[i] + qd[i] * t + 0.5 * qdd[i] * t * t)
+        .collect();
+    let poses = forward_kinematics(chain, data, &qt).unwrap();
+    (0..chain.links().len())
+        .map(|i| poses.world_from_link(LinkId::from_index(chain, i)))
+        .collect()
+}
+
+trait FromIndex {
+    fn from_index(chain: &Chain, i: usize) -> LinkId;
+}
+
+impl FromIndex for LinkId {
+    fn from_index(chain: &Chain, i: usize) -> LinkId {
+        chain.link_id(chain.links()[i].name()).unwrap()
+    }
+}
+
+/// The 12 numbers of a pose: 9 rotation entries then the translation.
+fn flat(t: &Transform) -> [f64; 12] {
+    let r = t.to_rows();
+    [
+        r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2], r[0][3],
+        r[1][3], r[2][3],
+    ]
+}
+
+/// Fourth-order central differences of every link's pose at step `h`: first and second time
+/// derivatives, each 12 numbers per link.
+fn differences(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+    h: f64,
+) -> (Vec<[f64; 12]>, Vec<[f64; 12]>) {
+    let f: Vec<Vec<[f64; 12]>> = [-2.0, -1.0, 0.0, 1.0, 2.0]
+        .iter()
+        .map(|k| {
+            poses_at(chain, data, q, qd, qdd, k * h)
+                .iter()
+                .map(flat)
+                .collect()
+        })
+        .collect();
+    let n = chain.links().len();
+    let mut d1 = vec![[0.0; 12]; n];
+    let mut d2 = vec![[0.0; 12]; n];
+    for l in 0..n {
+        for k in 0..12 {
+            let (m2, m1, z, p1, p2) = (f[0][l][k], f[1][l][k], f[2][l][k], f[3][l][k], f[4][l][k]);
+            d1[l][k] = (-p2 + 8.0 * p1 - 8.0 * m1 + m2) / (12.0 * h);
+            d2[l][k] = (-p2 + 16.0 * p1 - 30.0 * z + 16.0 * m1 - m2) / (12.0 * h * h);
+        }
+    }
+    (d1, d2)
+}
+
+/// `vee` of the skew part of `Ṙ Rᵀ` (eq. 2.27 gives ω; with R̈ it gives α, as `[ω]x²` is
+/// symmetric).
+fn vee_of_skew(dr: &[f64; 12], pose: &Transform) -> [f64; 3] {
+    let dr = Matrix3::new(
+        dr[0], dr[1], dr[2], dr[3], dr[4], dr[5], dr[6], dr[7], dr[8],
+    );
+    let w = dr * pose.rotation().transpose();
+    [
+        0.5 * (w[(2, 1)] - w[(1, 2)]),
+        0.5 * (w[(0, 2)] - w[(2, 0)]),
+        0.5 * (w[(1, 0)] - w[(0, 1)]),
+    ]
+}
+
+/// Finite differences against the computed rates, for every link of every bundled robot at seeded
+/// random states.
+///
+/// Tolerance, per quantity: the rounding bound of the stencil plus an estimate of its truncation
+/// error. The poses are accurate to 16 ulp of the reach (measured ≤ 8, `tests/reference.rs`), and
+/// the first-derivative stencil multiplies that by (1+8+8+1)/12 / h, the second-derivative one by
+/// (1+16+30+16+1)/12 / h². The truncation error of a fourth-order stencil at h is 1/15 of the
+/// change between steps h and 2h (Richardson); the test allows the whole change. ω and α come
+/// from three products of entries of `Ṙ` or `R̈` with entries of R (|·| ≤ 1), so their bound is
+/// three times that of an entry.
+#[test]
+fn rates_match_finite_differences_on_every_robot() {
+    let mut rng = rng(3);
+    for (name, chain) in robots() {
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let reach = chain.reach().max(1.0);
+        let pose_error = 16.0 * f64::EPSILON * reach;
+        for _ in 0..5 {
+            let q = random_q(&chain, &mut rng);
+            let qd = random_vec(chain.dof(), 1.0, &mut rng);
+            let qdd = random_vec(chain.dof(), 1.0, &mut rng);
+            let (h1, h2) = (1e-3, 1e-2);
+            let (d1, _) = differences(&chain, &mut data, &q, &qd, &qdd, h1);
+            let (d1_2h, _) = differences(&chain, &mut data, &q, &qd, &qdd, 2.0 * h1);
+            let (_, d2) = differences(&chain, &mut data, &q, &qd, &qdd, h2);
+            let (_, d2_2h) = differences(&chain, &mut data, &q, &qd, &qdd, 2.0 * h2);
+            let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+            for l in 0..chain.links().len() {
+                let id = LinkId::from_index(&chain, l);
+                let pose = acc.world_from_link(id);
+                let (v, a) = (acc.velocity(id), acc.acceleration(id));
+                let tol1 = |k: usize| (d1[l][k] - d1_2h[l][k]).abs() + 1.5 * pose_error / h1;
+                let tol2 = |k: usize| (d2[l][k] - d2_2h[l][k]).abs() + 5.4 * pose_error / (h2 * h2);
+                let max_tol = |tol: &dyn Fn(usize) -> f64| (0..9).map(tol).fold(0.0, f64::max);
+                let w_fd = vee_of_skew(&d1[l], &pose);
+                let al_fd = vee_of_skew(&d2[l], &pose);
+                for k in 0..3 {
+                    let what = format!("{name} {} component {k}", chain.links()[l].name());
+                    assert!((v.v[k] - d1[l][9 + k]).abs() <= tol1(9 + k), "v {what}");
+                    assert!((a.a[k] - d2[l][9 + k]).abs() <= tol2(9 + k), "a {what}");
+                    assert!(
+                        (v.omega[k] - w_fd[k]).abs() <= 3.0 * max_tol(&tol1),
+                        "omega {what}"
+                    );
+                    assert!(
+                        (a.alpha[k] - al_fd[k]).abs() <= 3.0 * max_tol(&tol2),
+                        "alpha {what}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Eqs. (2.119), (2.122), (2.127) applied to a point equal the vector forms (2.118), (2.120),
+/// (2.123)–(2.125), and `Ṫ`, `T̈` are the time derivatives of `T`.
+#[test]
+fn joint_4x4_forms_equal_the_vector_forms_and_differentiate_t() {
+    let chain = Chain::from_file(robots_dir().join("cylindrical.yaml")).unwrap();
+    let joint = chain.joint_id("joint").unwrap();
+    let mut rng = rng(4);
+    for _ in 0..50 {
+        let q = random_vec(2, 3.0, &mut rng);
+        let qd = random_vec(2, 2.0, &mut rng);
+        let qdd = random_vec(2, 2.0, &mut rng);
+        let u = random_vec(3, 1.0, &mut rng);
+        let u = Vector3::new(u[0], u[1], u[2]);
+        let s = chain.joint_screw(joint, &q, &qd, &qdd).unwrap();
+        let v = s.axis.into_inner();
+        let a = kinechain::joint::rotation_about(&s.axis, s.theta);
+        let k = kinechain::joint::skew(&v);
+        let uh = Vector4::new(u.x, u.y, u.z, 1.0);
+        let r = v * s.d + a * u; // eq. (2.118)
+        let r_dot = v * s.d_dot + k * a * u * s.theta_dot; // eq. (2.120)
+        let r_ddot =
+            v * s.d_ddot + a * (k * u * s.theta_ddot + k * k * u * s.theta_dot * s.theta_dot); // eq. (2.124)
+        assert!(((s.transform() * uh).xyz() - r).norm() < 1e-14);
+        assert!(((s.transform_dot() * uh).xyz() - r_dot).norm() < 1e-13);
+        assert!(((s.transform_ddot() * uh).xyz() - r_ddot).norm() < 1e-12);
+        // Eq. (2.125): the same as α × u + ω × (ω × u) in the joint frame, u = A ū.
+        let (w, al, au) = (v * s.theta_dot, v * s.theta_ddot, a * u);
+        assert!((v * s.d_ddot + al.cross(&au) + w.cross(&w.cross(&au)) - r_ddot).norm() < 1e-12);
+
+        // T(t) along θ(t), d(t) with the given rates; central differences, step 1e-4:
+        // truncation h²/6 |T'''| ≈ 1e-8 · 8, rounding 1e-16/h = 1e-12.
+        let h = 1e-4;
+        let t_at = |t: f64| {
+            let th = s.theta + s.theta_dot * t + 0.5 * s.theta_ddot * t * t;
+            let d = s.d + s.d_dot * t + 0.5 * s.d_ddot * t * t;
+            kinechain::joint::joint_transform(&s.axis, th, d)
+        };
+        let dt = (t_at(h) - t_at(-h)) / (2.0 * h);
+        let ddt = (t_at(h) - 2.0 * t_at(0.0) + t_at(-h)) / (h * h);
+        assert!(
+            (dt - s.transform_dot()).norm() < 1e-6,
+            "{}",
+            (dt - s.transform_dot()).norm()
+        );
+        assert!(
+            (ddt - s.transform_ddot()).norm() < 1e-5,
+            "{}",
+            (ddt - s.transform_ddot()).norm()
+        );
+    }
+}
+
+/// The chain composes the joints' relative motion: for a one-joint chain the link's velocity
+/// equals `Ṫ` applied to the origin, and ω = θ̇ v (eq. 2.116).
+#[test]
+fn chain_rates_compose_the_joint_forms() {
+    let chain = Chain::from_file(robots_dir().join("cylindrical.yaml")).unwrap();
+    let (joint, arm) = (
+        chain.joint_id("joint").unwrap(),
+        chain.link_id("arm").unwrap(),
+    );
+    let mut data = Data::new(&chain);
+    let (q, qd, qdd) = ([0.7, 1.2], [2.0, -0.5], [-1.0, 0.3]);
+    let s = chain.joint_screw(joint, &q, &qd, &qdd).unwrap();
+    let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+    let origin = Vector4::new(0.0, 0.0, 0.0, 1.0);
+    assert!((acc.velocity(arm).v - (s.transform_dot() * origin).xyz()).norm() < 1e-15);
+    assert!((acc.acceleration(arm).a - (s.transform_ddot() * origin).xyz()).norm() < 1e-15);
+    assert!((acc.velocity(arm).omega - s.axis.into_inner() * 2.0).norm() < 1e-15);
+}
+
+/// A point moving in a link (eq. 2.75): its computed velocity and acceleration equal finite
+/// differences of `r(t) = R(t) + A(t) ū(t)`; its parts add up; a fixed point has no Coriolis or
+/// local part.
+#[test]
+fn points_on_links_match_finite_differences() {
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let tool = chain.link_id("tool").unwrap();
+    let mut data = Data::new(&chain);
+    let mut rng = rng(5);
+    for _ in 0..20 {
+        let q = random_q(&chain, &mut rng);
+        let qd = random_vec(6, 1.0, &mut rng);
+        let qdd = random_vec(6, 1.0, &mut rng);
+        let v = |r: &mut _| {
+            let x = random_vec(3, 0.2, r);
+            Vector3::new(x[0], x[1], x[2])
+        };
+        let (u, ud, udd) = (v(&mut rng), v(&mut rng), v(&mut rng));
+        let r_at = |data: &mut Data, t: f64| {
+            let qt: Vec<f64> = (0..6)
+                .map(|i| q[i] + qd[i] * t + 0.5 * qdd[i] * t * t)
+                .collect();
+            let ut = u + ud * t + udd * (0.5 * t * t);
+            forward_kinematics(&chain, data, &qt)
+                .unwrap()
+                .world_from_link(tool)
+                .transform_point(&ut.into())
+                .coords
+        };
+        let h = 1e-3;
+        let f: Vec<Vector3<f64>> = [-2.0, -1.0, 0.0, 1.0, 2.0]
+            .iter()
+            .map(|k| r_at(&mut data, k * h))
+            .collect();
+        let d1 = (-f[4] + f[3] * 8.0 - f[1] * 8.0 + f[0]) / (12.0 * h);
+        let d2 = (-f[4] + f[3] * 16.0 - f[2] * 30.0 + f[1] * 16.0 - f[0]) / (12.0 * h * h);
+        let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+        let m = acc.moving_point(tool, &u, &ud, &udd);
+        assert!((m.position - f[2]).norm() < 1e-15);
+        // Truncation ~h⁴ (1e-12) times fifth/sixth derivatives of order 1; rounding
+        // 2e-16/h ≈ 2e-13 and 1e-15/h² ≈ 1e-9.
+        assert!(
+            (m.velocity - d1).norm() < 1e-9,
+            "{}",
+            (m.velocity - d1).norm()
+        );
+        assert!(
+            (m.acceleration - d2).norm() < 1e-7,
+            "{}",
+            (m.acceleration - d2).norm()
+        );
+        let p = m.parts;
+        let sum = p.origin + p.tangential + p.normal + p.coriolis + p.local;
+        assert_eq!(sum, m.acceleration);
+        let fixed = acc.point(tool, &u);
+        assert_eq!(fixed.parts.coriolis, Vector3::zeros());
+        assert_eq!(fixed.parts.local, Vector3::zeros());
+        assert_eq!(fixed.parts.tangential, p.tangential);
+        assert_eq!(fixed.parts.normal, p.normal);
+        // The moving point's Coriolis term is 2 ω × (A u̇).
+        let w = acc.velocity(tool).omega;
+        let a = acc.world_from_link(tool).rotation();
+        assert!((p.coriolis - 2.0 * w.cross(&(a * ud))).norm() < 1e-15);
+    }
+}
+
+/// Link-frame components: `ω̄ = Aᵀω` is the vee of `AᵀȦ` (eq. 2.29).
+#[test]
+fn local_components() {
+    let chain = Chain::from_file(robots_dir().join("iiwa7.yaml")).unwrap();
+    let flange = chain.link_id("flange").unwrap();
+    let mut data = Data::new(&chain);
+    let mut rng = rng(6);
+    let q = random_q(&chain, &mut rng);
+    let qd = random_vec(7, 1.0, &mut rng);
+    let h = 1e-6;
+    let at = |data: &mut Data, t: f64| {
+        let qt: Vec<f64> = (0..7).map(|i| q[i] + qd[i] * t).collect();
+        forward_kinematics(&chain, data, &qt)
+            .unwrap()
+            .world_from_link(flange)
+            .rotation()
+    };
+    let a_dot = (at(&mut data, h) - at(&mut data, -h)) / (2.0 * h);
+    let a = at(&mut data, 0.0);
+    let w_bar = a.transpose() * a_dot; // [ω̄]x
+    let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qd).unwrap();
+    let local = acc.velocity_local(flange);
+    let want = Vector3::new(w_bar[(2, 1)], w_bar[(0, 2)], w_bar[(1, 0)]);
+    assert!((local.omega - want).norm() < 1e-8);
+    assert!((local.v - a.transpose() * acc.velocity(flange).v).norm() < 1e-15);
+    let la = acc.acceleration_local(flange);
+    assert!((la.alpha - a.transpose() * acc.acceleration(flange).alpha).norm() < 1e-14);
+    assert!((la.a - a.transpose() * acc.acceleration(flange).a).norm() < 1e-14);
+}
+
+/// The planar three-link arm against its closed form.
+#[test]
+fn planar_arm_closed_form() {
+    let chain = Chain::from_file(robots_dir().join("planar3.yaml")).unwrap();
+    let tip = chain.link_id("link3").unwrap();
+    let mut data = Data::new(&chain);
+    let lengths = [4.0, 3.0, 2.0];
+    let mut rng = rng(8);
+    for _ in 0..100 {
+        let q = random_q(&chain, &mut rng);
+        let qd = random_vec(3, 2.0, &mut rng);
+        let qdd = random_vec(3, 2.0, &mut rng);
+        let (mut x, mut y, mut vx, mut vy, mut ax, mut ay) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut phi, mut w, mut al) = (0.0, 0.0, 0.0);
+        for k in 0..3 {
+            phi += q[k];
+            w += qd[k];
+            al += qdd[k];
+            let (s, c) = f64::sin_cos(phi);
+            x += lengths[k] * c;
+            y += lengths[k] * s;
+            vx -= lengths[k] * s * w;
+            vy += lengths[k] * c * w;
+            ax -= lengths[k] * (c * w * w + s * al);
+            ay += lengths[k] * (c * al - s * w * w);
+        }
+        let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+        let p = acc.world_from_link(tip).translation();
+        let (v, a) = (acc.velocity(tip), acc.acceleration(tip));
+        let close = |a: f64, b: f64, scale: f64| (a - b).abs() <= 1e-14 * scale;
+        assert!(close(p.x, x, 9.0) && close(p.y, y, 9.0) && p.z == 0.0);
+        assert!(close(v.v.x, vx, 60.0) && close(v.v.y, vy, 60.0) && v.v.z == 0.0);
+        assert!(close(a.a.x, ax, 500.0) && close(a.a.y, ay, 500.0));
+        assert_eq!([v.omega.x, v.omega.y], [0.0, 0.0]);
+        assert!(close(v.omega.z, w, 6.0) && close(a.alpha.z, al, 6.0));
+    }
+}
+
+fn vel_of(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    qd: &[f64],
+    link: LinkId,
+) -> [Vector3<f64>; 2] {
+    let v = forward_velocities(chain, data, q, qd)
+        .unwrap()
+        .velocity(link);
+    [v.omega, v.v]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// v and ω are linear in q̇; with q̇ = 0, α and a are linear in q̈; the base is at rest.
+    #[test]
+    fn rates_are_linear_and_the_base_is_at_rest(
+        robot in 0usize..12,
+        seed in any::<u64>(),
+        a in -3.0f64..3.0,
+        b in -3.0f64..3.0,
+    ) {
+        let all = robots();
+        let (_, chain) = &all[robot % all.len()];
+        let mut data = Data::new(chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut r = rng(seed);
+        let q = random_q(chain, &mut r);
+        let x = random_vec(chain.dof(), 1.0, &mut r);
+        let y = random_vec(chain.dof(), 1.0, &mut r);
+        let combo: Vec<f64> = x.iter().zip(&y).map(|(x, y)| a * x + b * y).collect();
+        let zero = vec![0.0; chain.dof()];
+        let tip = chain.end_link();
+        let scale = chain.reach().max(1.0) * chain.dof() as f64;
+        let [wx, vx] = vel_of(chain, &mut data, &q, &x, tip);
+        let [wy, vy] = vel_of(chain, &mut data, &q, &y, tip);
+        let [wc, vc] = vel_of(chain, &mut data, &q, &combo, tip);
+        let tol = 1e-13 * scale * (a.abs() + b.abs() + 1.0);
+        prop_assert!((wc - (wx * a + wy * b)).norm() <= tol);
+        prop_assert!((vc - (vx * a + vy * b)).norm() <= tol);
+
+        let acc_of = |data: &mut Data, qdd: &[f64]| {
+            let acc = forward_accelerations(chain, data, &q, &zero, qdd).unwrap();
+            let l = acc.acceleration(tip);
+            [l.alpha, l.a]
+        };
+        let [alx, ax] = acc_of(&mut data, &x);
+        let [aly, ay] = acc_of(&mut data, &y);
+        let [alc, ac] = acc_of(&mut data, &combo);
+        prop_assert!((alc - (alx * a + aly * b)).norm() <= tol);
+        prop_assert!((ac - (ax * a + ay * b)).norm() <= tol);
+
+        let acc = forward_accelerations(chain, &mut data, &q, &x, &y).unwrap();
+        let base = LinkId::from_index(chain, 0);
+        prop_assert_eq!(acc.velocity(base).omega, Vector3::zeros());
+        prop_assert_eq!(acc.velocity(base).v, Vector3::zeros());
+        prop_assert_eq!(acc.acceleration(base).alpha, Vector3::zeros());
+        prop_assert_eq!(acc.acceleration(base).a, Vector3::zeros());
+    }
+}
+
+/// The twist of every leaf link equals `k`'s Jacobian times q̇ (1e-12), for every URDF `k` loads.
+#[test]
+fn end_link_twist_equals_k_jacobian_times_q_dot() {
+    let mut files = vec![robots_dir().join("panda.urdf")];
+    for kind in ["urdf", "dh", "axis", "stress"] {
+        let mut more: Vec<_> = std::fs::read_dir(reference_dir().join(kind))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "urdf"))
+            .collect();
+        more.sort();
+        files.extend(more);
+    }
+    let mut rng = rng(9);
+    let mut checked = 0;
+    for path in files {
+        let chain = Chain::from_file(&path).unwrap();
+        let robot = k::Chain::<f64>::from_urdf_file(&path).unwrap();
+        let mut data = Data::new(&chain);
+        let leaves: Vec<usize> = (0..chain.links().len())
+            .filter(|&l| chain.joints().iter().all(|j| j.parent().index() != l))
+            .collect();
+        for _ in 0..10 {
+            let q = random_q(&chain, &mut rng);
+            let qd = random_vec(chain.dof(), 1.0, &mut rng);
+            let vel = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
+            for &leaf in &leaves {
+                let name = chain.links()[leaf].name();
+                let Some(node) = robot.find_link(name) else {
+                    continue;
+                };
+                let arm = k::SerialChain::from_end(node);
+                // k's joint vector along the path, from our q (mimic joints follow their primary).
+                let value = |name: &str, v: &[f64]| {
+                    let j = chain.joint(chain.joint_id(name).unwrap());
+                    match (j.q_index(), j.mimic()) {
+                        (Some(i), _) => (v[i], 1.0),
+                        (None, Some(m)) => {
+                            let i = chain.joint(m.primary).q_index().unwrap();
+                            (v[i], m.multiplier)
+                        }
+                        _ => unreachable!(),
+                    }
+                };
+                let positions: Vec<f64> = arm
+                    .iter_joints()
+                    .map(|j| {
+                        let jj = chain.joint(chain.joint_id(&j.name).unwrap());
+                        match jj.mimic() {
+                            Some(m) => m.multiplier * value(&j.name, &q).0 + m.offset,
+                            None => value(&j.name, &q).0,
+                        }
+                    })
+                    .collect();
+                let rates: Vec<f64> = arm
+                    .iter_joints()
+                    .map(|j| {
+                        let (v, m) = value(&j.name, &qd);
+                        m * v
+                    })
+                    .collect();
+                arm.set_joint_positions(&positions).unwrap();
+                let jac = k::jacobian(&arm);
+                let twist = &jac * k::nalgebra::DVector::from_vec(rates);
+                let ours = vel.velocity(chain.link_id(name).unwrap());
+                for i in 0..3 {
+                    assert!(
+                        (twist[i] - ours.v[i]).abs() < 1e-12,
+                        "{} {name} v",
+                        path.display()
+                    );
+                    assert!(
+                        (twist[3 + i] - ours.omega[i]).abs() < 1e-12,
+                        "{} {name} ω",
+                        path.display()
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100, "{checked}");
+}
