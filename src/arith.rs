@@ -1,9 +1,13 @@
-//! Fused or separate multiply–add, chosen once per call by CPU feature detection.
+//! Fused or separate multiply–add, and the vector width the kernels are compiled for, chosen
+//! once by CPU feature detection.
 //!
-//! The kernels are written once, generic over [`Arith`], and compiled twice: with the `fma`
-//! target feature (one rounding per `a * b + c`, faster and more accurate) and without it (for
-//! x86-64 machines that lack FMA). `f64::mul_add` without the target feature compiles to a slow
-//! library call, so the plain version never calls it.
+//! The kernels are written once, generic over [`Arith`], and compiled several times: with
+//! AVX-512 (8 lanes per register) and FMA, with AVX2 and FMA, and for baseline x86-64 (separate
+//! multiply and add: `f64::mul_add` without the FMA target feature compiles to a slow library
+//! call, so that path never calls it). Results with FMA can differ from those without in the last
+//! bit; both are within the accuracy the tests assert.
+
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Multiply–add policy of a kernel instantiation.
 pub(crate) trait Arith: Copy {
@@ -34,48 +38,104 @@ impl Arith for Fused {
     }
 }
 
-/// Whether this CPU has hardware FMA (cached by the standard library after the first call).
-#[inline]
-pub(crate) fn has_fma() -> bool {
-    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-    {
-        std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(target_arch = "aarch64")]
-    {
-        // FMA is part of the AArch64 base instruction set.
-        true
-    }
-    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64", target_arch = "aarch64")))]
-    {
-        false
+/// The instruction sets a kernel can be compiled for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[repr(u8)]
+pub enum Isa {
+    /// Baseline: SSE2 on x86-64 (2 lanes), separate multiply and add.
+    Baseline = 1,
+    /// AVX2 and FMA (4 lanes).
+    Avx2 = 2,
+    /// AVX-512 (8 lanes) and FMA.
+    Avx512 = 3,
+}
+
+impl Isa {
+    /// Short name for reports.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Baseline => "baseline",
+            Isa::Avx2 => "avx2+fma",
+            Isa::Avx512 => "avx512",
+        }
     }
 }
 
+static DETECTED: AtomicU8 = AtomicU8::new(0);
+static FORCED: AtomicU8 = AtomicU8::new(0);
+
+/// The instruction set the kernels use on this machine (detected once), unless lowered with
+/// [`force_isa`].
+#[must_use]
+pub fn isa() -> Isa {
+    let forced = FORCED.load(Ordering::Relaxed);
+    let detected = match DETECTED.load(Ordering::Relaxed) {
+        0 => {
+            let d = detect() as u8;
+            DETECTED.store(d, Ordering::Relaxed);
+            d
+        }
+        d => d,
+    };
+    let level = if forced != 0 {
+        forced.min(detected)
+    } else {
+        detected
+    };
+    match level {
+        3 => Isa::Avx512,
+        2 => Isa::Avx2,
+        _ => Isa::Baseline,
+    }
+}
+
+/// Makes the kernels use at most `isa` (for comparing paths in tests and benchmarks); `None`
+/// restores detection. A request above what the CPU supports is lowered to what it supports.
+pub fn force_isa(isa: Option<Isa>) {
+    FORCED.store(isa.map_or(0, |i| i as u8), Ordering::Relaxed);
+}
+
+fn detect() -> Isa {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512dq") && has!("avx512vl") && has!("fma") {
+            return Isa::Avx512;
+        }
+        if has!("avx2") && has!("fma") {
+            return Isa::Avx2;
+        }
+    }
+    Isa::Baseline
+}
+
 /// Defines `$vis fn $name(args) -> ret` that runs `$generic::<Fused>(args)` inside a function
-/// compiled with the `fma` target feature when the CPU has FMA, and `$generic::<Separate>(args)`
-/// otherwise. `$generic` must be `#[inline(always)]` so that its body is compiled with the
-/// caller's target features.
+/// compiled for AVX-512 or AVX2 (with FMA), whichever [`isa`] selects, and
+/// `$generic::<Separate>(args)` on baseline x86-64. `$generic` must be `#[inline(always)]` so that
+/// its body is compiled with the caller's target features.
 macro_rules! fma_dispatch {
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+            #[cfg(target_arch = "x86_64")]
             {
-                #[target_feature(enable = "fma")]
-                fn with_fma($($arg: $ty),*) $(-> $ret)? {
+                #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
+                fn with_avx512($($arg: $ty),*) $(-> $ret)? {
                     $generic::<$crate::arith::Fused>($($arg),*)
                 }
-                if $crate::arith::has_fma() {
-                    // SAFETY: the CPU supports FMA (checked at run time just above).
-                    return unsafe { with_fma($($arg),*) };
+                #[target_feature(enable = "avx2,fma")]
+                fn with_avx2($($arg: $ty),*) $(-> $ret)? {
+                    $generic::<$crate::arith::Fused>($($arg),*)
+                }
+                match $crate::arith::isa() {
+                    // SAFETY: `isa()` reports these features only when the CPU has them.
+                    $crate::arith::Isa::Avx512 => return unsafe { with_avx512($($arg),*) },
+                    // SAFETY: as above.
+                    $crate::arith::Isa::Avx2 => return unsafe { with_avx2($($arg),*) },
+                    $crate::arith::Isa::Baseline => {}
                 }
             }
-            #[cfg(target_arch = "aarch64")]
-            {
-                return $generic::<$crate::arith::Fused>($($arg),*);
-            }
-            #[allow(unreachable_code)]
             $generic::<$crate::arith::Separate>($($arg),*)
         }
     };

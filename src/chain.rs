@@ -450,6 +450,41 @@ pub(crate) struct Body {
     pub(crate) motion: Motion,
     pub(crate) post: Placement,
     pub(crate) joint: usize,
+    /// `pre` as a full transform.
+    pub(crate) pre_frame: Transform,
+    /// The joint axis in the parent body frame, `R_pre v`.
+    pub(crate) axis_in_parent: [f64; 3],
+}
+
+impl Body {
+    pub(crate) fn new(
+        parent: Option<usize>,
+        pre: Placement,
+        motion: Motion,
+        post: Placement,
+        joint: usize,
+    ) -> Body {
+        let pre_frame = pre.to_transform();
+        let axis_in_parent = pre_frame.apply(motion.axis.vector());
+        Body {
+            parent,
+            pre,
+            motion,
+            post,
+            joint,
+            pre_frame,
+            axis_in_parent,
+        }
+    }
+}
+
+/// How to compute θ of [`LANES`](crate::kernel::LANES) consecutive bodies from `q`:
+/// `θ_i = scale_i · q[index_i] + offset_i` (scale 0 where θ is constant or past the last body).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ThetaGather {
+    pub(crate) index: [usize; crate::kernel::LANES],
+    pub(crate) scale: [f64; crate::kernel::LANES],
+    pub(crate) offset: [f64; crate::kernel::LANES],
 }
 
 /// One entry of `q` and what it drives.
@@ -475,6 +510,8 @@ pub struct Chain {
     joints: Vec<Joint>,
     links: Vec<Link>,
     pub(crate) bodies: Vec<Body>,
+    /// θ of the bodies, [`LANES`](crate::kernel::LANES) at a time.
+    pub(crate) theta_gather: Vec<ThetaGather>,
     /// For each entry of `q`: (joint, component name for cylindrical joints).
     variables: Vec<(usize, Option<&'static str>)>,
     pub(crate) limit_checks: Vec<LimitCheck>,
@@ -982,13 +1019,13 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         }
 
         let body = bodies.len();
-        bodies.push(Body {
-            parent: carrier,
-            pre: compose(offset, origin),
-            motion: Motion::new(Axis::from_unit(axis), theta, d),
+        bodies.push(Body::new(
+            carrier,
+            compose(offset, origin),
+            Motion::new(Axis::from_unit(axis), theta, d),
             post,
-            joint: new_joint[j],
-        });
+            new_joint[j],
+        ));
         link_carrier[child] = (Some(body), Placement::Identity);
 
         // Limits apply to the joint's own coordinate: q for an independent joint, the implied
@@ -1022,6 +1059,27 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         .iter()
         .enumerate()
         .all(|(k, b)| b.parent == k.checked_sub(1));
+    let theta_gather = bodies
+        .chunks(crate::kernel::LANES)
+        .map(|chunk| {
+            let mut g = ThetaGather {
+                index: [0; crate::kernel::LANES],
+                scale: [0.0; crate::kernel::LANES],
+                offset: [0.0; crate::kernel::LANES],
+            };
+            for (i, b) in chunk.iter().enumerate() {
+                if let Term::Var {
+                    index,
+                    scale,
+                    offset,
+                } = b.motion.theta
+                {
+                    (g.index[i], g.scale[i], g.offset[i]) = (index, scale, offset);
+                }
+            }
+            g
+        })
+        .collect();
 
     let joints: Vec<Joint> = joint_order
         .iter()
@@ -1075,6 +1133,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         joints,
         links,
         bodies,
+        theta_gather,
         variables,
         limit_checks,
         serial,

@@ -1,6 +1,7 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
 use crate::chain::Chain;
+use crate::kernel::{Frame, Rates};
 use crate::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.
@@ -22,15 +23,13 @@ pub enum LimitPolicy {
 /// programming error and panics.
 #[derive(Clone, Debug)]
 pub struct Data {
-    pub(crate) world_from_body: Vec<Transform>,
-    /// Angular velocity of each body (world frame).
-    pub(crate) omega: Vec<[f64; 3]>,
-    /// Linear velocity of each body-frame origin (world frame).
-    pub(crate) vel: Vec<[f64; 3]>,
-    /// Angular acceleration of each body (world frame).
-    pub(crate) alpha: Vec<[f64; 3]>,
-    /// Classical acceleration of each body-frame origin (world frame).
-    pub(crate) acc: Vec<[f64; 3]>,
+    pub(crate) world_from_body: Vec<Frame<f64>>,
+    /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
+    pub(crate) rates: Vec<Rates<f64>>,
+    /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain
+    /// (padded to a whole number of lanes).
+    pub(crate) sin: Vec<f64>,
+    pub(crate) cos: Vec<f64>,
     /// Scratch: bodies on the path to a queried link, or dirty flags of an incremental update.
     pub(crate) path: Vec<usize>,
     pub(crate) dirty: Vec<bool>,
@@ -48,11 +47,10 @@ impl Data {
     pub fn new(chain: &Chain) -> Self {
         let n = chain.bodies.len();
         Data {
-            world_from_body: vec![Transform::IDENTITY; n],
-            omega: vec![[0.0; 3]; n],
-            vel: vec![[0.0; 3]; n],
-            alpha: vec![[0.0; 3]; n],
-            acc: vec![[0.0; 3]; n],
+            world_from_body: vec![Frame::splat(&Transform::IDENTITY); n],
+            rates: vec![Rates::zero(); n],
+            sin: vec![0.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],
+            cos: vec![1.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],
             path: Vec::with_capacity(n),
             dirty: vec![true; n],
             last_q: vec![0.0; chain.dof()],

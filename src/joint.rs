@@ -2,7 +2,6 @@
 //! along it, the cylindrical joint of Shabana eq. (2.119) of which revolute and prismatic joints
 //! are the special cases with `d` or `θ` constant.
 
-use crate::arith::Arith;
 use nalgebra::{Matrix3, Matrix4, Unit, Vector3};
 
 /// The closed set of joint kinds kinechain models.
@@ -99,6 +98,19 @@ pub(crate) enum Axis {
 }
 
 impl Axis {
+    /// The unit vector.
+    pub(crate) fn vector(&self) -> [f64; 3] {
+        match *self {
+            Axis::X => [1.0, 0.0, 0.0],
+            Axis::Y => [0.0, 1.0, 0.0],
+            Axis::Z => [0.0, 0.0, 1.0],
+            Axis::NegX => [-1.0, 0.0, 0.0],
+            Axis::NegY => [0.0, -1.0, 0.0],
+            Axis::NegZ => [0.0, 0.0, -1.0],
+            Axis::General(v) => v,
+        }
+    }
+
     /// Classifies a unit vector (exact comparisons: only an exact ±e_i is special).
     pub(crate) fn from_unit(v: [f64; 3]) -> Axis {
         match v {
@@ -147,30 +159,6 @@ pub(crate) enum Term {
     },
 }
 
-impl Term {
-    /// Value at `q`.
-    #[inline(always)]
-    pub(crate) fn value<A: Arith>(&self, q: &[f64]) -> f64 {
-        match *self {
-            Term::Const(v) => v,
-            Term::Var {
-                index,
-                scale,
-                offset,
-            } => A::mul_add(scale, q[index], offset),
-        }
-    }
-
-    /// Time derivative given the rates (`q_dot` or `q_ddot`).
-    #[inline(always)]
-    pub(crate) fn rate(&self, rates: &[f64]) -> f64 {
-        match *self {
-            Term::Const(_) => 0.0,
-            Term::Var { index, scale, .. } => scale * rates[index],
-        }
-    }
-}
-
 /// The moving part of a joint: `[A(v, θ), v d; 0, 1]` (eq. 2.119) with θ and d each a [`Term`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Motion {
@@ -194,70 +182,6 @@ impl Motion {
             const_sin_cos,
         }
     }
-}
-
-/// Replaces the rotation columns `r` by `r · A(axis, θ)` given `s = sin θ`, `c = cos θ`, where `A`
-/// is Rodrigues' rotation (eq. 2.112); for a coordinate axis this is a plane rotation of two
-/// columns.
-#[inline(always)]
-pub(crate) fn rotate_columns<A: Arith>(r: &mut [[f64; 3]; 3], axis: &Axis, s: f64, c: f64) {
-    // Rotating about +e_k by θ mixes the other two columns (i, j) in cyclic order:
-    // col_i' = c col_i + s col_j, col_j' = c col_j − s col_i. About −e_k, s changes sign.
-    let plane = |r: &mut [[f64; 3]; 3], i: usize, j: usize, s: f64| {
-        let (ci, cj) = (r[i], r[j]);
-        for k in 0..3 {
-            r[i][k] = A::mul_add(c, ci[k], s * cj[k]);
-            r[j][k] = A::mul_add(c, cj[k], -(s * ci[k]));
-        }
-    };
-    match *axis {
-        Axis::X => plane(r, 1, 2, s),
-        Axis::Y => plane(r, 2, 0, s),
-        Axis::Z => plane(r, 0, 1, s),
-        Axis::NegX => plane(r, 1, 2, -s),
-        Axis::NegY => plane(r, 2, 0, -s),
-        Axis::NegZ => plane(r, 0, 1, -s),
-        Axis::General(v) => {
-            let a = rodrigues::<A>(v, s, c);
-            let old = *r;
-            for (j, col) in r.iter_mut().enumerate() {
-                for (k, x) in col.iter_mut().enumerate() {
-                    *x = A::mul_add(
-                        old[0][k],
-                        a[j][0],
-                        A::mul_add(old[1][k], a[j][1], old[2][k] * a[j][2]),
-                    );
-                }
-            }
-        }
-    }
-}
-
-/// Rodrigues' formula (eq. 2.112), `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`, written as
-/// `A = c I + s [v]x + (1 − c) v vᵀ`; returns columns.
-#[inline(always)]
-pub(crate) fn rodrigues<A: Arith>(v: [f64; 3], s: f64, c: f64) -> [[f64; 3]; 3] {
-    let w = 1.0 - c;
-    let [x, y, z] = v;
-    let (wx, wy, wz) = (w * x, w * y, w * z);
-    let (sx, sy, sz) = (s * x, s * y, s * z);
-    [
-        [
-            A::mul_add(wx, x, c),
-            A::mul_add(wx, y, sz),
-            A::mul_add(wx, z, -sy),
-        ],
-        [
-            A::mul_add(wy, x, -sz),
-            A::mul_add(wy, y, c),
-            A::mul_add(wy, z, sx),
-        ],
-        [
-            A::mul_add(wz, x, sy),
-            A::mul_add(wz, y, -sx),
-            A::mul_add(wz, z, c),
-        ],
-    ]
 }
 
 /// The skew matrix `[v]x` of eq. (2.6): `[v]x u = v × u`.
@@ -326,44 +250,6 @@ pub fn joint_transform_ddot(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::arith::Separate;
-    use crate::transform::Transform;
-
-    fn max_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
-        a.iter()
-            .flatten()
-            .zip(b.iter().flatten())
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
-    }
-
-    #[test]
-    fn coordinate_axes_match_the_general_formula() {
-        let base = Transform::from_xyz_rpy([0.0; 3], [0.3, -0.7, 1.9]).r;
-        let theta: f64 = 0.83;
-        let (s, c) = theta.sin_cos();
-        for v in [
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [-1.0, 0.0, 0.0],
-            [0.0, -1.0, 0.0],
-            [0.0, 0.0, -1.0],
-        ] {
-            let mut special = base;
-            rotate_columns::<Separate>(&mut special, &Axis::from_unit(v), s, c);
-            let mut general = base;
-            rotate_columns::<Separate>(&mut general, &Axis::General(v), s, c);
-            assert!(max_diff(&special, &general) < 4.0 * f64::EPSILON, "{v:?}");
-        }
-    }
-
-    #[test]
-    fn rodrigues_about_z_is_rot_z() {
-        let (s, c) = 0.4_f64.sin_cos();
-        let a = rodrigues::<Separate>([0.0, 0.0, 1.0], s, c);
-        assert!(max_diff(&a, &Transform::rot_z(0.4).r) < f64::EPSILON);
-    }
 
     #[test]
     fn axes_normalise_and_zero_axes_are_refused() {

@@ -37,7 +37,8 @@ use crate::arith::{Arith, Separate, fma_dispatch};
 use crate::chain::{Body, Chain, LinkId, Placement};
 use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
-use crate::joint::{Axis, Motion, Term, rotate_columns};
+use crate::joint::{Motion, Term};
+use crate::kernel;
 use crate::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
 
@@ -132,10 +133,10 @@ impl<'a> Poses<'a> {
         match l.body {
             None => l.offset.to_transform(),
             Some(b) => {
-                let body = &self.data.world_from_body[b];
+                let body: Transform = self.data.world_from_body[b].into();
                 match l.offset {
-                    Placement::Identity => *body,
-                    offset => body * &offset.to_transform(),
+                    Placement::Identity => body,
+                    offset => body * offset.to_transform(),
                 }
             }
         }
@@ -156,8 +157,8 @@ impl<'a> Poses<'a> {
         let (omega, v) = match self.carrier(link) {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
-                let w = self.data.omega[b];
-                (w, add3(self.data.vel[b], cross3(w, r)))
+                let body = &self.data.rates[b];
+                (body.omega, add3(body.v, cross3(body.omega, r)))
             }
         };
         LinkVelocity {
@@ -224,11 +225,9 @@ impl<'a> Poses<'a> {
         let (alpha, a) = match self.carrier(link) {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
-                let (w, al) = (self.data.omega[b], self.data.alpha[b]);
-                let a = add3(
-                    self.data.acc[b],
-                    add3(cross3(al, r), cross3(w, cross3(w, r))),
-                );
+                let body = &self.data.rates[b];
+                let (w, al) = (body.omega, body.alpha);
+                let a = add3(body.a, add3(cross3(al, r), cross3(w, cross3(w, r))));
                 (al, a)
             }
         };
@@ -546,121 +545,22 @@ pub fn forward_accelerations<'a>(
 }
 
 // ---------------------------------------------------------------------------------------------
-// Kernels
-
-/// `f ← f · placement`.
-#[inline(always)]
-fn place<A: Arith>(f: &mut Transform, placement: &Placement) {
-    match *placement {
-        Placement::Identity => {}
-        Placement::Translation(t) => f.p = apply_add::<A>(&f.r, t, f.p),
-        Placement::ScrewX { a, c, s } => {
-            f.p = axpy::<A>(a, f.r[0], f.p);
-            rotate_columns::<A>(&mut f.r, &Axis::X, s, c);
-        }
-        Placement::General(t) => *f = compose::<A>(f, &t),
-    }
-}
-
-/// `R u + p`.
-#[inline(always)]
-fn apply_add<A: Arith>(r: &[[f64; 3]; 3], u: [f64; 3], p: [f64; 3]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        *o = A::mul_add(
-            r[0][k],
-            u[0],
-            A::mul_add(r[1][k], u[1], A::mul_add(r[2][k], u[2], p[k])),
-        );
-    }
-    out
-}
-
-/// `s x + y`.
-#[inline(always)]
-fn axpy<A: Arith>(s: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
-    [
-        A::mul_add(s, x[0], y[0]),
-        A::mul_add(s, x[1], y[1]),
-        A::mul_add(s, x[2], y[2]),
-    ]
-}
-
-/// `a · b` for rigid transforms.
-#[inline(always)]
-fn compose<A: Arith>(a: &Transform, b: &Transform) -> Transform {
-    let zero = [0.0; 3];
-    Transform {
-        r: [
-            apply_add::<A>(&a.r, b.r[0], zero),
-            apply_add::<A>(&a.r, b.r[1], zero),
-            apply_add::<A>(&a.r, b.r[2], zero),
-        ],
-        p: apply_add::<A>(&a.r, b.p, a.p),
-    }
-}
-
-/// The joint axis in the world frame, given the joint frame's rotation.
-#[inline(always)]
-fn axis_world<A: Arith>(r: &[[f64; 3]; 3], axis: &Axis) -> [f64; 3] {
-    match *axis {
-        Axis::X => r[0],
-        Axis::Y => r[1],
-        Axis::Z => r[2],
-        Axis::NegX => r[0].map(|x| -x),
-        Axis::NegY => r[1].map(|x| -x),
-        Axis::NegZ => r[2].map(|x| -x),
-        Axis::General(v) => apply_add::<A>(r, v, [0.0; 3]),
-    }
-}
-
-/// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the axis, rotate by θ about it (the two
-/// commute).
-#[inline(always)]
-fn apply_motion<A: Arith>(f: &mut Transform, m: &Motion, q: &[f64], z: &[f64; 3]) {
-    match m.d {
-        Term::Const(0.0) => {}
-        d => f.p = axpy::<A>(d.value::<A>(q), *z, f.p),
-    }
-    let (s, c) = match m.theta {
-        Term::Const(0.0) => return,
-        Term::Const(_) => m.const_sin_cos,
-        theta => theta.value::<A>(q).sin_cos(),
-    };
-    rotate_columns::<A>(&mut f.r, &m.axis, s, c);
-}
-
-/// The joint frame (parent body frame · pre), before the joint's motion.
-#[inline(always)]
-fn joint_frame<A: Arith>(world_from_body: &[Transform], body: &Body) -> Transform {
-    match body.parent {
-        Some(p) => {
-            let mut f = world_from_body[p];
-            place::<A>(&mut f, &body.pre);
-            f
-        }
-        None => body.pre.to_transform(),
-    }
-}
-
-/// Pose of one body from its parent's.
-#[inline(always)]
-fn pose_step<A: Arith>(world_from_body: &[Transform], body: &Body, q: &[f64]) -> Transform {
-    let mut f = joint_frame::<A>(world_from_body, body);
-    let z = match body.motion.d {
-        Term::Const(0.0) => [0.0; 3],
-        _ => axis_world::<A>(&f.r, &body.motion.axis),
-    };
-    apply_motion::<A>(&mut f, &body.motion, q, &z);
-    place::<A>(&mut f, &body.post);
-    f
-}
+// Loops over the bodies, single configuration (the per-body work is in `crate::kernel`).
 
 #[inline(always)]
 fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
-    let poses = &mut data.world_from_body;
+    kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
+    let frames = &mut data.world_from_body;
+    let mut f = kernel::Frame::splat(&Transform::IDENTITY);
     for (k, body) in chain.bodies.iter().enumerate() {
-        poses[k] = pose_step::<A>(poses, body, q);
+        // The previous body's frame stays in registers; only branches read a parent from memory.
+        let parent = match body.parent {
+            Some(p) if p + 1 == k => Some(f),
+            Some(p) => Some(frames[p]),
+            None => None,
+        };
+        f = kernel::pose_step::<f64, A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
+        frames[k] = f;
     }
 }
 
@@ -672,9 +572,11 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         data.path.push(b);
         k = chain.bodies[b].parent;
     }
-    let poses = &mut data.world_from_body;
+    let frames = &mut data.world_from_body;
     for &k in data.path.iter().rev() {
-        poses[k] = pose_step::<A>(poses, &chain.bodies[k], q);
+        let body = &chain.bodies[k];
+        let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
+        frames[k] = kernel::pose_step::<f64, A>(body.parent.map(|p| &frames[p]), body, q, sin_cos);
     }
 }
 
@@ -690,38 +592,11 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             || body.parent.is_some_and(|p| data.dirty[p]);
         data.dirty[k] = dirty;
         if dirty {
-            data.world_from_body[k] = pose_step::<A>(&data.world_from_body, body, q);
+            let frames = &data.world_from_body;
+            let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
+            data.world_from_body[k] =
+                kernel::pose_step::<f64, A>(body.parent.map(|p| &frames[p]), body, q, sin_cos);
         }
-    }
-}
-
-/// Origin, ω, v, α and a of a body's parent (all zero for a body hanging from the world).
-#[derive(Clone, Copy)]
-struct ParentMotion {
-    origin: [f64; 3],
-    omega: [f64; 3],
-    v: [f64; 3],
-    alpha: [f64; 3],
-    a: [f64; 3],
-}
-
-#[inline(always)]
-fn parent_motion(data: &Data, body: &Body) -> ParentMotion {
-    match body.parent {
-        Some(p) => ParentMotion {
-            origin: data.world_from_body[p].p,
-            omega: data.omega[p],
-            v: data.vel[p],
-            alpha: data.alpha[p],
-            a: data.acc[p],
-        },
-        None => ParentMotion {
-            origin: [0.0; 3],
-            omega: [0.0; 3],
-            v: [0.0; 3],
-            alpha: [0.0; 3],
-            a: [0.0; 3],
-        },
     }
 }
 
@@ -733,45 +608,27 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_dot: &[f64],
     q_ddot: &[f64],
 ) {
+    kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
+    let mut previous = (
+        kernel::Frame::splat(&Transform::IDENTITY),
+        kernel::Rates::zero(),
+    );
     for (k, body) in chain.bodies.iter().enumerate() {
-        let mut f = joint_frame::<A>(&data.world_from_body, body);
-        let p_joint = f.p;
-        let z = axis_world::<A>(&f.r, &body.motion.axis);
-        apply_motion::<A>(&mut f, &body.motion, q, &z);
-        place::<A>(&mut f, &body.post);
-        data.world_from_body[k] = f;
-
-        let ParentMotion {
-            origin: p_parent,
-            omega: w_p,
-            v: v_p,
-            alpha: al_p,
-            a: a_p,
-        } = parent_motion(data, body);
-        let m = &body.motion;
-        let (th_d, d_d) = (m.theta.rate(q_dot), m.d.rate(q_dot));
-        let u = sub3(f.p, p_joint);
-        let r = sub3(f.p, p_parent);
-        let z_u = cross3(z, u);
-        // eq. (2.120): velocity of the origin relative to the parent.
-        let v_rel = add3(scale3(d_d, z), scale3(th_d, z_u));
-        let w_r = cross3(w_p, r);
-        data.omega[k] = axpy::<A>(th_d, z, w_p);
-        data.vel[k] = add3(add3(v_p, w_r), v_rel);
-        if ACC {
-            let (th_dd, d_dd) = (m.theta.rate(q_ddot), m.d.rate(q_ddot));
-            // eq. (2.125): d'' z + α_rel × u + ω_rel × (ω_rel × u), relative to the parent.
-            let a_rel = add3(
-                add3(scale3(d_dd, z), scale3(th_dd, z_u)),
-                scale3(th_d * th_d, cross3(z, z_u)),
-            );
-            data.alpha[k] = add3(add3(al_p, scale3(th_dd, z)), cross3(w_p, scale3(th_d, z)));
-            // eq. (2.75): tangential, normal, Coriolis and local terms.
-            let tangential = cross3(al_p, r);
-            let normal = cross3(w_p, w_r);
-            let coriolis = scale3(2.0, cross3(w_p, v_rel));
-            data.acc[k] = add3(add3(a_p, add3(tangential, normal)), add3(coriolis, a_rel));
-        }
+        let parent = match body.parent {
+            Some(p) if p + 1 == k => Some((&previous.0, &previous.1)),
+            Some(p) => Some((&data.world_from_body[p], &data.rates[p])),
+            None => None,
+        };
+        previous = kernel::rates_step::<f64, A, ACC>(
+            parent,
+            body,
+            q,
+            q_dot,
+            q_ddot,
+            (data.sin[k], data.cos[k]),
+        );
+        data.world_from_body[k] = previous.0;
+        data.rates[k] = previous.1;
     }
 }
 
@@ -800,8 +657,7 @@ fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_
 /// The constant transform `M(θ, d)` of a motion whose terms are constants (a fixed joint),
 /// computed once at load time.
 pub(crate) fn constant_motion(m: &Motion) -> Placement {
-    let mut f = Transform::IDENTITY;
-    let z = axis_world::<Separate>(&f.r, &m.axis);
-    apply_motion::<Separate>(&mut f, m, &[], &z);
-    Placement::from_transform(&f)
+    let body = Body::new(None, Placement::Identity, *m, Placement::Identity, 0);
+    let f = kernel::pose_step::<f64, Separate>(None, &body, &[], (0.0, 1.0));
+    Placement::from_transform(&f.into())
 }

@@ -6,6 +6,7 @@
 )]
 
 mod arith;
+pub mod batch;
 pub mod chain;
 pub mod cli;
 pub mod data;
@@ -13,9 +14,12 @@ pub mod error;
 pub mod input;
 pub mod io;
 pub mod joint;
+mod kernel;
 pub mod kinematics;
 pub mod transform;
+mod trig;
 
+pub use arith::{Isa, force_isa, isa};
 pub use nalgebra;
 
 pub use chain::{

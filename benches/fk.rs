@@ -1,0 +1,248 @@
+//! Run time of forward kinematics: kinechain's evaluation modes against the `k` crate and a naive
+//! product of eq. (2.129) matrices, on the same robots and seeded configurations in one run.
+//!
+//! `cargo bench --bench fk` (ids like `fk/pose/panda`); the run-time-against-error table is
+//! `cargo bench --bench table`.
+
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use kinechain::{
+    Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics,
+    forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
+};
+use std::hint::black_box;
+use std::path::Path;
+
+/// Deterministic configurations (no RNG dependency in the timed loop).
+fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let mut state = seed;
+    let mut next = move || {
+        // SplitMix64.
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..n)
+        .map(|_| {
+            let mut q = vec![0.0; chain.dof()];
+            for j in chain.joints() {
+                let Some(first) = j.q_index() else { continue };
+                for (k, l) in j.limits().iter().enumerate() {
+                    let (lo, hi) = l.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| {
+                        (l.lower, l.upper)
+                    });
+                    q[first + k] = lo + (hi - lo) * next();
+                }
+            }
+            q
+        })
+        .collect()
+}
+
+fn robots() -> Vec<(&'static str, &'static str)> {
+    vec![
+        ("ur5", "tests/data/reference/urdf/ur5.urdf"),
+        ("panda", "robots/panda.urdf"),
+    ]
+}
+
+fn kinechain_modes(c: &mut Criterion) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (name, file) in robots() {
+        let chain = Chain::from_file(root.join(file)).unwrap();
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let qs = configurations(&chain, 64, 1);
+        let qd = vec![0.3; chain.dof()];
+        let tip = chain.end_link();
+        let mut i = 0;
+        let mut next = || {
+            i = (i + 1) % qs.len();
+            &qs[i]
+        };
+        c.bench_function(&format!("fk/pose/{name}"), |b| {
+            b.iter(|| {
+                let p = forward_kinematics(&chain, &mut data, black_box(next())).unwrap();
+                black_box(p.world_from_link(tip));
+            })
+        });
+        c.bench_function(&format!("fk/vel/{name}"), |b| {
+            b.iter(|| {
+                let v = forward_velocities(&chain, &mut data, black_box(next()), &qd).unwrap();
+                black_box(v.velocity(tip));
+            })
+        });
+        c.bench_function(&format!("fk/acc/{name}"), |b| {
+            b.iter(|| {
+                let a =
+                    forward_accelerations(&chain, &mut data, black_box(next()), &qd, &qd).unwrap();
+                black_box(a.acceleration(tip));
+            })
+        });
+        c.bench_function(&format!("fk/end/{name}"), |b| {
+            b.iter(|| {
+                black_box(forward_kinematics_to(&chain, &mut data, black_box(next()), tip).unwrap())
+            })
+        });
+        // Only the last joint moves between calls.
+        let last = chain.dof() - 1;
+        let mut q = qs[0].clone();
+        forward_kinematics_incremental(&chain, &mut data, &q).unwrap();
+        let mut t = 0.0_f64;
+        c.bench_function(&format!("fk/incremental_last/{name}"), |b| {
+            b.iter(|| {
+                t += 1e-4;
+                q[last] = 0.01 * t.sin();
+                let p = forward_kinematics_incremental(&chain, &mut data, black_box(&q)).unwrap();
+                black_box(p.world_from_link(tip));
+            })
+        });
+    }
+}
+
+fn k_baseline(c: &mut Criterion) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (name, file) in robots() {
+        let chain = Chain::from_file(root.join(file)).unwrap();
+        let robot = k::Chain::<f64>::from_urdf_file(root.join(file)).unwrap();
+        // k's joint vector (mimic joints included) for each configuration.
+        let qs: Vec<Vec<f64>> = configurations(&chain, 64, 1)
+            .iter()
+            .map(|q| {
+                robot
+                    .iter_joints()
+                    .map(|j| {
+                        let ours = chain.joint(chain.joint_id(&j.name).unwrap());
+                        match (ours.q_index(), ours.mimic()) {
+                            (Some(i), _) => q[i],
+                            (None, Some(m)) => {
+                                m.multiplier * q[chain.joint(m.primary).q_index().unwrap()]
+                                    + m.offset
+                            }
+                            _ => 0.0,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut i = 0;
+        c.bench_function(&format!("k/pose/{name}"), |b| {
+            b.iter(|| {
+                i = (i + 1) % qs.len();
+                robot.set_joint_positions_unchecked(black_box(&qs[i]));
+                black_box(robot.update_transforms());
+            })
+        });
+    }
+}
+
+/// The textbook method: multiply eq. (2.129)-style 4×4 matrices with `nalgebra::Matrix4`.
+fn naive_baseline(c: &mut Criterion) {
+    use kinechain::nalgebra::Matrix4;
+    // The Panda arm's modified DH table (robots/panda_mdh.yaml): (a, alpha, d).
+    let rows: [(f64, f64, f64); 7] = [
+        (0.0, 0.0, 0.333),
+        (0.0, -std::f64::consts::FRAC_PI_2, 0.0),
+        (0.0, std::f64::consts::FRAC_PI_2, 0.316),
+        (0.0825, std::f64::consts::FRAC_PI_2, 0.0),
+        (-0.0825, -std::f64::consts::FRAC_PI_2, 0.384),
+        (0.0, std::f64::consts::FRAC_PI_2, 0.0),
+        (0.088, std::f64::consts::FRAC_PI_2, 0.0),
+    ];
+    let chain =
+        Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/panda_mdh.yaml"))
+            .unwrap();
+    let qs = configurations(&chain, 64, 1);
+    let mut out = vec![Matrix4::<f64>::identity(); 8];
+    let mut i = 0;
+    c.bench_function("naive/pose/panda_mdh", |b| {
+        b.iter(|| {
+            i = (i + 1) % qs.len();
+            let q = black_box(&qs[i]);
+            let mut t = Matrix4::<f64>::identity();
+            for (k, &(a, alpha, d)) in rows.iter().enumerate() {
+                let (st, ct): (f64, f64) = q[k].sin_cos();
+                let (sa, ca): (f64, f64) = alpha.sin_cos();
+                // eq. (2.129)
+                let m = Matrix4::new(
+                    ct,
+                    -st,
+                    0.0,
+                    a,
+                    st * ca,
+                    ct * ca,
+                    -sa,
+                    -d * sa,
+                    st * sa,
+                    ct * sa,
+                    ca,
+                    d * ca,
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0,
+                );
+                t *= m;
+                out[k + 1] = t;
+            }
+            black_box(&out);
+        })
+    });
+    let mut data = Data::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let tip = chain.end_link();
+    c.bench_function("fk/pose/panda_mdh", |b| {
+        b.iter(|| {
+            i = (i + 1) % qs.len();
+            let p = forward_kinematics(&chain, &mut data, black_box(&qs[i])).unwrap();
+            black_box(p.world_from_link(tip));
+        })
+    });
+    let _ = BatchSize::SmallInput;
+}
+
+/// Batches of 4096 configurations; criterion reports time per batch and configurations per
+/// second (`thrpt`).
+fn batches(c: &mut Criterion) {
+    use criterion::Throughput;
+    use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let n = 4096;
+    for (name, file) in robots() {
+        let chain = Chain::from_file(root.join(file)).unwrap();
+        let qs: Vec<f64> = configurations(&chain, n, 2).concat();
+        let mut data = BatchData::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut group = c.benchmark_group(format!("fk/batch/{name}"));
+        group.throughput(Throughput::Elements(n as u64));
+        group.bench_function("1_thread", |b| {
+            b.iter(|| {
+                black_box(
+                    forward_kinematics_batch(&chain, &mut data, black_box(&qs))
+                        .unwrap()
+                        .len(),
+                )
+            })
+        });
+        group.bench_function("all_threads", |b| {
+            b.iter(|| {
+                black_box(
+                    forward_kinematics_batch_par(&chain, &mut data, black_box(&qs))
+                        .unwrap()
+                        .len(),
+                )
+            })
+        });
+        group.finish();
+    }
+}
+
+criterion_group!(
+    benches,
+    kinechain_modes,
+    k_baseline,
+    naive_baseline,
+    batches
+);
+criterion_main!(benches);

@@ -1,0 +1,586 @@
+//! The evaluation kernels, written once for any number type [`Num`]: one `f64` (a single
+//! configuration) or [`Lanes`] of `f64` (eight configurations at once, in SIMD registers), each
+//! with fused or separate multiply–add ([`Arith`]).
+//!
+//! One body (a moving joint with its constant placements folded in) is evaluated as
+//! `frame = parent · pre · M(θ, d) · post` (eq. 2.119 for `M`), and its rates by the recursion
+//! documented in [`crate::kinematics`].
+
+// Index loops over lanes and rows are the shape the vectoriser expects here.
+#![allow(clippy::needless_range_loop)]
+
+use crate::arith::Arith;
+use crate::chain::{Body, Placement};
+use crate::joint::{Axis, Term};
+use crate::trig;
+use std::ops::{Add, Mul, Neg, Sub};
+
+/// A number the kernels compute with.
+pub(crate) trait Num:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    fn splat(x: f64) -> Self;
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self;
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self);
+
+    /// `a · b`, the only work on a chain's dependency path.
+    #[inline(always)]
+    fn compose<A: Arith>(a: &Frame<Self>, b: &Frame<Self>) -> Frame<Self> {
+        let zero = [Self::splat(0.0); 3];
+        Frame {
+            r: [
+                mat_vec_add::<Self, A>(&a.r, &b.r[0], zero),
+                mat_vec_add::<Self, A>(&a.r, &b.r[1], zero),
+                mat_vec_add::<Self, A>(&a.r, &b.r[2], zero),
+            ],
+            p: mat_vec_add::<Self, A>(&a.r, &b.p, a.p),
+        }
+    }
+}
+
+impl Num for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+        A::mul_add(a, b, c)
+    }
+    #[inline(always)]
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+        trig::sin_cos::<A>(x)
+    }
+
+    /// Column by column in 4-wide vectors (the fourth lane is padding): 12 vector multiply–adds
+    /// instead of 36 scalar ones, in the same order of operations per entry as the generic form.
+    #[inline(always)]
+    fn compose<A: Arith>(a: &Frame<f64>, b: &Frame<f64>) -> Frame<f64> {
+        let c = [pad(&a.r[0]), pad(&a.r[1]), pad(&a.r[2])];
+        let zero = [0.0; 4];
+        Frame {
+            r: [
+                padded_col::<A>(&c, &b.r[0], zero),
+                padded_col::<A>(&c, &b.r[1], zero),
+                padded_col::<A>(&c, &b.r[2], zero),
+            ],
+            p: padded_col::<A>(&c, &b.p, pad(&a.p)),
+        }
+    }
+}
+
+/// `[v, 0]`.
+#[inline(always)]
+fn pad(v: &[f64; 3]) -> [f64; 4] {
+    [v[0], v[1], v[2], 0.0]
+}
+
+/// `c u + base` with 4-wide columns `c` (the fourth lane is padding).
+#[inline(always)]
+fn padded_col<A: Arith>(c: &[[f64; 4]; 3], u: &[f64; 3], base: [f64; 4]) -> [f64; 3] {
+    let mut out = [0.0; 4];
+    for k in 0..4 {
+        out[k] = A::mul_add(
+            c[0][k],
+            u[0],
+            A::mul_add(c[1][k], u[1], A::mul_add(c[2][k], u[2], base[k])),
+        );
+    }
+    [out[0], out[1], out[2]]
+}
+
+/// `r u + p` (the columns of `r` are its vectors).
+#[inline(always)]
+fn mat_vec_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: &V3<N>, p: V3<N>) -> V3<N> {
+    let mut out = p;
+    for k in 0..3 {
+        out[k] = N::mul_add::<A>(
+            r[0][k],
+            u[0],
+            N::mul_add::<A>(r[1][k], u[1], N::mul_add::<A>(r[2][k], u[2], p[k])),
+        );
+    }
+    out
+}
+
+/// Number of configurations a batch kernel evaluates together.
+pub(crate) const LANES: usize = 8;
+
+/// [`LANES`] values, one per configuration; arithmetic is lane-wise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(transparent)]
+pub(crate) struct Lanes(pub(crate) [f64; LANES]);
+
+macro_rules! lanewise {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for Lanes {
+            type Output = Lanes;
+            #[inline(always)]
+            fn $method(self, rhs: Lanes) -> Lanes {
+                let mut out = [0.0; LANES];
+                for i in 0..LANES {
+                    out[i] = self.0[i] $op rhs.0[i];
+                }
+                Lanes(out)
+            }
+        }
+    };
+}
+lanewise!(Add, add, +);
+lanewise!(Sub, sub, -);
+lanewise!(Mul, mul, *);
+
+impl Neg for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn neg(self) -> Lanes {
+        Lanes(self.0.map(|x| -x))
+    }
+}
+
+impl Num for Lanes {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        Lanes([x; LANES])
+    }
+    #[inline(always)]
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+        let mut out = [0.0; LANES];
+        for i in 0..LANES {
+            out[i] = A::mul_add(a.0[i], b.0[i], c.0[i]);
+        }
+        Lanes(out)
+    }
+    #[inline(always)]
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+        let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
+        let mut big = false;
+        for i in 0..LANES {
+            (s[i], c[i]) = trig::sin_cos_reduced::<A>(x.0[i]);
+            big |= x.0[i].abs() >= trig::REDUCTION_LIMIT;
+        }
+        // Rare: arguments beyond the fast reduction (or NaN never reaches here: inputs are checked).
+        if big {
+            for i in 0..LANES {
+                if x.0[i].abs() >= trig::REDUCTION_LIMIT {
+                    (s[i], c[i]) = x.0[i].sin_cos();
+                }
+            }
+        }
+        (Lanes(s), Lanes(c))
+    }
+}
+
+/// A rigid frame: rotation columns and origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Frame<N> {
+    pub(crate) r: [[N; 3]; 3],
+    pub(crate) p: [N; 3],
+}
+
+impl<N: Num> Frame<N> {
+    #[inline(always)]
+    pub(crate) fn splat(f: &crate::transform::Transform) -> Self {
+        Frame {
+            r: f.r.map(|c| c.map(N::splat)),
+            p: f.p.map(N::splat),
+        }
+    }
+}
+
+impl From<Frame<f64>> for crate::transform::Transform {
+    #[inline(always)]
+    fn from(f: Frame<f64>) -> Self {
+        crate::transform::Transform { r: f.r, p: f.p }
+    }
+}
+
+pub(crate) type V3<N> = [N; 3];
+
+#[inline(always)]
+pub(crate) fn add<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[inline(always)]
+pub(crate) fn sub<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+pub(crate) fn scale<N: Num>(s: N, a: V3<N>) -> V3<N> {
+    [s * a[0], s * a[1], s * a[2]]
+}
+
+/// `s x + y`.
+#[inline(always)]
+pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
+    [
+        N::mul_add::<A>(s, x[0], y[0]),
+        N::mul_add::<A>(s, x[1], y[1]),
+        N::mul_add::<A>(s, x[2], y[2]),
+    ]
+}
+
+/// `a × b`.
+#[inline(always)]
+pub(crate) fn cross<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `R u + p` with a constant `u`.
+#[inline(always)]
+fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
+    let mut out = p;
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = N::mul_add::<A>(
+            r[0][k],
+            N::splat(u[0]),
+            N::mul_add::<A>(
+                r[1][k],
+                N::splat(u[1]),
+                N::mul_add::<A>(r[2][k], N::splat(u[2]), p[k]),
+            ),
+        );
+    }
+    out
+}
+
+/// A rotation about +e_k mixes the two other columns (i, j) in cyclic order:
+/// `col_i' = c col_i + s col_j`, `col_j' = c col_j − s col_i` (about −e_k, `s` changes sign).
+#[inline(always)]
+fn plane<N: Num, A: Arith>(r: &mut [[N; 3]; 3], i: usize, j: usize, s: N, c: N) {
+    let (ci, cj) = (r[i], r[j]);
+    for k in 0..3 {
+        r[i][k] = N::mul_add::<A>(c, ci[k], s * cj[k]);
+        r[j][k] = N::mul_add::<A>(c, cj[k], -(s * ci[k]));
+    }
+}
+
+/// Replaces the columns `r` by `r · A(axis, θ)` given `s = sin θ`, `c = cos θ` (eq. 2.112).
+#[inline(always)]
+fn rotate_columns<N: Num, A: Arith>(r: &mut [[N; 3]; 3], axis: &Axis, s: N, c: N) {
+    match *axis {
+        Axis::X => plane::<N, A>(r, 1, 2, s, c),
+        Axis::Y => plane::<N, A>(r, 2, 0, s, c),
+        Axis::Z => plane::<N, A>(r, 0, 1, s, c),
+        Axis::NegX => plane::<N, A>(r, 1, 2, -s, c),
+        Axis::NegY => plane::<N, A>(r, 2, 0, -s, c),
+        Axis::NegZ => plane::<N, A>(r, 0, 1, -s, c),
+        Axis::General(v) => {
+            // Rodrigues (eq. 2.112) as A = c I + s [v]x + (1 − c) v vᵀ, by columns.
+            let w = N::splat(1.0) - c;
+            let [x, y, z] = v.map(N::splat);
+            let (wx, wy, wz) = (w * x, w * y, w * z);
+            let (sx, sy, sz) = (s * x, s * y, s * z);
+            let a = [
+                [
+                    N::mul_add::<A>(wx, x, c),
+                    N::mul_add::<A>(wx, y, sz),
+                    N::mul_add::<A>(wx, z, -sy),
+                ],
+                [
+                    N::mul_add::<A>(wy, x, -sz),
+                    N::mul_add::<A>(wy, y, c),
+                    N::mul_add::<A>(wy, z, sx),
+                ],
+                [
+                    N::mul_add::<A>(wz, x, sy),
+                    N::mul_add::<A>(wz, y, -sx),
+                    N::mul_add::<A>(wz, z, c),
+                ],
+            ];
+            let old = *r;
+            for (j, col) in r.iter_mut().enumerate() {
+                for (k, out) in col.iter_mut().enumerate() {
+                    *out = N::mul_add::<A>(
+                        old[0][k],
+                        a[j][0],
+                        N::mul_add::<A>(old[1][k], a[j][1], old[2][k] * a[j][2]),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// `f ← f · placement`.
+#[inline(always)]
+fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
+    match placement {
+        Placement::Identity => {}
+        Placement::Translation(t) => f.p = apply_const_add::<N, A>(&f.r, *t, f.p),
+        Placement::ScrewX { a, c, s } => {
+            f.p = axpy::<N, A>(N::splat(*a), f.r[0], f.p);
+            rotate_columns::<N, A>(&mut f.r, &Axis::X, N::splat(*s), N::splat(*c));
+        }
+        Placement::General(t) => {
+            let zero = [N::splat(0.0); 3];
+            let r = f.r;
+            *f = Frame {
+                r: [
+                    apply_const_add::<N, A>(&r, t.r[0], zero),
+                    apply_const_add::<N, A>(&r, t.r[1], zero),
+                    apply_const_add::<N, A>(&r, t.r[2], zero),
+                ],
+                p: apply_const_add::<N, A>(&r, t.p, f.p),
+            };
+        }
+    }
+}
+
+/// Value of a θ or d term at `q`.
+#[inline(always)]
+fn term_value<N: Num, A: Arith>(t: &Term, q: &[N]) -> N {
+    match *t {
+        Term::Const(v) => N::splat(v),
+        Term::Var {
+            index,
+            scale,
+            offset,
+        } => N::mul_add::<A>(N::splat(scale), q[index], N::splat(offset)),
+    }
+}
+
+/// Rate of a θ or d term given `q_dot` (or `q_ddot`).
+#[inline(always)]
+fn term_rate<N: Num>(t: &Term, rates: &[N]) -> N {
+    match *t {
+        Term::Const(_) => N::splat(0.0),
+        Term::Var { index, scale, .. } => N::splat(scale) * rates[index],
+    }
+}
+
+/// `(sin θ, cos θ)` of a body at `q`.
+#[inline(always)]
+pub(crate) fn body_sin_cos<N: Num, A: Arith>(body: &Body, q: &[N]) -> (N, N) {
+    match body.motion.theta {
+        Term::Const(_) => (N::splat(0.0), N::splat(1.0)),
+        theta => N::sin_cos::<A>(term_value::<N, A>(&theta, q)),
+    }
+}
+
+/// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the world axis `z`, rotate by θ about
+/// it (the two commute). `sin_cos` is `(sin θ, cos θ)` when θ varies.
+#[inline(always)]
+fn apply_motion<N: Num, A: Arith>(
+    f: &mut Frame<N>,
+    body: &Body,
+    q: &[N],
+    z: &V3<N>,
+    sin_cos: (N, N),
+) {
+    let m = &body.motion;
+    match m.d {
+        Term::Const(0.0) => {}
+        d => f.p = axpy::<N, A>(term_value::<N, A>(&d, q), *z, f.p),
+    }
+    let (s, c) = match m.theta {
+        Term::Const(0.0) => return,
+        Term::Const(_) => (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1)),
+        _ => sin_cos,
+    };
+    rotate_columns::<N, A>(&mut f.r, &m.axis, s, c);
+}
+
+/// The body's frame relative to its parent body, `pre · M(θ, d) · post`: independent of the
+/// parent, so that the joints of a chain can be worked on in parallel and only [`compose`]
+/// remains on the chain's dependency path.
+#[inline(always)]
+pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
+    let mut m = Frame::splat(&body.pre_frame);
+    let z = body.axis_in_parent.map(N::splat);
+    apply_motion::<N, A>(&mut m, body, q, &z, sin_cos);
+    place::<N, A>(&mut m, &body.post);
+    m
+}
+
+/// `a · b`.
+#[inline(always)]
+pub(crate) fn compose<N: Num, A: Arith>(a: &Frame<N>, b: &Frame<N>) -> Frame<N> {
+    N::compose::<A>(a, b)
+}
+
+/// Frame of a body from its parent's frame (`None`: the body hangs from the world), given
+/// `(sin θ, cos θ)` of its joint.
+#[inline(always)]
+pub(crate) fn pose_step<N: Num, A: Arith>(
+    parent: Option<&Frame<N>>,
+    body: &Body,
+    q: &[N],
+    sin_cos: (N, N),
+) -> Frame<N> {
+    let m = local_frame::<N, A>(body, q, sin_cos);
+    match parent {
+        Some(f) => compose::<N, A>(f, &m),
+        None => m,
+    }
+}
+
+/// `sin θ` and `cos θ` of every body at `q`, [`LANES`] joints at a time (vectorised: the
+/// single-configuration kernels take the trigonometry off their dependency chain this way).
+/// `sin` and `cos` have room for a whole number of chunks. θ is computed straight from `q`
+/// (a value assembled lane by lane in memory and read back as a vector would stall the load).
+#[inline(always)]
+pub(crate) fn all_sin_cos<A: Arith>(
+    gather: &[crate::chain::ThetaGather],
+    q: &[f64],
+    sin: &mut [f64],
+    cos: &mut [f64],
+) {
+    for ((g, s_out), c_out) in gather
+        .iter()
+        .zip(sin.chunks_exact_mut(LANES))
+        .zip(cos.chunks_exact_mut(LANES))
+    {
+        // The gather closure does no arithmetic (a closure is not always inlined into the
+        // target-feature function, and `mul_add` outside it would be a library call).
+        let gathered = Lanes(std::array::from_fn(|i| q[g.index[i]]));
+        let theta = Lanes::mul_add::<A>(Lanes(g.scale), gathered, Lanes(g.offset));
+        let (s, c) = Lanes::sin_cos::<A>(theta);
+        s_out.copy_from_slice(&s.0);
+        c_out.copy_from_slice(&c.0);
+    }
+}
+
+/// Per-body motion state for the rate recursion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Rates<N> {
+    pub(crate) omega: V3<N>,
+    pub(crate) v: V3<N>,
+    pub(crate) alpha: V3<N>,
+    pub(crate) a: V3<N>,
+}
+
+impl<N: Num> Rates<N> {
+    #[inline(always)]
+    pub(crate) fn zero() -> Self {
+        let z = [N::splat(0.0); 3];
+        Rates {
+            omega: z,
+            v: z,
+            alpha: z,
+            a: z,
+        }
+    }
+}
+
+/// Frame and rates of a body from its parent's (eqs. 2.120, 2.123–2.125 for the joint, 2.75 for
+/// the composition). With `ACC = false`, α and a are left untouched.
+#[inline(always)]
+pub(crate) fn rates_step<N: Num, A: Arith, const ACC: bool>(
+    parent: Option<(&Frame<N>, &Rates<N>)>,
+    body: &Body,
+    q: &[N],
+    q_dot: &[N],
+    q_ddot: &[N],
+    sin_cos: (N, N),
+) -> (Frame<N>, Rates<N>) {
+    // The same frame as `pose_step`, bit for bit; the joint origin and axis in the world frame
+    // follow from the parent frame and the constant `pre`.
+    let local = local_frame::<N, A>(body, q, sin_cos);
+    let (f, p_joint, z) = match parent {
+        Some((frame, _)) => (
+            compose::<N, A>(frame, &local),
+            apply_const_add::<N, A>(&frame.r, body.pre_frame.p, frame.p),
+            apply_const_add::<N, A>(&frame.r, body.axis_in_parent, [N::splat(0.0); 3]),
+        ),
+        None => (
+            local,
+            body.pre_frame.p.map(N::splat),
+            body.axis_in_parent.map(N::splat),
+        ),
+    };
+    let (p_parent, parent) = match parent {
+        Some((frame, rates)) => (frame.p, *rates),
+        None => ([N::splat(0.0); 3], Rates::zero()),
+    };
+    let m = &body.motion;
+    let (th_d, d_d) = (term_rate(&m.theta, q_dot), term_rate(&m.d, q_dot));
+    let u = sub(f.p, p_joint);
+    let r = sub(f.p, p_parent);
+    let z_u = cross(z, u);
+    // eq. (2.120): velocity of the origin relative to the parent.
+    let v_rel = add(scale(d_d, z), scale(th_d, z_u));
+    let w_r = cross(parent.omega, r);
+    let mut out = Rates {
+        omega: axpy::<N, A>(th_d, z, parent.omega),
+        v: add(add(parent.v, w_r), v_rel),
+        alpha: [N::splat(0.0); 3],
+        a: [N::splat(0.0); 3],
+    };
+    if ACC {
+        let (th_dd, d_dd) = (term_rate(&m.theta, q_ddot), term_rate(&m.d, q_ddot));
+        // eq. (2.125): d'' z + α_rel × u + ω_rel × (ω_rel × u), relative to the parent.
+        let a_rel = add(
+            add(scale(d_dd, z), scale(th_dd, z_u)),
+            scale(th_d * th_d, cross(z, z_u)),
+        );
+        out.alpha = add(
+            add(parent.alpha, scale(th_dd, z)),
+            cross(parent.omega, scale(th_d, z)),
+        );
+        // eq. (2.75): tangential, normal, Coriolis and local terms.
+        let tangential = cross(parent.alpha, r);
+        let normal = cross(parent.omega, w_r);
+        let coriolis = scale(N::splat(2.0), cross(parent.omega, v_rel));
+        out.a = add(add(parent.a, add(tangential, normal)), add(coriolis, a_rel));
+    }
+    (f, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arith::Separate;
+    use crate::transform::Transform;
+
+    fn max_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn coordinate_axes_match_the_general_formula() {
+        let base = Transform::from_xyz_rpy([0.0; 3], [0.3, -0.7, 1.9]).r;
+        let (s, c) = 0.83_f64.sin_cos();
+        for v in [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, -1.0],
+        ] {
+            let mut special = base;
+            rotate_columns::<f64, Separate>(&mut special, &Axis::from_unit(v), s, c);
+            let mut general = base;
+            rotate_columns::<f64, Separate>(&mut general, &Axis::General(v), s, c);
+            assert!(max_diff(&special, &general) < 4.0 * f64::EPSILON, "{v:?}");
+        }
+        let mut about_z = Transform::IDENTITY.r;
+        rotate_columns::<f64, Separate>(&mut about_z, &Axis::General([0.0, 0.0, 1.0]), s, c);
+        assert!(max_diff(&about_z, &Transform::rot_z(0.83).r) < f64::EPSILON);
+    }
+
+    #[test]
+    fn lanes_compute_what_scalars_compute() {
+        let xs = [0.1, -2.0, 1e3, 7.5e5, 9e5, -1e7, 0.0, 3.0];
+        let (s, c) = Lanes::sin_cos::<Separate>(Lanes(xs));
+        for i in 0..LANES {
+            assert_eq!((s.0[i], c.0[i]), <f64 as Num>::sin_cos::<Separate>(xs[i]));
+        }
+        let a = Lanes(xs);
+        let m = Lanes::mul_add::<Separate>(a, a, Lanes::splat(1.0));
+        for i in 0..LANES {
+            assert_eq!(m.0[i], xs[i] * xs[i] + 1.0);
+        }
+    }
+}

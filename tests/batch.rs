@@ -1,0 +1,78 @@
+//! Batches give, configuration by configuration, exactly what single evaluations give.
+
+mod common;
+
+use common::*;
+use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+use kinechain::{Chain, Data, LimitPolicy, StateError, forward_kinematics};
+
+#[test]
+fn batches_equal_single_evaluations_bit_for_bit() {
+    let mut rng = rng(21);
+    for file in [
+        "robots/panda.urdf",
+        "robots/snake50.yaml",
+        "robots/cylindrical.yaml",
+        "robots/stanford.yaml",
+        "tests/data/reference/urdf/tiago_no_hand.urdf",
+    ] {
+        let chain =
+            Chain::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
+        let mut single = Data::new(&chain);
+        single.set_limit_policy(LimitPolicy::Ignore);
+        let mut batch = BatchData::new(&chain);
+        batch.set_limit_policy(LimitPolicy::Ignore);
+        // 37 configurations: four full chunks of eight and a partial one.
+        let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let expected: Vec<Vec<_>> = qs
+            .chunks(chain.dof())
+            .map(|q| {
+                let p = forward_kinematics(&chain, &mut single, q).unwrap();
+                (0..chain.links().len())
+                    .map(|l| p.world_from_link(chain.link_id(chain.links()[l].name()).unwrap()))
+                    .collect()
+            })
+            .collect();
+        for parallel in [false, true] {
+            let poses = if parallel {
+                forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap()
+            } else {
+                forward_kinematics_batch(&chain, &mut batch, &qs).unwrap()
+            };
+            assert_eq!(poses.len(), 37);
+            for (i, want) in expected.iter().enumerate() {
+                for (l, pose) in want.iter().enumerate() {
+                    let id = chain.link_id(chain.links()[l].name()).unwrap();
+                    assert_eq!(
+                        poses.world_from_link(i, id),
+                        *pose,
+                        "{file} configuration {i} link {l}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn batch_errors_name_the_configuration() {
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let mut batch = BatchData::new(&chain);
+    let mut qs = vec![0.0; 6 * 10];
+    qs[6 * 7 + 2] = f64::NAN;
+    let e = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err();
+    assert_eq!(e.index, 7);
+    assert!(matches!(e.source, StateError::NonFinite { index: 2, .. }));
+    qs[6 * 7 + 2] = 0.0;
+    qs[6 * 3] = 10.0;
+    let e = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err();
+    assert_eq!(e.index, 3);
+    assert!(matches!(e.source, StateError::OutOfLimits { .. }));
+    let e = forward_kinematics_batch(&chain, &mut batch, &qs[..13]).unwrap_err();
+    assert!(matches!(e.source, StateError::WrongLength { .. }));
+    assert!(
+        forward_kinematics_batch(&chain, &mut batch, &[])
+            .unwrap()
+            .is_empty()
+    );
+}
