@@ -47,6 +47,22 @@ fn robots() -> Vec<(&'static str, &'static str)> {
     ]
 }
 
+/// The link at the tip of the arm (not a finger or a fixed frame on the base).
+fn tool_link(robot: &str) -> &'static str {
+    match robot {
+        "ur5" => "ee_link",
+        _ => "panda_hand_tcp",
+    }
+}
+
+/// The arm's last joint.
+fn last_joint(robot: &str) -> &'static str {
+    match robot {
+        "ur5" => "wrist_3_joint",
+        _ => "panda_joint7",
+    }
+}
+
 fn kinechain_modes(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (name, file) in robots() {
@@ -55,7 +71,7 @@ fn kinechain_modes(c: &mut Criterion) {
         data.set_limit_policy(LimitPolicy::Ignore);
         let qs = configurations(&chain, 64, 1);
         let qd = vec![0.3; chain.dof()];
-        let tip = chain.end_link();
+        let tip = chain.link_id(tool_link(name)).unwrap();
         let mut i = 0;
         let mut next = || {
             i = (i + 1) % qs.len();
@@ -85,16 +101,25 @@ fn kinechain_modes(c: &mut Criterion) {
                 black_box(forward_kinematics_to(&chain, &mut data, black_box(next()), tip).unwrap())
             })
         });
-        // Only the last joint moves between calls.
-        let last = chain.dof() - 1;
-        let mut q = qs[0].clone();
-        forward_kinematics_incremental(&chain, &mut data, &q).unwrap();
-        let mut t = 0.0_f64;
+        // Only the last arm joint moves between calls (precomputed configurations).
+        let last = chain
+            .joint(chain.joint_id(last_joint(name)).unwrap())
+            .q_index()
+            .unwrap();
+        let moving: Vec<Vec<f64>> = (0..64)
+            .map(|i| {
+                let mut q = qs[0].clone();
+                q[last] += 1e-3 * i as f64;
+                q
+            })
+            .collect();
+        forward_kinematics_incremental(&chain, &mut data, &moving[0]).unwrap();
+        let mut i = 0;
         c.bench_function(&format!("fk/incremental_last/{name}"), |b| {
             b.iter(|| {
-                t += 1e-4;
-                q[last] = 0.01 * t.sin();
-                let p = forward_kinematics_incremental(&chain, &mut data, black_box(&q)).unwrap();
+                i = (i + 1) % moving.len();
+                let p = forward_kinematics_incremental(&chain, &mut data, black_box(&moving[i]))
+                    .unwrap();
                 black_box(p.world_from_link(tip));
             })
         });

@@ -219,15 +219,23 @@ fn chunk_poses_generic<A: Arith>(
     for (j, qj) in q.iter_mut().enumerate() {
         *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
     }
+    let q: &[Lanes] = q;
+    // Trigonometry first, for all bodies, so that it does not compete with the composition for
+    // registers; the frames are written to `frames` and then read back one at a time.
+    for (k, body) in chain.bodies.iter().enumerate() {
+        let (s, c) = kernel::body_sin_cos::<Lanes, A>(body, q);
+        frames[k].r[0][0] = s;
+        frames[k].r[0][1] = c;
+    }
     let mut f = Frame::splat(&Transform::IDENTITY);
     for (k, body) in chain.bodies.iter().enumerate() {
-        let parent = match body.parent {
-            Some(p) if p + 1 == k => Some(f),
-            Some(p) => Some(frames[p]),
-            None => None,
+        let sin_cos = (frames[k].r[0][0], frames[k].r[0][1]);
+        let local = kernel::local_frame::<Lanes, A>(body, q, sin_cos);
+        f = match body.parent {
+            Some(p) if p + 1 == k => kernel::compose::<Lanes, A>(&f, &local),
+            Some(p) => kernel::compose::<Lanes, A>(&frames[p], &local),
+            None => local,
         };
-        let sin_cos = kernel::body_sin_cos::<Lanes, A>(body, &*q);
-        f = kernel::pose_step::<Lanes, A>(parent.as_ref(), body, &*q, sin_cos);
         frames[k] = f;
     }
 }

@@ -374,6 +374,10 @@ pub(crate) fn check_values(
             got: values.len(),
         });
     }
+    // Fast path: one vectorisable pass; the position is looked for only when something is wrong.
+    if values.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return Ok(());
+    }
     if let Some(index) = values.iter().position(|x| !x.is_finite()) {
         let (joint, component) = chain.variable(index);
         return Err(StateError::NonFinite {
@@ -566,6 +570,15 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
 
 #[inline(always)]
 fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
+    // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
+    // path (vectorised, so computing a few bodies off the path costs nothing).
+    let chunks = body / kernel::LANES + 1;
+    kernel::all_sin_cos::<A>(
+        &chain.theta_gather[..chunks],
+        q,
+        &mut data.sin,
+        &mut data.cos,
+    );
     data.path.clear();
     let mut k = Some(body);
     while let Some(b) = k {
@@ -573,10 +586,19 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         k = chain.bodies[b].parent;
     }
     let frames = &mut data.world_from_body;
+    let mut f = kernel::Frame::splat(&Transform::IDENTITY);
+    let mut previous = usize::MAX;
     for &k in data.path.iter().rev() {
         let body = &chain.bodies[k];
-        let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
-        frames[k] = kernel::pose_step::<f64, A>(body.parent.map(|p| &frames[p]), body, q, sin_cos);
+        let local = kernel::local_frame::<f64, A>(body, q, (data.sin[k], data.cos[k]));
+        f = match body.parent {
+            // The previous body on the path is always the parent; it stays in registers.
+            Some(p) if p == previous => kernel::compose::<f64, A>(&f, &local),
+            Some(p) => kernel::compose::<f64, A>(&frames[p], &local),
+            None => local,
+        };
+        frames[k] = f;
+        previous = k;
     }
 }
 

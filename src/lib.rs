@@ -8,6 +8,7 @@
 mod arith;
 pub mod batch;
 pub mod chain;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod data;
 pub mod error;
@@ -16,6 +17,8 @@ pub mod io;
 pub mod joint;
 mod kernel;
 pub mod kinematics;
+#[cfg(feature = "reference")]
+pub mod reference;
 pub mod transform;
 mod trig;
 

@@ -1,0 +1,430 @@
+//! Run time against error: for every robot of the reference data and every method, the time per
+//! configuration and the largest error against the 50-digit references (`*.hp.json`).
+//!
+//! `cargo bench --bench table` prints a markdown table and writes it, with an SVG plot (log–log,
+//! time against error), to `docs/bench/`.
+//!
+//! Timing: the 22 reference configurations evaluated in a loop for at least 100 ms; the median of
+//! seven such runs, divided by the number of configurations.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::*;
+use kinechain::batch::{BatchData, forward_kinematics_batch};
+use kinechain::nalgebra::Matrix4;
+use kinechain::{Data, Isa, LimitPolicy, force_isa, forward_kinematics, isa};
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+/// Median over seven runs of the time of `f` per call, in ns; each run lasts at least 100 ms.
+fn time_per_call(mut f: impl FnMut()) -> f64 {
+    let mut calls = 1u64;
+    loop {
+        let t = Instant::now();
+        for _ in 0..calls {
+            f();
+        }
+        if t.elapsed().as_millis() >= 100 {
+            break;
+        }
+        calls *= 2;
+    }
+    let mut runs: Vec<f64> = (0..7)
+        .map(|_| {
+            let t = Instant::now();
+            for _ in 0..calls {
+                f();
+            }
+            t.elapsed().as_nanos() as f64 / calls as f64
+        })
+        .collect();
+    runs.sort_by(f64::total_cmp);
+    runs[3]
+}
+
+struct Row {
+    method: String,
+    robot: String,
+    ns: f64,
+    position: f64,
+    reach: f64,
+    rotation: f64,
+}
+
+/// Largest position and rotation-entry errors of per-sample link poses against the 50-digit file.
+fn errors(exact: &serde_json::Value, names: &[String], poses: &[Vec<[[f64; 4]; 4]>]) -> (f64, f64) {
+    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    for (sample, got) in exact["samples"].as_array().unwrap().iter().zip(poses) {
+        for (name, pose) in names.iter().zip(got) {
+            let want = matrix4(&sample["links"][name.as_str()]["pose"]);
+            for i in 0..3 {
+                position = position.max((pose[i][3] - want[i][3]).abs());
+                for j in 0..3 {
+                    rotation = rotation.max((pose[i][j] - want[i][j]).abs());
+                }
+            }
+        }
+    }
+    (position, rotation)
+}
+
+fn rows_for(path: &Path) -> Vec<Row> {
+    let reference = read_json(path);
+    let exact = read_json(&hp_path(path));
+    let robot = format!(
+        "{}/{}",
+        path.parent()
+            .unwrap()
+            .file_name()
+            .unwrap()
+            .to_string_lossy(),
+        reference["robot"].as_str().unwrap()
+    );
+    let chain = reference_chain(path, &reference);
+    let samples = reference["samples"].as_array().unwrap();
+    let qs: Vec<Vec<f64>> = samples
+        .iter()
+        .map(|s| joint_vector(&chain, &s["q"]))
+        .collect();
+    let names: Vec<String> = samples[0]["links"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .cloned()
+        .collect();
+    let ids: Vec<_> = names.iter().map(|n| chain.link_id(n).unwrap()).collect();
+    let reach = scale_of(&exact, "pose");
+    let n = qs.len() as f64;
+    let mut rows = Vec::new();
+    let mut push = |method: &str, ns: f64, poses: Vec<Vec<[[f64; 4]; 4]>>| {
+        let (position, rotation) = errors(&exact, &names, &poses);
+        rows.push(Row {
+            method: method.to_string(),
+            robot: robot.clone(),
+            ns,
+            position,
+            reach,
+            rotation,
+        });
+    };
+
+    // kinechain, one configuration per call, on the detected instruction set and on baseline x86-64.
+    let detected = isa();
+    for (label, level) in [
+        ("kinechain", detected),
+        ("kinechain, baseline x86-64", Isa::Baseline),
+    ] {
+        force_isa(Some(level));
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
+            .iter()
+            .map(|q| {
+                let p = forward_kinematics(&chain, &mut data, q).unwrap();
+                ids.iter()
+                    .map(|&l| p.world_from_link(l).to_rows())
+                    .collect()
+            })
+            .collect();
+        let ns = time_per_call(|| {
+            for q in &qs {
+                let p = forward_kinematics(&chain, &mut data, black_box(q)).unwrap();
+                black_box(p.world_from_link(ids[ids.len() - 1]));
+            }
+        }) / n;
+        push(label, ns, poses);
+    }
+    force_isa(None);
+
+    // kinechain, batches of 22 × 16 configurations.
+    let flat: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
+    let mut batch = BatchData::new(&chain);
+    batch.set_limit_policy(LimitPolicy::Ignore);
+    let poses = {
+        let p = forward_kinematics_batch(&chain, &mut batch, &flat).unwrap();
+        (0..qs.len())
+            .map(|i| {
+                ids.iter()
+                    .map(|&l| p.world_from_link(i, l).to_rows())
+                    .collect()
+            })
+            .collect()
+    };
+    let ns = time_per_call(|| {
+        black_box(
+            forward_kinematics_batch(&chain, &mut batch, black_box(&flat))
+                .unwrap()
+                .len(),
+        );
+    }) / (16.0 * n);
+    push("kinechain batch, 1 thread", ns, poses);
+
+    // The k crate (URDF models).
+    if reference["model"]["kind"] == "urdf" {
+        let robot = k::Chain::<f64>::from_urdf_file(
+            path.with_file_name(reference["model"]["file"].as_str().unwrap()),
+        )
+        .unwrap();
+        let kq: Vec<Vec<f64>> = qs
+            .iter()
+            .map(|q| {
+                robot
+                    .iter_joints()
+                    .map(|j| {
+                        let ours = chain.joint(chain.joint_id(&j.name).unwrap());
+                        match (ours.q_index(), ours.mimic()) {
+                            (Some(i), _) => q[i],
+                            (None, Some(m)) => {
+                                m.multiplier * q[chain.joint(m.primary).q_index().unwrap()]
+                                    + m.offset
+                            }
+                            _ => 0.0,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let poses: Vec<Vec<[[f64; 4]; 4]>> = kq
+            .iter()
+            .map(|q| {
+                robot.set_joint_positions_unchecked(q);
+                robot.update_transforms();
+                names
+                    .iter()
+                    .map(|name| {
+                        let m = robot
+                            .find_link(name)
+                            .unwrap()
+                            .world_transform()
+                            .unwrap()
+                            .to_homogeneous();
+                        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+                    })
+                    .collect()
+            })
+            .collect();
+        let ns = time_per_call(|| {
+            for q in &kq {
+                robot.set_joint_positions_unchecked(black_box(q));
+                black_box(robot.update_transforms());
+            }
+        }) / n;
+        push("k 0.32", ns, poses);
+    }
+
+    // The textbook method for DH models: products of 4×4 nalgebra matrices (eq. 2.129 or the
+    // standard form), sin/cos from the standard library.
+    if reference["model"]["kind"] == "dh" {
+        let m = &reference["model"];
+        let modified = m["convention"] == "modified";
+        let base = Matrix4::from_fn(|i, j| matrix4(&m["base"])[i][j]);
+        let tool = Matrix4::from_fn(|i, j| matrix4(&m["tool"])[i][j]);
+        let rows: Vec<(bool, f64, f64, f64, f64)> = m["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| {
+                let revolute = j["type"] == "revolute";
+                (
+                    revolute,
+                    num(&j["a"]),
+                    num(&j["alpha"]),
+                    num(&j["d"]),
+                    num(&j["theta"]),
+                )
+            })
+            .collect();
+        let offsets: Vec<f64> = m["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| num(&j["offset"]))
+            .collect();
+        let eval = |q: &[f64], out: &mut Vec<Matrix4<f64>>| {
+            out.clear();
+            let mut t = base;
+            out.push(t);
+            for (k, &(revolute, a, alpha, d, theta)) in rows.iter().enumerate() {
+                let (th, dd) = if revolute {
+                    (q[k] + offsets[k], d)
+                } else {
+                    (theta, q[k] + offsets[k])
+                };
+                let (st, ct) = th.sin_cos();
+                let (sa, ca) = alpha.sin_cos();
+                let a_i = if modified {
+                    // eq. (2.129)
+                    Matrix4::new(
+                        ct,
+                        -st,
+                        0.0,
+                        a,
+                        st * ca,
+                        ct * ca,
+                        -sa,
+                        -dd * sa,
+                        st * sa,
+                        ct * sa,
+                        ca,
+                        dd * ca,
+                        0.0,
+                        0.0,
+                        0.0,
+                        1.0,
+                    )
+                } else {
+                    Matrix4::new(
+                        ct,
+                        -st * ca,
+                        st * sa,
+                        a * ct,
+                        st,
+                        ct * ca,
+                        -ct * sa,
+                        a * st,
+                        0.0,
+                        sa,
+                        ca,
+                        dd,
+                        0.0,
+                        0.0,
+                        0.0,
+                        1.0,
+                    )
+                };
+                t *= a_i;
+                out.push(t);
+            }
+            out.push(t * tool);
+        };
+        let mut out = Vec::new();
+        let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
+            .iter()
+            .map(|q| {
+                eval(q, &mut out);
+                // Link names of DH references: link0..linkn, tool.
+                names
+                    .iter()
+                    .map(|name| {
+                        let i = if name == "tool" {
+                            out.len() - 1
+                        } else {
+                            name.trim_start_matches("link").parse().unwrap()
+                        };
+                        std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)]))
+                    })
+                    .collect()
+            })
+            .collect();
+        let ns = time_per_call(|| {
+            for q in &qs {
+                eval(black_box(q), &mut out);
+                black_box(&out);
+            }
+        }) / n;
+        push("naive nalgebra Matrix4", ns, poses);
+    }
+    rows
+}
+
+fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
+    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let ulps = |r: &Row| {
+        (r.position / (r.reach * f64::EPSILON))
+            .max(r.rotation / f64::EPSILON)
+            .max(0.1)
+    };
+    let (x_max, y_max) = rows.iter().fold((1.0_f64, 1.0_f64), |(x, y), r| {
+        (x.max(r.ns), y.max(ulps(r)))
+    });
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Time per configuration against error (all link poses)",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (5.0..x_max * 2.0).log_scale(),
+            (0.1..y_max * 4.0).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("ns per configuration (log)")
+        .y_desc("max error, ulp of reach or of 1 (log)")
+        .draw()?;
+    let mut methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    methods.dedup();
+    methods.sort();
+    methods.dedup();
+    for (i, method) in methods.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.method == *method)
+            .map(|r| (r.ns, ulps(r)))
+            .collect();
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
+            .label(*method)
+            .legend(move |(x, y)| Circle::new((x, y), 5, color.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; nothing to parse.
+    let mut rows = Vec::new();
+    for path in reference_files() {
+        rows.extend(rows_for(&path));
+    }
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let mut table = format!(
+        "Machine: {cpu}, {} threads, kernels: {}.\n\n| method | robot | ns/config | max position error (m) | (ulp of reach) | max rotation error |\n|---|---|---:|---:|---:|---:|\n",
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        isa().name()
+    );
+    for r in &rows {
+        writeln!(
+            table,
+            "| {} | {} | {:.1} | {:.1e} | {:.2} | {:.1e} |",
+            r.method,
+            r.robot,
+            r.ns,
+            r.position,
+            r.position / (r.reach * f64::EPSILON),
+            r.rotation
+        )
+        .unwrap();
+    }
+    print!("{table}");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/bench");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("table.md"), &table).unwrap();
+    plot(&rows, &dir.join("time_vs_error.svg")).unwrap();
+    println!(
+        "\nwrote {} and {}",
+        dir.join("table.md").display(),
+        dir.join("time_vs_error.svg").display()
+    );
+    let _: Option<Transform> = None;
+}
