@@ -426,5 +426,4 @@ fn main() {
         dir.join("table.md").display(),
         dir.join("time_vs_error.svg").display()
     );
-    let _: Option<Transform> = None;
 }
