@@ -59,7 +59,7 @@ impl BatchData {
         self.limit_policy = policy;
     }
 
-    fn prepare(&mut self, chain: &Chain, qs: &[f64]) -> Result<usize, BatchError> {
+    fn prepare(&mut self, chain: &Chain, qs: &[f64], parallel: bool) -> Result<usize, BatchError> {
         assert!(
             self.bodies == chain.bodies.len() && self.dof == chain.dof(),
             "kinechain: BatchData was created for another chain"
@@ -76,8 +76,22 @@ impl BatchData {
                 },
             });
         }
-        for (index, q) in qs.chunks_exact(dof).enumerate() {
-            check_q(chain, q, self.limit_policy).map_err(|source| BatchError { index, source })?;
+        let policy = self.limit_policy;
+        let check = |(index, q): (usize, &[f64])| {
+            check_q(chain, q, policy).map_err(|source| BatchError { index, source })
+        };
+        if parallel {
+            // The first bad configuration, as the sequential check would report it.
+            if let Some(bad) = qs
+                .par_chunks_exact(dof)
+                .enumerate()
+                .with_min_len(64)
+                .find_first(|&(i, q)| check((i, q)).is_err())
+            {
+                check(bad)?;
+            }
+        } else {
+            qs.chunks_exact(dof).enumerate().try_for_each(check)?;
         }
         let chunks = n.div_ceil(LANES);
         let zero = Frame::splat(&Transform::IDENTITY);
@@ -162,7 +176,7 @@ pub fn forward_kinematics_batch<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    let chunks = data.prepare(chain, qs)?;
+    let chunks = data.prepare(chain, qs, false)?;
     let bodies = chain.bodies.len().max(1);
     for (c, frames) in data
         .frames
@@ -189,7 +203,7 @@ pub fn forward_kinematics_batch_par<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    let chunks = data.prepare(chain, qs)?;
+    let chunks = data.prepare(chain, qs, true)?;
     let bodies = chain.bodies.len().max(1);
     data.frames[..chunks * chain.bodies.len()]
         .par_chunks_mut(bodies)

@@ -36,6 +36,25 @@ enum Command {
     },
     /// Poses (and velocities, accelerations) of the links at a configuration.
     Fk(FkArgs),
+    /// Time per configuration of each evaluation mode, and its error against a high-precision
+    /// evaluation of the same model.
+    Bench {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// What to compute: poses, poses and velocities, or poses, velocities and accelerations.
+        #[arg(long, value_enum, default_value_t = Level::Pose)]
+        level: Level,
+        /// Random configurations (within the joint limits) to time and check.
+        #[arg(long, default_value_t = 64)]
+        configurations: usize,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Level {
+    Pose,
+    Vel,
+    Acc,
 }
 
 #[derive(Debug, clap::Args)]
@@ -205,6 +224,11 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
     match command {
         Command::Info { robot, format } => info(&load(&robot)?, format, out),
         Command::Fk(args) => fk(&args, out),
+        Command::Bench {
+            robot,
+            level,
+            configurations,
+        } => bench(&robot, level, configurations.max(1), out),
     }
 }
 
@@ -677,4 +701,287 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
             .map(|v| joint_vector_from_json(chain, v, "qdd"))
             .transpose()?,
     })
+}
+
+/// A deterministic generator (SplitMix64) for benchmark configurations.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn unit(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Configurations within the joint limits (±π where a joint has none).
+fn random_configurations(chain: &Chain, n: usize) -> Vec<Vec<f64>> {
+    let mut rng = SplitMix(0x6b69_6e65);
+    (0..n)
+        .map(|_| {
+            let mut q = vec![0.0; chain.dof()];
+            for j in chain.joints() {
+                let Some(first) = j.q_index() else { continue };
+                for (k, l) in j.limits().iter().enumerate() {
+                    let (lo, hi) = match l {
+                        Some(l) if l.lower.is_finite() && l.upper.is_finite() => (l.lower, l.upper),
+                        _ => (-std::f64::consts::PI, std::f64::consts::PI),
+                    };
+                    q[first + k] = lo + (hi - lo) * rng.unit();
+                }
+            }
+            q
+        })
+        .collect()
+}
+
+/// Median over five runs of the time per call of `f`, each run lasting at least 20 ms.
+fn time_per_call(mut f: impl FnMut()) -> f64 {
+    let mut calls = 1u64;
+    loop {
+        let t = std::time::Instant::now();
+        for _ in 0..calls {
+            f();
+        }
+        if t.elapsed().as_millis() >= 20 {
+            break;
+        }
+        calls *= 2;
+    }
+    let mut runs: Vec<f64> = (0..5)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            for _ in 0..calls {
+                f();
+            }
+            t.elapsed().as_nanos() as f64 / calls as f64
+        })
+        .collect();
+    runs.sort_by(f64::total_cmp);
+    runs[2]
+}
+
+fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<(), CliError> {
+    use crate::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    use crate::kinematics::forward_kinematics_incremental;
+    use std::hint::black_box;
+
+    let chain = load(path)?;
+    let qs = random_configurations(&chain, n);
+    let qd: Vec<Vec<f64>> = qs
+        .iter()
+        .map(|q| q.iter().map(|x| 0.5 * x.sin()).collect())
+        .collect();
+    let mut data = Data::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let all: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
+    let end = chain.end_link();
+    let links = chain.links().len();
+
+    // Errors of the single evaluation against the 256-bit evaluation of the same model.
+    let mut position: f64 = 0.0;
+    let mut rotation: f64 = 0.0;
+    for q in &qs {
+        let exact = crate::reference::link_poses(&chain, q);
+        let poses = forward_kinematics(&chain, &mut data, q)?;
+        let ours: Vec<Transform> = all.iter().map(|&l| poses.world_from_link(l)).collect();
+        let (p, r) = crate::reference::max_errors(&ours, &exact);
+        position = position.max(p);
+        rotation = rotation.max(r);
+    }
+
+    let mut rows: Vec<(String, f64)> = Vec::new();
+    let per = |ns: f64| ns / qs.len() as f64;
+    match level {
+        Level::Pose => {
+            rows.push((
+                "kinechain, all links".into(),
+                per(time_per_call(|| {
+                    for q in &qs {
+                        let p = forward_kinematics(&chain, &mut data, black_box(q))
+                            .unwrap_or_else(|_| unreachable!());
+                        black_box(p.world_from_link(end));
+                    }
+                })),
+            ));
+            rows.push((
+                format!("kinechain, end link {} only", chain.link(end).name()),
+                per(time_per_call(|| {
+                    for q in &qs {
+                        black_box(forward_kinematics_to(&chain, &mut data, black_box(q), end).ok());
+                    }
+                })),
+            ));
+            if chain.dof() > 0 {
+                let last = chain.dof() - 1;
+                let moving: Vec<Vec<f64>> = qs
+                    .iter()
+                    .map(|q| {
+                        let mut m = qs[0].clone();
+                        m[last] = q[last];
+                        m
+                    })
+                    .collect();
+                rows.push((
+                    "kinechain, incremental (last joint moves)".into(),
+                    per(time_per_call(|| {
+                        for q in &moving {
+                            black_box(
+                                forward_kinematics_incremental(&chain, &mut data, black_box(q))
+                                    .ok()
+                                    .map(|p| p.world_from_link(end)),
+                            );
+                        }
+                    })),
+                ));
+            }
+            let flat: Vec<f64> = qs.concat();
+            let mut batch = BatchData::new(&chain);
+            batch.set_limit_policy(LimitPolicy::Ignore);
+            rows.push((
+                "kinechain, batch, 1 thread".into(),
+                per(time_per_call(|| {
+                    black_box(
+                        forward_kinematics_batch(&chain, &mut batch, black_box(&flat))
+                            .ok()
+                            .map(|b| b.len()),
+                    );
+                })),
+            ));
+            let big: Vec<f64> = (0..64).flat_map(|_| flat.iter().copied()).collect();
+            rows.push((
+                format!("kinechain, batch, {} threads", rayon::current_num_threads()),
+                time_per_call(|| {
+                    black_box(
+                        forward_kinematics_batch_par(&chain, &mut batch, black_box(&big))
+                            .ok()
+                            .map(|b| b.len()),
+                    );
+                }) / (64 * qs.len()) as f64,
+            ));
+            crate::force_isa(Some(crate::Isa::Baseline));
+            rows.push((
+                "kinechain, baseline x86-64 path".into(),
+                per(time_per_call(|| {
+                    for q in &qs {
+                        black_box(
+                            forward_kinematics(&chain, &mut data, black_box(q))
+                                .ok()
+                                .map(|p| p.world_from_link(end)),
+                        );
+                    }
+                })),
+            ));
+            crate::force_isa(None);
+            if let Some(ns) = k_time(path, &chain, &qs) {
+                rows.push(("k 0.32, update_transforms".into(), ns));
+            }
+        }
+        Level::Vel | Level::Acc => {
+            let acc = level == Level::Acc;
+            rows.push((
+                if acc {
+                    "kinechain, poses + velocities + accelerations"
+                } else {
+                    "kinechain, poses + velocities"
+                }
+                .into(),
+                per(time_per_call(|| {
+                    for (q, v) in qs.iter().zip(&qd) {
+                        if acc {
+                            black_box(
+                                forward_accelerations(&chain, &mut data, black_box(q), v, v)
+                                    .ok()
+                                    .map(|a| a.acceleration(end)),
+                            );
+                        } else {
+                            black_box(
+                                forward_velocities(&chain, &mut data, black_box(q), v)
+                                    .ok()
+                                    .map(|a| a.velocity(end)),
+                            );
+                        }
+                    }
+                })),
+            ));
+            rows.push((
+                "kinechain, poses only".into(),
+                per(time_per_call(|| {
+                    for q in &qs {
+                        black_box(
+                            forward_kinematics(&chain, &mut data, black_box(q))
+                                .ok()
+                                .map(|p| p.world_from_link(end)),
+                        );
+                    }
+                })),
+            ));
+        }
+    }
+
+    let k_ns = rows.iter().find(|(m, _)| m.starts_with("k ")).map(|r| r.1);
+    let reach = chain.reach().max(f64::MIN_POSITIVE);
+    let mut text = format!(
+        "{}: {} dof, {} links, {} moving joints; {} random configurations; kernels: {}\n",
+        chain.name(),
+        chain.dof(),
+        links,
+        chain.moving_joint_count(),
+        qs.len(),
+        crate::isa().name()
+    );
+    text.push_str(&format!(
+        "{:<48} {:>12} {:>10}\n",
+        "method", "ns/config", "vs k"
+    ));
+    for (method, ns) in &rows {
+        let ratio = k_ns.map_or("-".to_string(), |k| format!("{:.1}x", k / ns));
+        text.push_str(&format!("{method:<48} {ns:>12.1} {ratio:>10}\n"));
+    }
+    text.push_str(&format!(
+        "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
+        position / (reach * f64::EPSILON)
+    ));
+    write_line(out, &text)
+}
+
+/// Time per configuration of the `k` crate on a URDF it can load (mimic joints in its vector).
+fn k_time(path: &std::path::Path, chain: &Chain, qs: &[Vec<f64>]) -> Option<f64> {
+    use std::hint::black_box;
+    if crate::io::Format::from_path(path) != Some(crate::io::Format::Urdf) {
+        return None;
+    }
+    let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
+    let kq: Vec<Vec<f64>> = qs
+        .iter()
+        .map(|q| {
+            robot
+                .iter_joints()
+                .map(|j| {
+                    let Ok(id) = chain.joint_id(&j.name) else {
+                        return 0.0;
+                    };
+                    let ours = chain.joint(id);
+                    match (ours.q_index(), ours.mimic()) {
+                        (Some(i), _) => q[i],
+                        (None, Some(m)) => chain
+                            .joint(m.primary)
+                            .q_index()
+                            .map_or(0.0, |i| m.multiplier * q[i] + m.offset),
+                        _ => 0.0,
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    Some(
+        time_per_call(|| {
+            for q in &kq {
+                robot.set_joint_positions_unchecked(black_box(q));
+                black_box(robot.update_transforms());
+            }
+        }) / qs.len() as f64,
+    )
 }

@@ -343,3 +343,45 @@ fn fk_rates_appear_only_when_asked_for() {
     ]);
     assert!(m.contains("no link named 'hand'"), "{m}");
 }
+
+#[test]
+fn bench_prints_times_ratios_and_errors() {
+    let out = kinechain(&["bench", "robots/panda.urdf", "--configurations", "4"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    for needle in [
+        "kinechain, all links",
+        "batch",
+        "k 0.32",
+        "ulp of the",
+        "vs k",
+    ] {
+        assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
+    }
+    // The error line reports a small error (under 8 ulp of the reach).
+    let ulp: f64 = text
+        .split(" ulp of the")
+        .next()
+        .and_then(|s| s.rsplit('(').next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap();
+    assert!(ulp < 8.0, "{text}");
+    let out = kinechain(&[
+        "bench",
+        "robots/cylindrical.yaml",
+        "--level",
+        "acc",
+        "--configurations",
+        "2",
+    ]);
+    assert!(out.status.success());
+    assert!(
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .contains("accelerations")
+    );
+}
