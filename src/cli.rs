@@ -1,12 +1,13 @@
 //! The `kinechain` command line: argument parsing, library calls, output. `main.rs` only calls
 //! [`main`].
 
+use crate::batch::{BatchData, forward_kinematics_batch};
 use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
 use crate::input::{InputError, joint_vector_from_json, joint_vector_from_str};
 use crate::kinematics::{
-    AccelerationParts, LinkAcceleration, LinkVelocity, forward_accelerations, forward_kinematics,
-    forward_kinematics_to, forward_velocities,
+    AccelerationParts, LinkAcceleration, LinkVelocity, check_q, forward_accelerations,
+    forward_kinematics, forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -89,6 +90,10 @@ struct FkArgs {
     /// Evaluate joint values outside the joints' limits instead of refusing them.
     #[arg(long)]
     ignore_limits: bool,
+    /// With --batch: on a bad line, write {"line": N, "error": ".."} in its place and go on;
+    /// exit non-zero at the end if any line failed.
+    #[arg(long, requires = "batch")]
+    keep_going: bool,
     /// Output format.
     #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
     format: OutputFormat,
@@ -132,6 +137,14 @@ pub enum CliError {
         /// What went wrong.
         #[source]
         source: Box<CliError>,
+    },
+    /// Some batch lines failed under `--keep-going`.
+    #[error("{}: {count} line(s) failed (see the error objects in the output)", path.display())]
+    BatchFailures {
+        /// The batch file.
+        path: PathBuf,
+        /// Lines that failed.
+        count: usize,
     },
     /// A batch line is not a JSON object with a "q" member.
     #[error("{0}")]
@@ -633,23 +646,90 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             context: format!("cannot open batch file {}", path.display()),
             source,
         })?;
+        // Pose-only lines (the common case) go through the batch kernel, 256 at a time; lines
+        // with rates, or a run with --link/--point, go one by one. Results are written in line
+        // order, and everything before a bad line is written before its error.
+        let batchable = links.is_empty() && points.is_empty();
+        let mut pending: Vec<f64> = Vec::new();
+        let mut batch = BatchData::new(&chain);
+        batch.set_limit_policy(data.limit_policy());
+        let mut flush = |out: &mut dyn Write, pending: &mut Vec<f64>| -> Result<(), CliError> {
+            if pending.is_empty() {
+                return Ok(());
+            }
+            let poses = forward_kinematics_batch(&chain, &mut batch, pending)
+                .map_err(|e| CliError::State(e.source))?;
+            for i in 0..poses.len() {
+                let results: Vec<LinkResult> = (0..chain.links().len())
+                    .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
+                    .collect();
+                let text = match args.format {
+                    OutputFormat::Json => results_json(&chain, &results).to_string(),
+                    OutputFormat::Table => results_table(&chain, &results),
+                };
+                write_line(out, &text)?;
+            }
+            pending.clear();
+            Ok(())
+        };
+        let mut failed_lines = 0usize;
         for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
             let at = |source: CliError| CliError::BatchLine {
                 path: path.clone(),
                 line: i + 1,
                 source: Box::new(source),
             };
-            let line = line.map_err(|source| {
-                at(CliError::Io {
+            let result = line
+                .map_err(|source| CliError::Io {
                     context: "cannot read line".into(),
                     source,
                 })
-            })?;
-            if line.trim().is_empty() {
-                continue;
+                .and_then(|line| {
+                    if line.trim().is_empty() {
+                        return Ok(None);
+                    }
+                    let c = batch_configuration(&chain, &line)?;
+                    if batchable && c.qd.is_none() && c.qdd.is_none() {
+                        check_q(&chain, &c.q, data.limit_policy())?;
+                        pending.extend_from_slice(&c.q);
+                        return Ok(None);
+                    }
+                    Ok(Some(c))
+                });
+            match result {
+                Ok(None) => {
+                    if pending.len() >= 256 * chain.dof().max(1) {
+                        flush(out, &mut pending)?;
+                    }
+                }
+                Ok(Some(c)) => {
+                    flush(out, &mut pending)?;
+                    match emit(out, &c, &mut data) {
+                        Ok(()) => {}
+                        Err(e @ CliError::Io { .. }) => return Err(e),
+                        Err(e) if args.keep_going => {
+                            failed_lines += 1;
+                            write_line(out, &error_json(i + 1, &e))?;
+                        }
+                        Err(e) => return Err(at(e)),
+                    }
+                }
+                Err(e) => {
+                    flush(out, &mut pending)?;
+                    if !args.keep_going {
+                        return Err(at(e));
+                    }
+                    failed_lines += 1;
+                    write_line(out, &error_json(i + 1, &e))?;
+                }
             }
-            let c = batch_configuration(&chain, &line).map_err(at)?;
-            emit(out, &c, &mut data).map_err(at)?;
+        }
+        flush(out, &mut pending)?;
+        if failed_lines > 0 {
+            return Err(CliError::BatchFailures {
+                path: path.clone(),
+                count: failed_lines,
+            });
         }
         return Ok(());
     }
@@ -669,6 +749,11 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             .transpose()?,
     };
     emit(out, &c, &mut data)
+}
+
+/// The output line standing in for a failed batch line under `--keep-going`.
+fn error_json(line: usize, e: &CliError) -> String {
+    json!({ "line": line, "error": error_chain(e) }).to_string()
 }
 
 /// One batch line: `{"q": .., "qd": .., "qdd": ..}` (qd, qdd optional).

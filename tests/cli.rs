@@ -385,3 +385,61 @@ fn bench_prints_times_ratios_and_errors() {
             .contains("accelerations")
     );
 }
+
+#[test]
+fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-batch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let batch = dir.join("many.jsonl");
+    let mut f = std::fs::File::create(&batch).unwrap();
+    // 600 lines: poses in several kernel batches, with a rate line and two bad lines inside.
+    for i in 0..600 {
+        match i {
+            100 => writeln!(f, r#"{{"q": [0.1, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
+            300 => writeln!(f, r#"{{"q": [0.1, 0.0]}}"#).unwrap(),
+            450 => writeln!(f, "not json").unwrap(),
+            _ => writeln!(f, r#"{{"q": [{}, 0.0, 0.0]}}"#, 0.001 * i as f64).unwrap(),
+        }
+    }
+    drop(f);
+    let arg = batch.to_str().unwrap();
+
+    // Without --keep-going: the 300 lines before the first bad one are written.
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg]);
+    assert!(!out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 300);
+    assert!(String::from_utf8(out.stderr).unwrap().contains("line 301"));
+
+    // With --keep-going: one output line per input line, error objects in place, exit non-zero.
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg, "--keep-going"]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("2 line(s) failed"),
+        "{stderr}"
+    );
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 600);
+    for (i, v) in lines.iter().enumerate() {
+        match i {
+            300 | 450 => {
+                assert_eq!(v["line"], i + 1);
+                assert!(v["error"].as_str().unwrap().len() > 5);
+            }
+            100 => assert!(v["links"]["link3"].get("omega").is_some()),
+            _ => {
+                // The tip of the planar arm at q1 = 0.001 i: (9 cos, 9 sin).
+                let x = position(v, "link3")[0];
+                assert!(
+                    (x - 9.0 * (0.001 * i as f64).cos()).abs() < 1e-14,
+                    "line {i}"
+                );
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
