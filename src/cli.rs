@@ -97,6 +97,10 @@ struct FkArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
     format: OutputFormat,
+    /// How to print each link's orientation (JSON output): the pose matrix, or the position and
+    /// one set of orientation coordinates (null where undefined).
+    #[arg(long, value_enum, default_value_t = Orientation::Matrix)]
+    orientation: Orientation,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -528,11 +532,75 @@ fn points_json(chain: &Chain, points: &[Point], results: &[PointResult]) -> Valu
     Value::Array(list)
 }
 
-fn results_json(chain: &Chain, results: &[LinkResult]) -> Value {
+/// How `fk` prints each link's orientation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Orientation {
+    /// The 4×4 pose matrix (`"pose"`).
+    Matrix,
+    /// Euler parameters, `"quaternion": {"w", "x", "y", "z"}`.
+    Quat,
+    /// `"rpy": {"roll", "pitch", "yaw"}`, `R = Rz(yaw) Ry(pitch) Rx(roll)`.
+    Rpy,
+    /// `"euler_zxz": {"phi", "theta", "psi"}`, `R = Rz(φ) Rx(θ) Rz(ψ)` (eq. 2.96).
+    Zxz,
+    /// `"axis_angle": {"axis": [x, y, z], "angle"}`.
+    AxisAngle,
+    /// Rodriguez parameters `"rodrigues": [γ1, γ2, γ3]` (eq. 2.77).
+    Rodrigues,
+}
+
+/// The `"position"` and orientation members of a link for a non-matrix `--orientation`; the
+/// orientation is `null` where the representation is undefined (a singularity).
+fn orientation_json(m: &mut Map<String, Value>, pose: &Transform, kind: Orientation) {
+    use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
+    let a = pose.rotation();
+    let (key, value) = match kind {
+        Orientation::Matrix => {
+            m.insert("pose".into(), json!(pose.to_rows()));
+            return;
+        }
+        Orientation::Quat => {
+            let e = EulerParameters::from_matrix(&a);
+            (
+                "quaternion",
+                json!({"w": e.e0, "x": e.e1, "y": e.e2, "z": e.e3}),
+            )
+        }
+        Orientation::Rpy => (
+            "rpy",
+            Rpy::from_matrix(&a).map_or(
+                Value::Null,
+                |r| json!({"roll": r.roll, "pitch": r.pitch, "yaw": r.yaw}),
+            ),
+        ),
+        Orientation::Zxz => (
+            "euler_zxz",
+            EulerZxz::from_matrix(&a).map_or(
+                Value::Null,
+                |e| json!({"phi": e.phi, "theta": e.theta, "psi": e.psi}),
+            ),
+        ),
+        Orientation::AxisAngle => (
+            "axis_angle",
+            AxisAngle::from_matrix(&a).map_or(
+                Value::Null,
+                |x| json!({"axis": vec_json(&x.axis), "angle": x.angle}),
+            ),
+        ),
+        Orientation::Rodrigues => (
+            "rodrigues",
+            RodriguezParameters::from_matrix(&a).map_or(Value::Null, |g| vec_json(&g.0)),
+        ),
+    };
+    m.insert("position".into(), vec_json(&pose.translation()));
+    m.insert(key.into(), value);
+}
+
+fn results_json(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> Value {
     let mut links = Map::new();
     for (l, pose, vel, acc) in results {
         let mut m = Map::new();
-        m.insert("pose".into(), json!(pose.to_rows()));
+        orientation_json(&mut m, pose, orientation);
         if let Some(v) = vel {
             m.insert("omega".into(), vec_json(&v.omega));
             m.insert("v".into(), vec_json(&v.v));
@@ -626,7 +694,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             )?;
             let text = match args.format {
                 OutputFormat::Json => {
-                    let mut value = results_json(&chain, &results);
+                    let mut value = results_json(&chain, &results, args.orientation);
                     if !points.is_empty() {
                         value["points"] = points_json(&chain, &points, &point_results);
                     }
@@ -664,7 +732,9 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
                     .collect();
                 let text = match args.format {
-                    OutputFormat::Json => results_json(&chain, &results).to_string(),
+                    OutputFormat::Json => {
+                        results_json(&chain, &results, args.orientation).to_string()
+                    }
                     OutputFormat::Table => results_table(&chain, &results),
                 };
                 write_line(out, &text)?;

@@ -19,6 +19,7 @@ mod kernel;
 pub mod kinematics;
 #[cfg(feature = "reference")]
 pub mod reference;
+pub mod rotation;
 pub mod transform;
 mod trig;
 

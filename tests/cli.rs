@@ -443,3 +443,127 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Every `--orientation` kind on every reference robot and sample: each non-null output
+/// recomposes to the link's rotation matrix (the `matrix` output) within 1e-12, near gimbal
+/// lock included (the reference samples include the zero configuration and joint limits).
+#[test]
+fn orientation_kinds_recompose_on_the_reference_robots() {
+    use kinechain::nalgebra::{Matrix3, Unit, Vector3};
+    use kinechain::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-orient-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
+    let v3 = |v: &Value| {
+        Vector3::new(
+            v[0].as_f64().unwrap(),
+            v[1].as_f64().unwrap(),
+            v[2].as_f64().unwrap(),
+        )
+    };
+    let mut checked = 0;
+    for path in common::reference_files() {
+        let reference = common::read_json(&path);
+        let robot = if reference["model"]["kind"] == "urdf" {
+            path.with_file_name(reference["model"]["file"].as_str().unwrap())
+        } else {
+            let y = dir.join(format!("{}.yaml", reference["robot"].as_str().unwrap()));
+            std::fs::write(&y, common::model_yaml(&reference)).unwrap();
+            y
+        };
+        let batch = dir.join("samples.jsonl");
+        let lines: Vec<String> = reference["samples"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| serde_json::json!({"q": s["q"]}).to_string())
+            .collect();
+        std::fs::write(&batch, lines.join("\n")).unwrap();
+        let run = |kind: &str| {
+            ok_json(&[
+                "fk",
+                robot.to_str().unwrap(),
+                "--batch",
+                batch.to_str().unwrap(),
+                "--ignore-limits",
+                "--orientation",
+                kind,
+            ])
+        };
+        let matrices = run("matrix");
+        for kind in ["quat", "rpy", "zxz", "axis-angle", "rodrigues"] {
+            for (out, want) in run(kind).iter().zip(&matrices) {
+                for (name, link) in out["links"].as_object().unwrap() {
+                    let pose = &want["links"][name]["pose"];
+                    let a = Matrix3::from_fn(|i, j| pose[i][j].as_f64().unwrap());
+                    assert_eq!(
+                        v3(&link["position"]),
+                        Vector3::new(
+                            pose[0][3].as_f64().unwrap(),
+                            pose[1][3].as_f64().unwrap(),
+                            pose[2][3].as_f64().unwrap()
+                        )
+                    );
+                    let r = match kind {
+                        "quat" => Some(
+                            EulerParameters {
+                                e0: f(&link["quaternion"], "w"),
+                                e1: f(&link["quaternion"], "x"),
+                                e2: f(&link["quaternion"], "y"),
+                                e3: f(&link["quaternion"], "z"),
+                            }
+                            .to_matrix(),
+                        ),
+                        "rpy" => (!link["rpy"].is_null()).then(|| {
+                            Rpy {
+                                roll: f(&link["rpy"], "roll"),
+                                pitch: f(&link["rpy"], "pitch"),
+                                yaw: f(&link["rpy"], "yaw"),
+                            }
+                            .to_matrix()
+                        }),
+                        "zxz" => (!link["euler_zxz"].is_null()).then(|| {
+                            EulerZxz {
+                                phi: f(&link["euler_zxz"], "phi"),
+                                theta: f(&link["euler_zxz"], "theta"),
+                                psi: f(&link["euler_zxz"], "psi"),
+                            }
+                            .to_matrix()
+                        }),
+                        "axis-angle" => (!link["axis_angle"].is_null()).then(|| {
+                            AxisAngle {
+                                axis: Unit::new_normalize(v3(&link["axis_angle"]["axis"])),
+                                angle: f(&link["axis_angle"], "angle"),
+                            }
+                            .to_matrix()
+                        }),
+                        _ => (!link["rodrigues"].is_null())
+                            .then(|| RodriguezParameters(v3(&link["rodrigues"])).to_matrix()),
+                    };
+                    if let Some(r) = r {
+                        assert!(
+                            (r - a).abs().max() < 1e-12,
+                            "{} {kind} {name}",
+                            path.display()
+                        );
+                        checked += 1;
+                    } else {
+                        // Null only where the representation really is undefined.
+                        assert!(
+                            match kind {
+                                "zxz" => a[(0, 2)] == 0.0 && a[(1, 2)] == 0.0,
+                                "rpy" => a[(0, 0)] == 0.0 && a[(1, 0)] == 0.0,
+                                "axis-angle" => a == Matrix3::identity(),
+                                _ => false,
+                            },
+                            "{} {kind} {name}: null for {a}",
+                            path.display()
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 5000, "{checked}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

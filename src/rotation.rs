@@ -1,0 +1,733 @@
+//! Orientation coordinates of Shabana ch. 2 (sec. 2.1–2.8, 2.10): the rotation matrix, angle and
+//! axis of rotation, Euler parameters, Rodriguez parameters, Euler angles (z-x-z and x-y-z),
+//! direction cosines and URDF roll–pitch–yaw; conversions between them, and the maps between
+//! their time derivatives and the angular velocity.
+//!
+//! Conventions: a rotation matrix `A` maps body (local) components to global ones, `x = A x̄`;
+//! `ω` is the angular velocity in global components and `ω̄ = Aᵀω` in body components. Angles
+//! are in radians.
+//!
+//! Extraction is written to stay accurate where the textbook formulas lose digits: Euler
+//! parameters by Shepperd's method (the largest of four candidates first), the angle of rotation
+//! as `2 atan2(|e|, e₀)` instead of `acos((tr A − 1)/2)` (sec. 2.10, ill-conditioned near 0 and
+//! π), and Euler angles through the sum and difference of the outer angles, which stay well
+//! defined near gimbal lock, so that a result near (not at) a singularity still recomposes to
+//! the input matrix to ~1e-15. At a singularity the representation is undefined and a
+//! [`Singular`] error is returned; no function returns NaN for a finite rotation.
+
+use nalgebra::{Matrix3, Matrix3x4, Matrix4, Unit, Vector3, Vector4};
+use std::f64::consts::PI;
+
+/// A representation or rate map is undefined (or would divide by ~0) at this rotation.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("{representation} is undefined here: {reason}")]
+pub struct Singular {
+    /// The representation, e.g. `Euler angles z-x-z`.
+    pub representation: &'static str,
+    /// Why, e.g. `θ = 0 (gimbal lock)`.
+    pub reason: &'static str,
+}
+
+/// Below this |sin θ| (or |cos θ|) an inverse rate map is reported singular instead of dividing:
+/// the rates it would return exceed 10¹² |ω|.
+pub const RATE_SINGULARITY: f64 = 1e-12;
+
+/// The skew matrix `[v]x` (eq. 2.6).
+#[must_use]
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    crate::joint::skew(v)
+}
+
+/// Rodrigues' formula (eq. 2.9): `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`, for a unit axis `v`.
+/// The same matrix as the exponential form `exp(θ [v]x)` (eq. 2.26).
+#[must_use]
+pub fn rotation_matrix(axis: &Unit<Vector3<f64>>, angle: f64) -> Matrix3<f64> {
+    crate::joint::rotation_about(axis, angle)
+}
+
+/// Rotation about x (a simple rotation, sec. 2.1).
+#[must_use]
+pub fn rot_x(angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+}
+
+/// Rotation about y.
+#[must_use]
+pub fn rot_y(angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+}
+
+/// Rotation about z.
+#[must_use]
+pub fn rot_z(angle: f64) -> Matrix3<f64> {
+    let (s, c) = angle.sin_cos();
+    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Euler parameters
+
+/// Euler parameters (eq. 2.10): `e₀ = cos(θ/2)`, `(e₁, e₂, e₃) = v sin(θ/2)`, with
+/// `e₀² + e₁² + e₂² + e₃² = 1` (eq. 2.11). The same numbers as a unit quaternion `w, x, y, z`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EulerParameters {
+    /// `e₀ = cos(θ/2)`.
+    pub e0: f64,
+    /// `e₁ = v₁ sin(θ/2)`.
+    pub e1: f64,
+    /// `e₂ = v₂ sin(θ/2)`.
+    pub e2: f64,
+    /// `e₃ = v₃ sin(θ/2)`.
+    pub e3: f64,
+}
+
+impl EulerParameters {
+    /// The parameters of a rotation by `angle` about the unit `axis` (eq. 2.10).
+    #[must_use]
+    pub fn from_axis_angle(axis: &Unit<Vector3<f64>>, angle: f64) -> Self {
+        let (s, c) = (0.5 * angle).sin_cos();
+        EulerParameters {
+            e0: c,
+            e1: axis.x * s,
+            e2: axis.y * s,
+            e3: axis.z * s,
+        }
+    }
+
+    /// The parameters of a rotation matrix, with `e₀ ≥ 0` (Shepperd's method: the largest of
+    /// `e₀², e₁², e₂², e₃²` is taken from the diagonal, the others from off-diagonal sums and
+    /// differences, so no step divides by a small number).
+    #[must_use]
+    pub fn from_matrix(a: &Matrix3<f64>) -> Self {
+        let t = a.trace();
+        let d = [t, a[(0, 0)], a[(1, 1)], a[(2, 2)]];
+        let k = (0..4).fold(0, |best, i| if d[i] > d[best] { i } else { best });
+        let e = match k {
+            0 => {
+                let s = 2.0 * (1.0 + t).sqrt(); // 4 e0
+                [
+                    0.25 * s,
+                    (a[(2, 1)] - a[(1, 2)]) / s,
+                    (a[(0, 2)] - a[(2, 0)]) / s,
+                    (a[(1, 0)] - a[(0, 1)]) / s,
+                ]
+            }
+            1 => {
+                let s = 2.0 * (1.0 + 2.0 * a[(0, 0)] - t).sqrt(); // 4 e1
+                [
+                    (a[(2, 1)] - a[(1, 2)]) / s,
+                    0.25 * s,
+                    (a[(0, 1)] + a[(1, 0)]) / s,
+                    (a[(0, 2)] + a[(2, 0)]) / s,
+                ]
+            }
+            2 => {
+                let s = 2.0 * (1.0 + 2.0 * a[(1, 1)] - t).sqrt(); // 4 e2
+                [
+                    (a[(0, 2)] - a[(2, 0)]) / s,
+                    (a[(0, 1)] + a[(1, 0)]) / s,
+                    0.25 * s,
+                    (a[(1, 2)] + a[(2, 1)]) / s,
+                ]
+            }
+            _ => {
+                let s = 2.0 * (1.0 + 2.0 * a[(2, 2)] - t).sqrt(); // 4 e3
+                [
+                    (a[(1, 0)] - a[(0, 1)]) / s,
+                    (a[(0, 2)] + a[(2, 0)]) / s,
+                    (a[(1, 2)] + a[(2, 1)]) / s,
+                    0.25 * s,
+                ]
+            }
+        };
+        let sign = if e[0] < 0.0 { -1.0 } else { 1.0 };
+        EulerParameters {
+            e0: sign * e[0],
+            e1: sign * e[1],
+            e2: sign * e[2],
+            e3: sign * e[3],
+        }
+        .normalized()
+    }
+
+    /// Scaled to unit norm (eq. 2.11).
+    #[must_use]
+    pub fn normalized(&self) -> Self {
+        let n = self.as_vector().norm();
+        EulerParameters {
+            e0: self.e0 / n,
+            e1: self.e1 / n,
+            e2: self.e2 / n,
+            e3: self.e3 / n,
+        }
+    }
+
+    /// `[e₀, e₁, e₂, e₃]`.
+    #[must_use]
+    pub fn as_vector(&self) -> Vector4<f64> {
+        Vector4::new(self.e0, self.e1, self.e2, self.e3)
+    }
+
+    /// From `[e₀, e₁, e₂, e₃]` (not normalised).
+    #[must_use]
+    pub fn from_vector(e: &Vector4<f64>) -> Self {
+        EulerParameters {
+            e0: e[0],
+            e1: e[1],
+            e2: e[2],
+            e3: e[3],
+        }
+    }
+
+    /// The rotation matrix (eq. 2.14), equal to `E Ēᵀ` (eq. 2.20).
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        let EulerParameters { e0, e1, e2, e3 } = *self;
+        Matrix3::new(
+            1.0 - 2.0 * (e2 * e2 + e3 * e3),
+            2.0 * (e1 * e2 - e0 * e3),
+            2.0 * (e1 * e3 + e0 * e2),
+            2.0 * (e1 * e2 + e0 * e3),
+            1.0 - 2.0 * (e1 * e1 + e3 * e3),
+            2.0 * (e2 * e3 - e0 * e1),
+            2.0 * (e1 * e3 - e0 * e2),
+            2.0 * (e2 * e3 + e0 * e1),
+            1.0 - 2.0 * (e1 * e1 + e2 * e2),
+        )
+    }
+
+    /// `E` of eq. (2.21): `ω = 2 E ė` (eq. 2.46).
+    #[must_use]
+    pub fn e_matrix(&self) -> Matrix3x4<f64> {
+        let EulerParameters { e0, e1, e2, e3 } = *self;
+        Matrix3x4::new(-e1, e0, -e3, e2, -e2, e3, e0, -e1, -e3, -e2, e1, e0)
+    }
+
+    /// `Ē` of eq. (2.22): `ω̄ = 2 Ē ė` (eq. 2.45).
+    #[must_use]
+    pub fn e_bar_matrix(&self) -> Matrix3x4<f64> {
+        let EulerParameters { e0, e1, e2, e3 } = *self;
+        Matrix3x4::new(-e1, e0, e3, -e2, -e2, -e3, e0, e1, -e3, e2, -e1, e0)
+    }
+
+    /// `H(p)` with `p ⊗ q = H(p) q`: the Euler parameters of `A(p) A(q)` (the rotation `q`
+    /// followed by `p` in the single-frame sense, or `p` then `q` about body axes).
+    #[must_use]
+    pub fn h_matrix(&self) -> Matrix4<f64> {
+        let EulerParameters { e0, e1, e2, e3 } = *self;
+        Matrix4::new(
+            e0, -e1, -e2, -e3, e1, e0, -e3, e2, e2, e3, e0, -e1, e3, -e2, e1, e0,
+        )
+    }
+
+    /// The Euler parameters of `A(self) A(other)`.
+    #[must_use]
+    pub fn compose(&self, other: &EulerParameters) -> Self {
+        Self::from_vector(&(self.h_matrix() * other.as_vector()))
+    }
+
+    /// Global angular velocity from parameter rates: `ω = 2 E ė` (eq. 2.46, `G = 2E`, eq. 2.60).
+    #[must_use]
+    pub fn omega(&self, e_dot: &Vector4<f64>) -> Vector3<f64> {
+        2.0 * self.e_matrix() * e_dot
+    }
+
+    /// Body angular velocity from parameter rates: `ω̄ = 2 Ē ė` (eq. 2.45, `Ḡ = 2Ē`, eq. 2.59).
+    #[must_use]
+    pub fn omega_local(&self, e_dot: &Vector4<f64>) -> Vector3<f64> {
+        2.0 * self.e_bar_matrix() * e_dot
+    }
+
+    /// Parameter rates from the global angular velocity: `ė = ½ Eᵀ ω` (from `E Eᵀ = I`,
+    /// eq. 2.23, and `eᵀė = 0`). Defined everywhere.
+    #[must_use]
+    pub fn rates(&self, omega: &Vector3<f64>) -> Vector4<f64> {
+        0.5 * self.e_matrix().transpose() * omega
+    }
+
+    /// Parameter rates from the body angular velocity: `ė = ½ Ēᵀ ω̄`.
+    #[must_use]
+    pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Vector4<f64> {
+        0.5 * self.e_bar_matrix().transpose() * omega_local
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Angle and axis
+
+/// A rotation by `angle` in `[0, π]` about the unit `axis` (eq. 2.9).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisAngle {
+    /// Unit axis of rotation.
+    pub axis: Unit<Vector3<f64>>,
+    /// Angle of rotation in `[0, π]`.
+    pub angle: f64,
+}
+
+impl AxisAngle {
+    /// The angle and axis of a rotation matrix, through its Euler parameters:
+    /// `θ = 2 atan2(|(e₁, e₂, e₃)|, e₀)`, accurate near 0 and π where `acos((tr A − 1)/2)` is not.
+    ///
+    /// # Errors
+    /// [`Singular`] for the identity (θ = 0: every axis is an axis of rotation).
+    pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
+        let e = EulerParameters::from_matrix(a);
+        let v = Vector3::new(e.e1, e.e2, e.e3);
+        let s = v.norm();
+        if s == 0.0 {
+            return Err(Singular {
+                representation: "angle and axis",
+                reason: "θ = 0 (identity: no unique axis)",
+            });
+        }
+        Ok(AxisAngle {
+            axis: Unit::new_unchecked(v / s),
+            angle: 2.0 * s.atan2(e.e0),
+        })
+    }
+
+    /// The rotation matrix (eq. 2.9).
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        rotation_matrix(&self.axis, self.angle)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rodriguez parameters
+
+/// Rodriguez parameters `γ = v tan(θ/2)` (eq. 2.77); `γᵢ = eᵢ/e₀` (eq. 2.88). Infinite at θ = π.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RodriguezParameters(pub Vector3<f64>);
+
+impl RodriguezParameters {
+    /// From a rotation matrix.
+    ///
+    /// # Errors
+    /// [`Singular`] at θ = π, where `tan(θ/2)` is infinite.
+    pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
+        Self::from_euler_parameters(&EulerParameters::from_matrix(a))
+    }
+
+    /// From Euler parameters (eq. 2.88).
+    ///
+    /// # Errors
+    /// [`Singular`] when `e₀ = 0` (θ = π).
+    pub fn from_euler_parameters(e: &EulerParameters) -> Result<Self, Singular> {
+        if e.e0 == 0.0 {
+            return Err(Singular {
+                representation: "Rodriguez parameters",
+                reason: "θ = π (tan(θ/2) is infinite)",
+            });
+        }
+        Ok(RodriguezParameters(Vector3::new(e.e1, e.e2, e.e3) / e.e0))
+    }
+
+    /// Euler parameters: `e₀ = 1/√(1+γ²)`, `eᵢ = γᵢ e₀` (the inverse of eq. 2.88).
+    #[must_use]
+    pub fn to_euler_parameters(&self) -> EulerParameters {
+        let g = &self.0;
+        let e0 = 1.0 / (1.0 + g.norm_squared()).sqrt();
+        EulerParameters {
+            e0,
+            e1: g.x * e0,
+            e2: g.y * e0,
+            e3: g.z * e0,
+        }
+    }
+
+    /// The rotation matrix (eq. 2.84): `A = I + 2/(1+γ²) ([γ]x + [γ]x²)`.
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        let k = skew(&self.0);
+        Matrix3::identity() + (k + k * k) * (2.0 / (1.0 + self.0.norm_squared()))
+    }
+
+    /// `G` of eq. (2.91), `ω = G γ̇`: `2/(1+γ²) (I + [γ]x)`.
+    #[must_use]
+    pub fn g_matrix(&self) -> Matrix3<f64> {
+        (Matrix3::identity() + skew(&self.0)) * (2.0 / (1.0 + self.0.norm_squared()))
+    }
+
+    /// `Ḡ` of eq. (2.90), `ω̄ = Ḡ γ̇`: `2/(1+γ²) (I − [γ]x)`.
+    #[must_use]
+    pub fn g_bar_matrix(&self) -> Matrix3<f64> {
+        (Matrix3::identity() - skew(&self.0)) * (2.0 / (1.0 + self.0.norm_squared()))
+    }
+
+    /// `γ̇` from the global angular velocity: `G⁻¹ = ½ (I − [γ]x + γγᵀ)` (no singularity while γ
+    /// is finite).
+    #[must_use]
+    pub fn rates(&self, omega: &Vector3<f64>) -> Vector3<f64> {
+        let g = &self.0;
+        0.5 * (Matrix3::identity() - skew(g) + g * g.transpose()) * omega
+    }
+
+    /// `γ̇` from the body angular velocity: `Ḡ⁻¹ = ½ (I + [γ]x + γγᵀ)`.
+    #[must_use]
+    pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Vector3<f64> {
+        let g = &self.0;
+        0.5 * (Matrix3::identity() + skew(g) + g * g.transpose()) * omega_local
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Euler angles
+
+/// Wraps to `(−π, π]`.
+fn wrap(a: f64) -> f64 {
+    let w = a.rem_euclid(2.0 * PI);
+    if w > PI { w - 2.0 * PI } else { w }
+}
+
+/// Goldstein's Euler angles (sec. 2.7): `A = Rz(φ) Rx(θ) Rz(ψ)` (eq. 2.96), θ in `[0, π]`.
+/// Singular at θ = 0 and θ = π (only φ + ψ or φ − ψ is defined there).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EulerZxz {
+    /// Precession φ, about the global z axis.
+    pub phi: f64,
+    /// Nutation θ, about the line of nodes.
+    pub theta: f64,
+    /// Spin ψ, about the body z axis.
+    pub psi: f64,
+}
+
+impl EulerZxz {
+    /// The rotation matrix (eq. 2.96).
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        rot_z(self.phi) * rot_x(self.theta) * rot_z(self.psi)
+    }
+
+    /// The angles of a rotation matrix: θ = atan2(√(a₁₃² + a₂₃²), a₃₃) and φ = atan2(a₁₃, −a₂₃)
+    /// (both accurate relative to sin θ, which is all the entries need of φ); ψ from φ + ψ (for
+    /// θ ≤ π/2) or φ − ψ (beyond), taken from 2×2 minors that stay well conditioned near θ = 0 and
+    /// θ = π respectively, so that the large entries, which depend on φ ± ψ, come back exactly.
+    ///
+    /// # Errors
+    /// [`Singular`] at θ = 0 or π exactly (`sin θ = 0`).
+    pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
+        let s = a[(0, 2)].hypot(a[(1, 2)]);
+        if s == 0.0 {
+            return Err(Singular {
+                representation: "Euler angles z-x-z",
+                reason: "θ = 0 or π (gimbal lock: only φ ± ψ is defined)",
+            });
+        }
+        let theta = s.atan2(a[(2, 2)]);
+        // a13 = sθ sφ, a23 = −sθ cφ with sθ > 0.
+        let phi = a[(0, 2)].atan2(-a[(1, 2)]);
+        let psi = if a[(2, 2)] >= 0.0 {
+            // a21 − a12 = (1 + cθ) sin(φ+ψ), a11 + a22 = (1 + cθ) cos(φ+ψ).
+            (a[(1, 0)] - a[(0, 1)]).atan2(a[(0, 0)] + a[(1, 1)]) - phi
+        } else {
+            // a21 + a12 = (1 − cθ) sin(φ−ψ), a11 − a22 = (1 − cθ) cos(φ−ψ).
+            phi - (a[(1, 0)] + a[(0, 1)]).atan2(a[(0, 0)] - a[(1, 1)])
+        };
+        Ok(EulerZxz {
+            phi,
+            theta,
+            psi: wrap(psi),
+        })
+    }
+
+    /// Euler parameters (sec. 2.7): `e₀ = cos(θ/2) cos((φ+ψ)/2)`, `e₁ = sin(θ/2) cos((φ−ψ)/2)`,
+    /// `e₂ = sin(θ/2) sin((φ−ψ)/2)`, `e₃ = cos(θ/2) sin((φ+ψ)/2)`.
+    #[must_use]
+    pub fn to_euler_parameters(&self) -> EulerParameters {
+        let (st, ct) = (0.5 * self.theta).sin_cos();
+        let (ss, cs) = (0.5 * (self.phi + self.psi)).sin_cos();
+        let (sd, cd) = (0.5 * (self.phi - self.psi)).sin_cos();
+        EulerParameters {
+            e0: ct * cs,
+            e1: st * cd,
+            e2: st * sd,
+            e3: ct * ss,
+        }
+    }
+
+    /// `G` with `ω = G [φ̇, θ̇, ψ̇]` (sec. 2.7).
+    #[must_use]
+    pub fn g_matrix(&self) -> Matrix3<f64> {
+        let (sp, cp) = self.phi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        Matrix3::new(0.0, cp, st * sp, 0.0, sp, -st * cp, 1.0, 0.0, ct)
+    }
+
+    /// `Ḡ` with `ω̄ = Ḡ [φ̇, θ̇, ψ̇]`.
+    #[must_use]
+    pub fn g_bar_matrix(&self) -> Matrix3<f64> {
+        let (ss, cs) = self.psi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        Matrix3::new(st * ss, cs, 0.0, st * cs, -ss, 0.0, ct, 0.0, 1.0)
+    }
+
+    /// Angle rates from the global angular velocity, `G⁻¹ ω` (Example 2.9).
+    ///
+    /// # Errors
+    /// [`Singular`] when |sin θ| < [`RATE_SINGULARITY`].
+    pub fn rates(&self, omega: &Vector3<f64>) -> Result<Vector3<f64>, Singular> {
+        let (sp, cp) = self.phi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        if st.abs() < RATE_SINGULARITY {
+            return Err(Singular {
+                representation: "z-x-z angle rates",
+                reason: "sin θ = 0 (gimbal lock)",
+            });
+        }
+        let g_inv = Matrix3::new(-sp * ct, cp * ct, st, st * cp, st * sp, 0.0, sp, -cp, 0.0) / st;
+        Ok(g_inv * omega)
+    }
+
+    /// Angle rates from the body angular velocity, `Ḡ⁻¹ ω̄`.
+    ///
+    /// # Errors
+    /// [`Singular`] when |sin θ| < [`RATE_SINGULARITY`].
+    pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Result<Vector3<f64>, Singular> {
+        let (ss, cs) = self.psi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        if st.abs() < RATE_SINGULARITY {
+            return Err(Singular {
+                representation: "z-x-z angle rates",
+                reason: "sin θ = 0 (gimbal lock)",
+            });
+        }
+        let g_inv = Matrix3::new(ss, cs, 0.0, st * cs, -st * ss, 0.0, -ss * ct, -cs * ct, st) / st;
+        Ok(g_inv * omega_local)
+    }
+}
+
+/// Euler angles of the x-y-z sequence (rotations about the body x, then the new y, then the
+/// new z axis, as in aerospace and automotive use): `A = Rx(φ) Ry(θ) Rz(ψ)`, θ in `[−π/2, π/2]`.
+/// Singular at θ = ±π/2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EulerXyz {
+    /// First rotation, about x.
+    pub phi: f64,
+    /// Second rotation, about the new y.
+    pub theta: f64,
+    /// Third rotation, about the new z.
+    pub psi: f64,
+}
+
+impl EulerXyz {
+    /// The rotation matrix.
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        rot_x(self.phi) * rot_y(self.theta) * rot_z(self.psi)
+    }
+
+    /// The angles of a rotation matrix: θ = atan2(a₁₃, √(a₁₁² + a₁₂²)), φ = atan2(−a₂₃, a₃₃), and
+    /// ψ from φ + ψ (θ ≥ 0) or ψ − φ (θ < 0), taken from 2×2 minors as for z-x-z.
+    ///
+    /// # Errors
+    /// [`Singular`] at θ = ±π/2 exactly (`cos θ = 0`).
+    pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
+        let c = a[(0, 0)].hypot(a[(0, 1)]);
+        if c == 0.0 {
+            return Err(Singular {
+                representation: "Euler angles x-y-z",
+                reason: "θ = ±π/2 (gimbal lock: only φ ± ψ is defined)",
+            });
+        }
+        let theta = a[(0, 2)].atan2(c);
+        // a23 = −sφ cθ, a33 = cφ cθ with cθ > 0.
+        let phi = (-a[(1, 2)]).atan2(a[(2, 2)]);
+        let psi = if a[(0, 2)] >= 0.0 {
+            // a21 + a32 = (1 + sθ) sin(φ+ψ), a22 − a31 = (1 + sθ) cos(φ+ψ).
+            (a[(1, 0)] + a[(2, 1)]).atan2(a[(1, 1)] - a[(2, 0)]) - phi
+        } else {
+            // a21 − a32 = (1 − sθ) sin(ψ−φ), a22 + a31 = (1 − sθ) cos(ψ−φ).
+            (a[(1, 0)] - a[(2, 1)]).atan2(a[(1, 1)] + a[(2, 0)]) + phi
+        };
+        Ok(EulerXyz {
+            phi,
+            theta,
+            psi: wrap(psi),
+        })
+    }
+
+    /// `G` with `ω = G [φ̇, θ̇, ψ̇]`: the columns are the x axis, `Rx(φ)` y and `Rx(φ) Ry(θ)` z.
+    #[must_use]
+    pub fn g_matrix(&self) -> Matrix3<f64> {
+        let (sp, cp) = self.phi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        Matrix3::new(1.0, 0.0, st, 0.0, cp, -sp * ct, 0.0, sp, cp * ct)
+    }
+
+    /// `Ḡ` with `ω̄ = Ḡ [φ̇, θ̇, ψ̇]`.
+    #[must_use]
+    pub fn g_bar_matrix(&self) -> Matrix3<f64> {
+        let (ss, cs) = self.psi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        Matrix3::new(ct * cs, ss, 0.0, -ct * ss, cs, 0.0, st, 0.0, 1.0)
+    }
+
+    /// Angle rates from the global angular velocity, `G⁻¹ ω`.
+    ///
+    /// # Errors
+    /// [`Singular`] when |cos θ| < [`RATE_SINGULARITY`].
+    pub fn rates(&self, omega: &Vector3<f64>) -> Result<Vector3<f64>, Singular> {
+        let (sp, cp) = self.phi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        if ct.abs() < RATE_SINGULARITY {
+            return Err(Singular {
+                representation: "x-y-z angle rates",
+                reason: "cos θ = 0 (gimbal lock)",
+            });
+        }
+        let g_inv = Matrix3::new(ct, sp * st, -cp * st, 0.0, cp * ct, sp * ct, 0.0, -sp, cp) / ct;
+        Ok(g_inv * omega)
+    }
+
+    /// Angle rates from the body angular velocity, `Ḡ⁻¹ ω̄`.
+    ///
+    /// # Errors
+    /// [`Singular`] when |cos θ| < [`RATE_SINGULARITY`].
+    pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Result<Vector3<f64>, Singular> {
+        let (ss, cs) = self.psi.sin_cos();
+        let (st, ct) = self.theta.sin_cos();
+        if ct.abs() < RATE_SINGULARITY {
+            return Err(Singular {
+                representation: "x-y-z angle rates",
+                reason: "cos θ = 0 (gimbal lock)",
+            });
+        }
+        let g_inv = Matrix3::new(cs, -ss, 0.0, ct * ss, ct * cs, 0.0, -st * cs, st * ss, ct) / ct;
+        Ok(g_inv * omega_local)
+    }
+}
+
+/// URDF roll–pitch–yaw: `R = Rz(yaw) Ry(pitch) Rx(roll)` (rotations about the fixed x, y, z axes),
+/// pitch in `[−π/2, π/2]`. Singular at pitch = ±π/2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rpy {
+    /// About x, first.
+    pub roll: f64,
+    /// About y.
+    pub pitch: f64,
+    /// About z, last.
+    pub yaw: f64,
+}
+
+impl Rpy {
+    /// The rotation matrix.
+    #[must_use]
+    pub fn to_matrix(&self) -> Matrix3<f64> {
+        rot_z(self.yaw) * rot_y(self.pitch) * rot_x(self.roll)
+    }
+
+    /// The angles of a rotation matrix: pitch = atan2(−a₃₁, √(a₁₁² + a₂₁²)), roll = atan2(a₃₂, a₃₃),
+    /// and yaw from roll − yaw (pitch ≥ 0) or roll + yaw (pitch < 0), taken from 2×2 minors.
+    ///
+    /// # Errors
+    /// [`Singular`] at pitch = ±π/2 exactly.
+    pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
+        let c = a[(0, 0)].hypot(a[(1, 0)]);
+        if c == 0.0 {
+            return Err(Singular {
+                representation: "roll-pitch-yaw",
+                reason: "pitch = ±π/2 (gimbal lock: only roll ± yaw is defined)",
+            });
+        }
+        let pitch = (-a[(2, 0)]).atan2(c);
+        // a32 = cp sr, a33 = cp cr with cp > 0.
+        let roll = a[(2, 1)].atan2(a[(2, 2)]);
+        let yaw = if a[(2, 0)] <= 0.0 {
+            // a12 − a23 = (1 + sp) sin(r − y), a13 + a22 = (1 + sp) cos(r − y).
+            roll - (a[(0, 1)] - a[(1, 2)]).atan2(a[(0, 2)] + a[(1, 1)])
+        } else {
+            // −(a12 + a23) = (1 − sp) sin(r + y), a22 − a13 = (1 − sp) cos(r + y).
+            (-(a[(0, 1)] + a[(1, 2)])).atan2(a[(1, 1)] - a[(0, 2)]) - roll
+        };
+        Ok(Rpy {
+            roll,
+            pitch,
+            yaw: wrap(yaw),
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Direction cosines and successive rotations
+
+/// A body frame whose axes are given in the global frame by possibly unnormalised vectors
+/// (sec. 2.8: the direction cosines αᵢⱼ of each axis are its normalised components).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum FrameError {
+    /// An axis is zero or not finite.
+    #[error("axis {axis} is zero or not finite")]
+    ZeroAxis {
+        /// 1, 2 or 3.
+        axis: usize,
+    },
+    /// The axes are not orthogonal (eq. 2.101 fails).
+    #[error("axes are not orthogonal: max |αₖ·αₗ| = {deviation:e}")]
+    NotOrthogonal {
+        /// Largest dot product of two normalised axes.
+        deviation: f64,
+    },
+    /// The axes form a left-handed frame.
+    #[error("axes form a left-handed frame")]
+    LeftHanded,
+}
+
+/// The rotation matrix whose columns are the direction cosines of the body axes (eqs. 2.97–2.99):
+/// each given axis is normalised; they must be orthogonal within `tolerance` (eq. 2.101) and
+/// right-handed.
+///
+/// # Errors
+/// [`FrameError`] naming what is wrong.
+pub fn from_direction_cosines(
+    axes: [Vector3<f64>; 3],
+    tolerance: f64,
+) -> Result<Matrix3<f64>, FrameError> {
+    let mut unit = [Vector3::zeros(); 3];
+    for (i, a) in axes.iter().enumerate() {
+        let n = a.norm();
+        if n == 0.0 || !n.is_finite() {
+            return Err(FrameError::ZeroAxis { axis: i + 1 });
+        }
+        unit[i] = a / n;
+    }
+    let deviation = unit[0]
+        .dot(&unit[1])
+        .abs()
+        .max(unit[0].dot(&unit[2]).abs())
+        .max(unit[1].dot(&unit[2]).abs());
+    if deviation > tolerance {
+        return Err(FrameError::NotOrthogonal { deviation });
+    }
+    let a = Matrix3::from_columns(&unit);
+    if a.determinant() < 0.0 {
+        return Err(FrameError::LeftHanded);
+    }
+    Ok(a)
+}
+
+/// Successive rotations about axes fixed in the body, by the multiframe method (sec. 2.3,
+/// Example 2.5): each axis is given in body components, and `A = A₁ A₂ ⋯ Aₙ`.
+#[must_use]
+pub fn multiframe(rotations: &[(Unit<Vector3<f64>>, f64)]) -> Matrix3<f64> {
+    rotations
+        .iter()
+        .fold(Matrix3::identity(), |a, (axis, angle)| {
+            a * rotation_matrix(axis, *angle)
+        })
+}
+
+/// The same successive rotations by the single-frame method (sec. 2.3, Example 2.4): before
+/// each rotation its body axis is expressed in the global frame, `vₖ = A vₖ`, and the rotation
+/// about it premultiplies, `A ← A(vₖ, θₖ) A`. Equal to [`multiframe`].
+#[must_use]
+pub fn single_frame(rotations: &[(Unit<Vector3<f64>>, f64)]) -> Matrix3<f64> {
+    rotations
+        .iter()
+        .fold(Matrix3::identity(), |a, (axis, angle)| {
+            let global = Unit::new_normalize(a * axis.into_inner());
+            rotation_matrix(&global, *angle) * a
+        })
+}
