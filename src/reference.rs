@@ -160,3 +160,162 @@ pub fn max_errors(poses: &[Transform], reference: &[Transform]) -> (f64, f64) {
     }
     (position, rotation)
 }
+
+/// Pose, angular velocity, origin velocity, angular acceleration and classical origin
+/// acceleration of one link, world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkMotion {
+    /// `world_from_link`.
+    pub pose: Transform,
+    /// ω.
+    pub omega: [f64; 3],
+    /// Velocity of the link-frame origin.
+    pub v: [f64; 3],
+    /// α = dω/dt.
+    pub alpha: [f64; 3],
+    /// Classical acceleration of the link-frame origin.
+    pub a: [f64; 3],
+}
+
+fn cross(a: &[F; 3], b: &[F; 3]) -> [F; 3] {
+    [
+        &a[1] * &b[2] - &a[2] * &b[1],
+        &a[2] * &b[0] - &a[0] * &b[2],
+        &a[0] * &b[1] - &a[1] * &b[0],
+    ]
+}
+
+fn add(a: &[F; 3], b: &[F; 3]) -> [F; 3] {
+    std::array::from_fn(|k| &a[k] + &b[k])
+}
+
+fn sub(a: &[F; 3], b: &[F; 3]) -> [F; 3] {
+    std::array::from_fn(|k| &a[k] - &b[k])
+}
+
+fn scale(s: &F, a: &[F; 3]) -> [F; 3] {
+    std::array::from_fn(|k| s * &a[k])
+}
+
+fn rate(t: &Term, rates: &[f64]) -> F {
+    match *t {
+        Term::Const(_) => F::ZERO,
+        Term::Var { index, scale, .. } => exact(scale) * exact(rates[index]),
+    }
+}
+
+fn round3(v: &[F; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| to_f64(&v[k]))
+}
+
+#[derive(Clone)]
+struct BigMotion {
+    frame: BigFrame,
+    omega: [F; 3],
+    v: [F; 3],
+    alpha: [F; 3],
+    a: [F; 3],
+}
+
+/// Link poses, velocities and accelerations at `(q, q_dot, q_ddot)` (in [`Chain::links`]
+/// order), by the recursion of [`crate::kinematics`] in [`PRECISION_BITS`]-bit arithmetic.
+///
+/// # Panics
+/// If a vector does not have [`Chain::dof`] entries.
+#[must_use]
+pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> Vec<LinkMotion> {
+    assert!(
+        q.len() == chain.dof() && q_dot.len() == chain.dof() && q_ddot.len() == chain.dof(),
+        "joint vectors have the wrong length"
+    );
+    let zero = || [F::ZERO, F::ZERO, F::ZERO];
+    let mut bodies: Vec<BigMotion> = Vec::with_capacity(chain.bodies.len());
+    for body in &chain.bodies {
+        let local = local(body, q);
+        let pre = BigFrame::from_transform(&body.pre_frame);
+        let axis = body.motion.axis.vector().map(exact);
+        let axis_in_parent = pre.apply_add(&axis, &zero());
+        let (frame, p_joint, z, parent) = match body.parent {
+            Some(p) => {
+                let parent = &bodies[p];
+                (
+                    parent.frame.compose(&local),
+                    parent.frame.apply_add(&pre.p, &parent.frame.p),
+                    parent.frame.apply_add(&axis_in_parent, &zero()),
+                    Some(parent),
+                )
+            }
+            None => (local, pre.p.clone(), axis_in_parent, None),
+        };
+        let (p_parent, w_p, v_p, al_p, a_p) = match parent {
+            Some(m) => (
+                m.frame.p.clone(),
+                m.omega.clone(),
+                m.v.clone(),
+                m.alpha.clone(),
+                m.a.clone(),
+            ),
+            None => (zero(), zero(), zero(), zero(), zero()),
+        };
+        let m = &body.motion;
+        let (th_d, d_d) = (rate(&m.theta, q_dot), rate(&m.d, q_dot));
+        let (th_dd, d_dd) = (rate(&m.theta, q_ddot), rate(&m.d, q_ddot));
+        let u = sub(&frame.p, &p_joint);
+        let r = sub(&frame.p, &p_parent);
+        let z_u = cross(&z, &u);
+        let v_rel = add(&scale(&d_d, &z), &scale(&th_d, &z_u));
+        let w_r = cross(&w_p, &r);
+        let omega = add(&w_p, &scale(&th_d, &z));
+        let v = add(&add(&v_p, &w_r), &v_rel);
+        let a_rel = add(
+            &add(&scale(&d_dd, &z), &scale(&th_dd, &z_u)),
+            &scale(&(&th_d * &th_d), &cross(&z, &z_u)),
+        );
+        let alpha = add(
+            &add(&al_p, &scale(&th_dd, &z)),
+            &cross(&w_p, &scale(&th_d, &z)),
+        );
+        let a = add(
+            &add(&a_p, &add(&cross(&al_p, &r), &cross(&w_p, &w_r))),
+            &add(&scale(&exact(2.0), &cross(&w_p, &v_rel)), &a_rel),
+        );
+        bodies.push(BigMotion {
+            frame,
+            omega,
+            v,
+            alpha,
+            a,
+        });
+    }
+    (0..chain.links().len())
+        .map(|i| {
+            let link = chain.link(LinkId(i));
+            let offset = BigFrame::from_transform(&link.offset.to_transform());
+            match link.body {
+                None => LinkMotion {
+                    pose: offset.to_transform(),
+                    omega: [0.0; 3],
+                    v: [0.0; 3],
+                    alpha: [0.0; 3],
+                    a: [0.0; 3],
+                },
+                Some(b) => {
+                    let m = &bodies[b];
+                    let frame = m.frame.compose(&offset);
+                    let r = sub(&frame.p, &m.frame.p);
+                    let w_r = cross(&m.omega, &r);
+                    LinkMotion {
+                        pose: frame.to_transform(),
+                        omega: round3(&m.omega),
+                        v: round3(&add(&m.v, &w_r)),
+                        alpha: round3(&m.alpha),
+                        a: round3(&add(
+                            &m.a,
+                            &add(&cross(&m.alpha, &r), &cross(&m.omega, &w_r)),
+                        )),
+                    }
+                }
+            }
+        })
+        .collect()
+}
