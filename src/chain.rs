@@ -203,6 +203,30 @@ impl ChainBuilder {
         self
     }
 
+    /// Robot name.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Declared links, in declaration order.
+    #[must_use]
+    pub fn links(&self) -> &[String] {
+        &self.links
+    }
+
+    /// Joints, in declaration order.
+    #[must_use]
+    pub fn joints(&self) -> &[JointSpec] {
+        &self.joints
+    }
+
+    /// The root link's placement in the world, if one was set.
+    #[must_use]
+    pub fn root_placement(&self) -> Option<Transform> {
+        self.world_from_root
+    }
+
     /// Records a warning that the built chain will carry (see [`Chain::warnings`]).
     pub fn warn(&mut self, message: impl Into<String>) -> &mut Self {
         self.warnings.push(message.into());
@@ -521,6 +545,8 @@ pub struct Chain {
     serial: bool,
     reach: f64,
     warnings: Vec<String>,
+    /// The description the chain was built from (for writing it out again).
+    source: ChainBuilder,
 }
 
 impl Chain {
@@ -623,6 +649,13 @@ impl Chain {
     #[must_use]
     pub fn warnings(&self) -> &[String] {
         &self.warnings
+    }
+
+    /// The description this chain was built from: links and joints as given (before fixed joints
+    /// were folded), and the root's placement.
+    #[must_use]
+    pub fn description(&self) -> &ChainBuilder {
+        &self.source
     }
 
     /// Number of moving joints after folding fixed joints away.
@@ -1139,5 +1172,6 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         serial,
         reach,
         warnings: spec.warnings.clone(),
+        source: spec.clone(),
     })
 }

@@ -4,7 +4,7 @@
 use crate::batch::{BatchData, forward_kinematics_batch};
 use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
-use crate::input::{InputError, joint_vector_from_json, joint_vector_from_str};
+use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, check_q, forward_accelerations,
     forward_kinematics, forward_kinematics_to, forward_velocities,
@@ -37,6 +37,29 @@ enum Command {
     },
     /// Poses (and velocities, accelerations) of the links at a configuration.
     Fk(FkArgs),
+    /// Write the robot as URDF (DH tables and the axis form; the links keep their names and
+    /// poses).
+    Convert {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// Output file (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Draw the robot at a configuration as SVG: front, side, top and isometric views.
+    Render {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// Joint positions (same forms as for fk).
+        #[arg(long, allow_hyphen_values = true)]
+        q: String,
+        /// Output file (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Draw joint values outside the joints' limits instead of refusing them.
+        #[arg(long)]
+        ignore_limits: bool,
+    },
     /// Time per configuration of each evaluation mode, and its error against a high-precision
     /// evaluation of the same model.
     Bench {
@@ -125,6 +148,9 @@ pub enum CliError {
     /// A link name is unknown.
     #[error(transparent)]
     Name(#[from] crate::error::NameError),
+    /// The robot cannot be written as URDF.
+    #[error(transparent)]
+    Convert(#[from] crate::convert::ConvertError),
     /// `--qdd` without `--qd`.
     #[error("--qdd needs --qd (accelerations depend on velocities)")]
     QddWithoutQd,
@@ -150,12 +176,6 @@ pub enum CliError {
         /// Lines that failed.
         count: usize,
     },
-    /// A batch line is not a JSON object with a "q" member.
-    #[error("{0}")]
-    BatchShape(&'static str),
-    /// A batch line is not JSON.
-    #[error("not valid JSON: {0}")]
-    BatchJson(String),
     /// Reading input or writing output failed.
     #[error("{context}")]
     Io {
@@ -230,6 +250,22 @@ fn load(path: &PathBuf) -> Result<Chain, CliError> {
     Ok(chain)
 }
 
+/// Writes `text` to `path`, or to `out` when there is no path.
+fn write_output(path: Option<&PathBuf>, text: &str, out: &mut dyn Write) -> Result<(), CliError> {
+    match path {
+        Some(p) => std::fs::write(p, text).map_err(|source| CliError::Io {
+            context: format!("cannot write {}", p.display()),
+            source,
+        }),
+        None => out
+            .write_all(text.as_bytes())
+            .map_err(|source| CliError::Io {
+                context: "cannot write output".into(),
+                source,
+            }),
+    }
+}
+
 fn write_line(out: &mut dyn Write, text: &str) -> Result<(), CliError> {
     writeln!(out, "{text}").map_err(|source| CliError::Io {
         context: "cannot write output".into(),
@@ -246,6 +282,26 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
             level,
             configurations,
         } => bench(&robot, level, configurations.max(1), out),
+        Command::Convert { robot, output } => {
+            let chain = load(&robot)?;
+            let text = crate::convert::to_urdf(&chain)?;
+            write_output(output.as_ref(), &text, out)
+        }
+        Command::Render {
+            robot,
+            q,
+            output,
+            ignore_limits,
+        } => {
+            let chain = load(&robot)?;
+            let q = joint_vector_from_str(&chain, &q, "q")?;
+            let mut data = Data::new(&chain);
+            if ignore_limits {
+                data.set_limit_policy(LimitPolicy::Ignore);
+            }
+            let poses = forward_kinematics(&chain, &mut data, &q)?;
+            write_output(output.as_ref(), &crate::render::svg(&chain, &poses), out)
+        }
     }
 }
 
@@ -826,35 +882,13 @@ fn error_json(line: usize, e: &CliError) -> String {
     json!({ "line": line, "error": error_chain(e) }).to_string()
 }
 
-/// One batch line: `{"q": .., "qd": .., "qdd": ..}` (qd, qdd optional).
+/// One batch line through [`crate::input::parse_batch_line`].
 fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliError> {
-    let value: Value =
-        serde_json::from_str(line).map_err(|e| CliError::BatchJson(e.to_string()))?;
-    let Value::Object(map) = value else {
-        return Err(CliError::BatchShape(
-            "expected a JSON object {\"q\": ..} on each line",
-        ));
-    };
-    if let Some(key) = map
-        .keys()
-        .find(|k| !matches!(k.as_str(), "q" | "qd" | "qdd"))
-    {
-        let _ = key;
-        return Err(CliError::BatchShape(
-            "unknown member (a line may have only \"q\", \"qd\" and \"qdd\")",
-        ));
-    }
-    let q = map.get("q").ok_or(CliError::BatchShape("missing \"q\""))?;
+    let l = crate::input::parse_batch_line(chain, line)?;
     Ok(Configuration {
-        q: joint_vector_from_json(chain, q, "q")?,
-        qd: map
-            .get("qd")
-            .map(|v| joint_vector_from_json(chain, v, "qd"))
-            .transpose()?,
-        qdd: map
-            .get("qdd")
-            .map(|v| joint_vector_from_json(chain, v, "qdd"))
-            .transpose()?,
+        q: l.q,
+        qd: l.q_dot,
+        qdd: l.q_ddot,
     })
 }
 
@@ -955,9 +989,11 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                 "kinechain, all links".into(),
                 per(time_per_call(|| {
                     for q in &qs {
-                        let p = forward_kinematics(&chain, &mut data, black_box(q))
-                            .unwrap_or_else(|_| unreachable!());
-                        black_box(p.world_from_link(end));
+                        black_box(
+                            forward_kinematics(&chain, &mut data, black_box(q))
+                                .ok()
+                                .map(|p| p.world_from_link(end)),
+                        );
                     }
                 })),
             ));

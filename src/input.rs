@@ -72,6 +72,9 @@ pub enum InputError {
         /// The joint left out.
         name: String,
     },
+    /// A batch line is not a JSON object with a `q` member (and optionally `qd`, `qdd`).
+    #[error("{0}")]
+    BatchLine(&'static str),
     /// A joint's value has the wrong shape (a number for a cylindrical joint, or a list for a
     /// one-coordinate joint).
     #[error("{what}: joint '{name}' takes {expected}")]
@@ -226,4 +229,53 @@ pub fn joint_vector_from_str(
         });
     }
     Ok(values)
+}
+
+/// One line of a batch file: `{"q": .., "qd": .., "qdd": ..}`, with `qd` and `qdd` optional and
+/// each vector an array in `q` order or an object keyed by joint name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchLine {
+    /// Joint positions.
+    pub q: Vec<f64>,
+    /// Joint velocities, when given.
+    pub q_dot: Option<Vec<f64>>,
+    /// Joint accelerations, when given.
+    pub q_ddot: Option<Vec<f64>>,
+}
+
+/// Reads one batch line.
+///
+/// # Errors
+/// [`InputError`]: not JSON, not an object, an unknown or missing member, or a vector that
+/// [`joint_vector_from_json`] refuses.
+pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputError> {
+    let value: Value = serde_json::from_str(line).map_err(|e| InputError::Json {
+        what: "line",
+        message: e.to_string(),
+    })?;
+    let Value::Object(map) = value else {
+        return Err(InputError::BatchLine(
+            "expected a JSON object {\"q\": ..} on each line",
+        ));
+    };
+    if map
+        .keys()
+        .any(|k| !matches!(k.as_str(), "q" | "qd" | "qdd"))
+    {
+        return Err(InputError::BatchLine(
+            "unknown member (a line may have only \"q\", \"qd\" and \"qdd\")",
+        ));
+    }
+    let q = map.get("q").ok_or(InputError::BatchLine("missing \"q\""))?;
+    Ok(BatchLine {
+        q: joint_vector_from_json(chain, q, "q")?,
+        q_dot: map
+            .get("qd")
+            .map(|v| joint_vector_from_json(chain, v, "qd"))
+            .transpose()?,
+        q_ddot: map
+            .get("qdd")
+            .map(|v| joint_vector_from_json(chain, v, "qdd"))
+            .transpose()?,
+    })
 }

@@ -142,6 +142,32 @@ impl<'a> Poses<'a> {
         }
     }
 
+    /// A moving joint's axis in the world frame: a point on it (the joint-frame origin) and its
+    /// unit direction; `None` for a fixed joint.
+    ///
+    /// # Panics
+    /// If `joint` comes from another chain with more joints.
+    #[must_use]
+    pub fn joint_axis(
+        &self,
+        joint: crate::chain::JointId,
+    ) -> Option<(nalgebra::Point3<f64>, Vector3<f64>)> {
+        let _ = self.chain.joint(joint);
+        let body = self
+            .chain
+            .bodies
+            .iter()
+            .find(|b| b.joint == joint.index())?;
+        let parent: Transform = match body.parent {
+            Some(p) => self.data.world_from_body[p].into(),
+            None => Transform::IDENTITY,
+        };
+        Some((
+            parent.transform_point(&nalgebra::Point3::from(body.pre_frame.p)),
+            parent.transform_vector(&Vector3::from(body.axis_in_parent)),
+        ))
+    }
+
     /// The frame a link's motion is computed for, and the link's offset from it.
     fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
         let l = self.chain.link(link);

@@ -10,6 +10,7 @@ pub mod batch;
 pub mod chain;
 #[cfg(feature = "cli")]
 pub mod cli;
+pub mod convert;
 pub mod data;
 pub mod error;
 pub mod input;
@@ -19,6 +20,7 @@ mod kernel;
 pub mod kinematics;
 #[cfg(feature = "reference")]
 pub mod reference;
+pub mod render;
 pub mod rotation;
 pub mod transform;
 mod trig;

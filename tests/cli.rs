@@ -567,3 +567,53 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
     assert!(checked > 5000, "{checked}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn convert_and_render_write_files() {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-convert-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let urdf = dir.join("puma.urdf");
+    let out = kinechain(&[
+        "convert",
+        "robots/puma560.yaml",
+        "-o",
+        urdf.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The converted file gives the same tool pose.
+    let q = "[0.3, -0.6, 0.4, 0.2, -0.7, 0.5]";
+    let a = &ok_json(&["fk", "robots/puma560.yaml", "--q", q, "--link", "tool"])[0];
+    let b = &ok_json(&["fk", urdf.to_str().unwrap(), "--q", q, "--link", "tool"])[0];
+    for i in 0..3 {
+        for j in 0..4 {
+            let (x, y) = (
+                a["links"]["tool"]["pose"][i][j].as_f64().unwrap(),
+                b["links"]["tool"]["pose"][i][j].as_f64().unwrap(),
+            );
+            assert!((x - y).abs() < 1e-12);
+        }
+    }
+    let svg = dir.join("arm.svg");
+    let out = kinechain(&[
+        "render",
+        "robots/puma560.yaml",
+        "--q",
+        q,
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    let m = error(&[
+        "render",
+        "robots/puma560.yaml",
+        "--q",
+        "[10, 0, 0, 0, 0, 0]",
+    ]);
+    assert!(m.contains("limits"), "{m}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -387,3 +387,58 @@ fn every_bad_file_is_exercised() {
         }
     }
 }
+
+/// Resource attacks end quickly with an error: an alias bomb, 20 000-deep nesting (YAML and
+/// XML), an XML entity bomb, binary data, and a file over the size limit.
+#[test]
+fn resource_attacks_fail_fast() {
+    let timed = |file: &str| {
+        let start = std::time::Instant::now();
+        let e = load(file);
+        assert!(
+            start.elapsed().as_secs_f64() < 2.0,
+            "{file} took {:?}",
+            start.elapsed()
+        );
+        e
+    };
+    let e = timed("yaml/alias_bomb.yaml");
+    assert!(
+        matches!(e.kind(), LoadErrorKind::Yaml { .. }),
+        "{}",
+        message(&e)
+    );
+    let e = timed("yaml/deep_nesting.yaml");
+    assert!(yaml(&e).2.contains("recursion limit"), "{}", message(&e));
+    let e = timed("urdf/deep_nesting.urdf");
+    assert!(
+        matches!(e.kind(), LoadErrorKind::Urdf { message } if message.contains("nest deeper")),
+        "{}",
+        message(&e)
+    );
+    let e = timed("urdf/entity_bomb.urdf");
+    assert!(
+        matches!(e.kind(), LoadErrorKind::Urdf { .. }),
+        "{}",
+        message(&e)
+    );
+    let e = timed("urdf/binary.urdf");
+    assert!(
+        matches!(e.kind(), LoadErrorKind::NotText { offset: 128 }),
+        "{}",
+        message(&e)
+    );
+
+    let big = std::env::temp_dir().join(format!("kinechain-big-{}.yaml", std::process::id()));
+    let line = "# padding padding padding padding padding padding padding padding padding\n";
+    std::fs::write(
+        &big,
+        line.repeat((kinechain::io::MAX_FILE_BYTES as usize) / line.len() + 2),
+    )
+    .unwrap();
+    let e = Chain::from_file(&big).unwrap_err();
+    assert!(
+        matches!(e.kind(), LoadErrorKind::TooLarge { limit, .. } if *limit == kinechain::io::MAX_FILE_BYTES)
+    );
+    std::fs::remove_file(&big).unwrap();
+}

@@ -1,0 +1,66 @@
+//! Workspace sampling: one million random configurations of the Panda arm (within its joint
+//! limits), evaluated in batches on every core, and the bounding box of the tool positions
+//! reached.
+//!
+//! Run with `cargo run --release --example workspace`.
+
+use kinechain::Chain;
+use kinechain::batch::{BatchData, forward_kinematics_batch_par};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let chain = Chain::from_file("robots/panda_mdh.yaml")?;
+    let tcp = chain.link_id("tcp")?;
+    let limits: Vec<(f64, f64)> = chain
+        .joints()
+        .iter()
+        .filter(|j| j.dof() == 1)
+        .map(|j| {
+            j.limits()[0].map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| {
+                (l.lower, l.upper)
+            })
+        })
+        .collect();
+    let n = 1_000_000;
+    // A small deterministic generator (xorshift) keeps the example free of dependencies.
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut unit = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let qs: Vec<f64> = (0..n)
+        .flat_map(|_| {
+            limits
+                .iter()
+                .map(|(lo, hi)| lo + (hi - lo) * unit())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let mut batch = BatchData::new(&chain);
+    let start = std::time::Instant::now();
+    let poses = forward_kinematics_batch_par(&chain, &mut batch, &qs)?;
+    let elapsed = start.elapsed();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    let mut farthest: f64 = 0.0;
+    for i in 0..poses.len() {
+        let p = poses.world_from_link(i, tcp).translation();
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+        farthest = farthest.max(p.norm());
+    }
+    println!(
+        "{n} configurations in {:.1} ms ({:.1} ns each, {} threads)",
+        elapsed.as_secs_f64() * 1e3,
+        elapsed.as_nanos() as f64 / n as f64,
+        rayon::current_num_threads()
+    );
+    println!(
+        "tcp reaches x ∈ [{:.3}, {:.3}] m, y ∈ [{:.3}, {:.3}] m, z ∈ [{:.3}, {:.3}] m",
+        lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
+    );
+    println!("farthest from the base: {farthest:.3} m");
+    Ok(())
+}

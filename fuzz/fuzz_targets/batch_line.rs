@@ -1,0 +1,19 @@
+//! One line of a `--batch` file, for the same chains as `joint_vector`.
+mod common;
+
+fn main() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let chains = [
+        kinechain::Chain::from_file(dir.join("robots/cylindrical.yaml")).expect("bundled robot"),
+        kinechain::Chain::from_file(dir.join("robots/panda.urdf")).expect("bundled robot"),
+    ];
+    afl::fuzz!(|data: &[u8]| {
+        if let Ok(text) = std::str::from_utf8(data) {
+            for chain in &chains {
+                if let Ok(line) = kinechain::input::parse_batch_line(chain, text) {
+                    common::evaluate(chain, &line.q);
+                }
+            }
+        }
+    });
+}

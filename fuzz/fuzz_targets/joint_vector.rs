@@ -1,0 +1,20 @@
+//! Joint vectors as the CLI reads them (`--q`): JSON array, name-keyed object, or a list, for a
+//! chain with a cylindrical joint and one with a mimic joint.
+mod common;
+
+fn main() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let chains = [
+        kinechain::Chain::from_file(dir.join("robots/cylindrical.yaml")).expect("bundled robot"),
+        kinechain::Chain::from_file(dir.join("robots/panda.urdf")).expect("bundled robot"),
+    ];
+    afl::fuzz!(|data: &[u8]| {
+        if let Ok(text) = std::str::from_utf8(data) {
+            for chain in &chains {
+                if let Ok(q) = kinechain::input::joint_vector_from_str(chain, text, "q") {
+                    common::evaluate(chain, &q);
+                }
+            }
+        }
+    });
+}

@@ -1,0 +1,289 @@
+//! Writing a chain as URDF (`kinechain convert`): DH tables (standard, modified) and the axis
+//! form become URDF joints whose link frames are exactly those of the original, so the two
+//! models agree link for link.
+//!
+//! Each joint becomes a URDF joint with origin `origin · Rot(v, θ₀) · Trans(v d₀)` (the offsets
+//! at q = 0; they commute with the motion along the same axis), so its URDF joint value is `q`.
+//! A constant placement after the motion (standard DH: `Tx(a) Rx(α)`) becomes a fixed joint from
+//! a massless link `<joint>_motion` to the original child link. A cylindrical joint becomes a
+//! revolute joint `<joint>` and a prismatic joint `<joint>_d` on the same axis through a massless
+//! link `<joint>_theta` (its two entries of `q` keep their order). A root placement becomes a fixed
+//! joint from a new root link. Limits are carried over; mimic joints keep their mimic element.
+
+use crate::chain::{Chain, JointSpec};
+use crate::joint::{JointKind, Limits, normalize_axis};
+use crate::rotation::Rpy;
+use crate::transform::Transform;
+use nalgebra::{Unit, Vector3};
+
+/// A chain that URDF cannot express.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ConvertError {
+    /// URDF requires limits on prismatic joints.
+    #[error(
+        "joint '{joint}': a prismatic coordinate without limits cannot be written as URDF (add limits)"
+    )]
+    UnlimitedPrismatic {
+        /// The joint.
+        joint: String,
+    },
+    /// A generated link or joint name collides with an existing one.
+    #[error("the generated name '{name}' is already used in the model")]
+    NameClash {
+        /// The name.
+        name: String,
+    },
+    /// urdf-rs could not write the model.
+    #[error("cannot write URDF: {message}")]
+    Write {
+        /// What urdf-rs said.
+        message: String,
+    },
+}
+
+/// `(xyz, rpy)` of a rigid transform, rpy as URDF reads it (`R = Rz(yaw) Ry(pitch) Rx(roll)`);
+/// at pitch = ±π/2 exactly, roll is set to 0 and yaw carries the whole rotation about z.
+fn xyz_rpy(t: &Transform) -> ([f64; 3], [f64; 3]) {
+    let a = t.rotation();
+    let rpy = match Rpy::from_matrix(&a) {
+        Ok(r) => [r.roll, r.pitch, r.yaw],
+        Err(_) => {
+            // R = Rz(y) Ry(±π/2) with roll 0: a12 = −sin y, a22 = cos y.
+            let pitch = if a[(2, 0)] < 0.0 {
+                std::f64::consts::FRAC_PI_2
+            } else {
+                -std::f64::consts::FRAC_PI_2
+            };
+            [0.0, pitch, (-a[(0, 1)]).atan2(a[(1, 1)])]
+        }
+    };
+    (t.p, rpy)
+}
+
+fn pose(t: &Transform) -> urdf_rs::Pose {
+    let (xyz, rpy) = xyz_rpy(t);
+    urdf_rs::Pose {
+        xyz: urdf_rs::Vec3(xyz),
+        rpy: urdf_rs::Vec3(rpy),
+    }
+}
+
+fn link(name: &str) -> urdf_rs::Link {
+    urdf_rs::Link {
+        name: name.to_string(),
+        inertial: urdf_rs::Inertial::default(),
+        visual: Vec::new(),
+        collision: Vec::new(),
+    }
+}
+
+/// The transform `Rot(v, θ) Trans(v d)` of a motion with constant θ and d.
+fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
+    let v = normalize_axis(axis).unwrap_or([0.0, 0.0, 1.0]);
+    let u = Unit::new_unchecked(Vector3::from(v));
+    Transform::from_parts(
+        &crate::joint::rotation_about(&u, theta),
+        &(u.into_inner() * d),
+    )
+}
+
+struct Writer {
+    links: Vec<urdf_rs::Link>,
+    joints: Vec<urdf_rs::Joint>,
+    names: std::collections::HashSet<String>,
+}
+
+impl Writer {
+    fn fresh_link(&mut self, name: String) -> Result<String, ConvertError> {
+        if !self.names.insert(format!("link:{name}")) {
+            return Err(ConvertError::NameClash { name });
+        }
+        self.links.push(link(&name));
+        Ok(name)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn joint(
+        &mut self,
+        name: String,
+        kind: urdf_rs::JointType,
+        parent: &str,
+        child: &str,
+        origin: &Transform,
+        axis: [f64; 3],
+        limits: Option<Limits>,
+        mimic: Option<&crate::chain::MimicSpec>,
+    ) -> Result<(), ConvertError> {
+        if !self.names.insert(format!("joint:{name}")) {
+            return Err(ConvertError::NameClash { name });
+        }
+        let (lower, upper) = limits.map_or((0.0, 0.0), |l| (l.lower, l.upper));
+        self.joints.push(urdf_rs::Joint {
+            name,
+            joint_type: kind,
+            origin: pose(origin),
+            parent: urdf_rs::LinkName {
+                link: parent.to_string(),
+            },
+            child: urdf_rs::LinkName {
+                link: child.to_string(),
+            },
+            axis: urdf_rs::Axis {
+                xyz: urdf_rs::Vec3(axis),
+            },
+            limit: urdf_rs::JointLimit {
+                lower,
+                upper,
+                effort: 0.0,
+                velocity: 0.0,
+                ..urdf_rs::JointLimit::default()
+            },
+            calibration: None,
+            dynamics: None,
+            mimic: mimic.map(|m| urdf_rs::Mimic {
+                joint: m.joint.clone(),
+                multiplier: Some(m.multiplier),
+                offset: Some(m.offset),
+            }),
+            safety_controller: None,
+        });
+        Ok(())
+    }
+}
+
+fn moving_kind(
+    kind: JointKind,
+    limits: Option<Limits>,
+    joint: &str,
+) -> Result<urdf_rs::JointType, ConvertError> {
+    Ok(match (kind, limits) {
+        (JointKind::Prismatic, Some(_)) => urdf_rs::JointType::Prismatic,
+        (JointKind::Prismatic, None) => {
+            return Err(ConvertError::UnlimitedPrismatic {
+                joint: joint.to_string(),
+            });
+        }
+        (_, Some(_)) => urdf_rs::JointType::Revolute,
+        (_, None) => urdf_rs::JointType::Continuous,
+    })
+}
+
+/// The chain as URDF text; its links keep their names and poses.
+///
+/// # Errors
+/// [`ConvertError`] for a prismatic joint without limits (URDF requires them) or a generated
+/// name that clashes with an existing one.
+pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
+    let d = chain.description();
+    let mut w = Writer {
+        links: Vec::new(),
+        joints: Vec::new(),
+        names: std::collections::HashSet::new(),
+    };
+    for l in d.links() {
+        w.fresh_link(l.clone())?;
+    }
+    if let Some(root) = d.root_placement().filter(|t| *t != Transform::IDENTITY) {
+        let root_link = chain.links()[0].name().to_string();
+        let world = w.fresh_link(format!("{root_link}_world"))?;
+        w.joint(
+            format!("{root_link}_placement"),
+            urdf_rs::JointType::Fixed,
+            &world,
+            &root_link,
+            &root,
+            [1.0, 0.0, 0.0],
+            None,
+            None,
+        )?;
+    }
+    for js in d.joints() {
+        write_joint(&mut w, js)?;
+    }
+    let robot = urdf_rs::Robot {
+        name: chain.name().to_string(),
+        version: None,
+        links: w.links,
+        joints: w.joints,
+        materials: Vec::new(),
+    };
+    urdf_rs::write_to_string(&robot).map_err(|e| ConvertError::Write {
+        message: e.to_string(),
+    })
+}
+
+fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
+    let axis = normalize_axis(js.axis).unwrap_or([0.0, 0.0, 1.0]);
+    let origin = js.origin * screw(axis, js.theta, js.d);
+    let has_post = js.post != Transform::IDENTITY;
+    if js.kind == JointKind::Fixed {
+        return w.joint(
+            js.name.clone(),
+            urdf_rs::JointType::Fixed,
+            &js.parent,
+            &js.child,
+            &(origin * js.post),
+            [1.0, 0.0, 0.0],
+            None,
+            None,
+        );
+    }
+    // The frame right after the motion: the child itself, or a massless link before `post`.
+    let after_motion = if has_post {
+        w.fresh_link(format!("{}_motion", js.name))?
+    } else {
+        js.child.clone()
+    };
+    if js.kind == JointKind::Cylindrical {
+        let middle = w.fresh_link(format!("{}_theta", js.name))?;
+        let kind = moving_kind(JointKind::Revolute, js.limits[0], &js.name)?;
+        w.joint(
+            js.name.clone(),
+            kind,
+            &js.parent,
+            &middle,
+            &origin,
+            axis,
+            js.limits[0],
+            None,
+        )?;
+        let d_name = format!("{}_d", js.name);
+        let kind = moving_kind(JointKind::Prismatic, js.limits[1], &d_name)?;
+        w.joint(
+            d_name,
+            kind,
+            &middle,
+            &after_motion,
+            &Transform::IDENTITY,
+            axis,
+            js.limits[1],
+            None,
+        )?;
+    } else {
+        let kind = moving_kind(js.kind, js.limits[0], &js.name)?;
+        w.joint(
+            js.name.clone(),
+            kind,
+            &js.parent,
+            &after_motion,
+            &origin,
+            axis,
+            js.limits[0],
+            js.mimic.as_ref(),
+        )?;
+    }
+    if has_post {
+        w.joint(
+            format!("{}_post", js.name),
+            urdf_rs::JointType::Fixed,
+            &after_motion,
+            &js.child,
+            &js.post,
+            [1.0, 0.0, 0.0],
+            None,
+            None,
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,299 @@
+//! An SVG drawing of a chain at one configuration (`kinechain render`): three orthographic views
+//! and an isometric one, links as segments between frame origins, each moving joint's axis as a
+//! short arrow, small RGB triads for the frames, names on hover, a scale bar, base and tool
+//! marked. The output depends only on its inputs (same chain and pose, same bytes).
+//!
+//! Projections, with `(u, v)` the drawing's horizontal and upward coordinates in metres, then
+//! `svg_x = origin_x + scale · u`, `svg_y = origin_y − scale · v` (the values are written on each
+//! panel as `data-origin-x`, `data-origin-y`, `data-scale`):
+//! front `(x, z)`, side `(y, z)`, top `(x, y)`, isometric `((x − y) cos 30°, z + (x + y) sin 30°)`.
+
+use crate::chain::{Chain, LinkId};
+use crate::kinematics::Poses;
+use nalgebra::{Point3, Vector3};
+use std::fmt::Write as _;
+
+/// The four views.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Looking along −y: x to the right, z up.
+    Front,
+    /// Looking along +x: y to the right, z up.
+    Side,
+    /// Looking down −z: x to the right, y up.
+    Top,
+    /// Isometric: `((x − y) cos 30°, z + (x + y) sin 30°)`.
+    Isometric,
+}
+
+impl View {
+    /// All four, in drawing order (left to right, top to bottom).
+    pub const ALL: [View; 4] = [View::Front, View::Side, View::Top, View::Isometric];
+
+    /// Name used in the SVG (`data-view`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Front => "front",
+            View::Side => "side",
+            View::Top => "top",
+            View::Isometric => "isometric",
+        }
+    }
+
+    /// The drawing coordinates `(u, v)` of a world point, in metres.
+    #[must_use]
+    pub fn project(self, p: &Point3<f64>) -> (f64, f64) {
+        let (c30, s30) = (3f64.sqrt() / 2.0, 0.5);
+        match self {
+            View::Front => (p.x, p.z),
+            View::Side => (p.y, p.z),
+            View::Top => (p.x, p.y),
+            View::Isometric => ((p.x - p.y) * c30, p.z + (p.x + p.y) * s30),
+        }
+    }
+}
+
+const PANEL: f64 = 360.0;
+const MARGIN: f64 = 30.0;
+
+struct Panel {
+    view: View,
+    x0: f64,
+    y0: f64,
+    scale: f64,
+}
+
+impl Panel {
+    fn at(&self, p: &Point3<f64>) -> (f64, f64) {
+        let (u, v) = self.view.project(p);
+        (self.x0 + self.scale * u, self.y0 - self.scale * v)
+    }
+}
+
+/// A round length (1, 2 or 5 × 10ⁿ m) close to `target`.
+fn round_length(target: f64) -> f64 {
+    let e = target.log10().floor();
+    let base = 10f64.powf(e);
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * base)
+        .filter(|l| *l <= target)
+        .fold(base, f64::max)
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The chain at the configuration of `poses`, as an SVG document.
+#[must_use]
+pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
+    let links: Vec<_> = (0..chain.links().len()).map(LinkId).collect();
+    let frames: Vec<_> = links.iter().map(|&l| poses.world_from_link(l)).collect();
+    let origins: Vec<Point3<f64>> = frames
+        .iter()
+        .map(|f| Point3::from(f.translation()))
+        .collect();
+    let axes: Vec<(String, Point3<f64>, Vector3<f64>)> = chain
+        .joints()
+        .iter()
+        .enumerate()
+        .filter_map(|(i, j)| {
+            poses
+                .joint_axis(crate::chain::JointId(i))
+                .map(|(p, z)| (j.name().to_string(), p, z))
+        })
+        .collect();
+    let reach = origins
+        .iter()
+        .map(|p| p.coords.norm())
+        .fold(0.0_f64, f64::max)
+        .max(1e-9);
+    let triad = 0.08 * reach;
+    let arrow = 0.12 * reach;
+
+    // One scale for the three orthographic views (so the scale bar holds for all), another for
+    // the isometric one; each view is centred on its own extent.
+    let mut points: Vec<Point3<f64>> = origins.clone();
+    for (_, p, z) in &axes {
+        points.push(p + z * arrow);
+    }
+    let extent = |v: View| {
+        let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+        for p in &points {
+            let (u, w) = v.project(p);
+            lo = (lo.0.min(u), lo.1.min(w));
+            hi = (hi.0.max(u), hi.1.max(w));
+        }
+        (lo, hi)
+    };
+    let span = |v: View| {
+        let (lo, hi) = extent(v);
+        (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-9)
+    };
+    let ortho = (PANEL - 2.0 * MARGIN)
+        / [View::Front, View::Side, View::Top]
+            .map(span)
+            .iter()
+            .fold(0.0_f64, |m, s| m.max(*s));
+    let iso = (PANEL - 2.0 * MARGIN) / span(View::Isometric);
+    let panels: Vec<Panel> = View::ALL
+        .iter()
+        .enumerate()
+        .map(|(i, &view)| {
+            let scale = if view == View::Isometric { iso } else { ortho };
+            let (lo, hi) = extent(view);
+            let (cx, cy) = (0.5 * (lo.0 + hi.0), 0.5 * (lo.1 + hi.1));
+            let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+            Panel {
+                view,
+                x0: px + PANEL / 2.0 - scale * cx,
+                y0: py + PANEL / 2.0 + scale * cy,
+                scale,
+            }
+        })
+        .collect();
+
+    let mut s = String::new();
+    let size = 2.0 * PANEL;
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{}" viewBox="0 0 {size} {}" font-family="sans-serif" font-size="11">"#,
+        size + 40.0,
+        size + 40.0
+    );
+    let _ = writeln!(s, "<title>{}</title>", escape(chain.name()));
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    for (i, p) in panels.iter().enumerate() {
+        let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+        let _ = writeln!(
+            s,
+            r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{:.6}">"#,
+            p.view.name(),
+            p.x0,
+            p.y0,
+            p.scale
+        );
+        let _ = writeln!(
+            s,
+            r##"<rect x="{px}" y="{py}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#bbb"/><text x="{}" y="{}" fill="#555">{}</text>"##,
+            px + 8.0,
+            py + 16.0,
+            match p.view {
+                View::Front => "front (x →, z ↑)",
+                View::Side => "side (y →, z ↑)",
+                View::Top => "top (x →, y ↑)",
+                View::Isometric => "isometric",
+            }
+        );
+        // Links: segments from the parent link's origin to the child's, one per joint.
+        for j in chain.joints() {
+            let (a, b) = (p.at(&origins[j.parent().0]), p.at(&origins[j.child().0]));
+            let _ = writeln!(
+                s,
+                r##"<line class="segment" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#333" stroke-width="3" stroke-linecap="round"><title>{}</title></line>"##,
+                a.0,
+                a.1,
+                b.0,
+                b.1,
+                escape(j.name())
+            );
+        }
+        // Joint axes: short arrows from the axis point along the axis.
+        for (name, o, z) in &axes {
+            let (a, b) = (p.at(o), p.at(&(o + z * arrow)));
+            let _ = writeln!(
+                s,
+                r##"<line class="axis" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#c60" stroke-width="1.5" marker-end="url(#arrow)"><title>axis of {}</title></line>"##,
+                a.0,
+                a.1,
+                b.0,
+                b.1,
+                escape(name)
+            );
+        }
+        let _ = writeln!(s, "</g>");
+    }
+    // One group per link: its origin and triad in every panel, and its name on hover.
+    let root = LinkId(0);
+    let tools: Vec<LinkId> = links
+        .iter()
+        .copied()
+        .filter(|l| chain.joints().iter().all(|j| j.parent() != *l))
+        .collect();
+    for (i, &l) in links.iter().enumerate() {
+        let name = chain.link(l).name();
+        let role = if l == root {
+            " base"
+        } else if tools.contains(&l) {
+            " tool"
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            s,
+            r#"<g class="link{role}" data-link="{}"><title>{}</title>"#,
+            escape(name),
+            escape(name)
+        );
+        for p in &panels {
+            let o = p.at(&origins[i]);
+            for (k, color) in ["#d00", "#080", "#00d"].iter().enumerate() {
+                let tip = origins[i] + frames[i].rotation().column(k) * triad;
+                let t = p.at(&tip);
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="{color}" stroke-width="1"/>"#,
+                    o.0, o.1, t.0, t.1
+                );
+            }
+            let marker = match role {
+                " base" => format!(
+                    r##"<rect x="{:.3}" y="{:.3}" width="10" height="10" fill="#444"/>"##,
+                    o.0 - 5.0,
+                    o.1 - 5.0
+                ),
+                " tool" => format!(
+                    r##"<circle cx="{:.3}" cy="{:.3}" r="5" fill="none" stroke="#c00" stroke-width="2"/>"##,
+                    o.0, o.1
+                ),
+                _ => String::new(),
+            };
+            let _ = writeln!(
+                s,
+                r##"{marker}<circle class="origin" data-view="{}" cx="{:.6}" cy="{:.6}" r="2.5" fill="#222"/>"##,
+                p.view.name(),
+                o.0,
+                o.1
+            );
+        }
+        let _ = writeln!(s, "</g>");
+    }
+    // Scale bar (orthographic views).
+    let bar = round_length(0.25 * (PANEL - 2.0 * MARGIN) / ortho);
+    let (bx, by) = (20.0, size + 20.0);
+    let _ = writeln!(
+        s,
+        r##"<g class="scale-bar"><line x1="{bx}" y1="{by}" x2="{:.3}" y2="{by}" stroke="black" stroke-width="3"/><text x="{:.3}" y="{:.3}">{} m (front, side, top)</text></g>"##,
+        bx + bar * ortho,
+        bx + bar * ortho + 8.0,
+        by + 4.0,
+        bar
+    );
+    let _ = writeln!(
+        s,
+        r##"<text x="{:.3}" y="{:.3}" fill="#555">■ base   ○ tool   frames: x red, y green, z blue   arrows: joint axes</text>"##,
+        size / 2.0 - 60.0,
+        by + 4.0
+    );
+    let _ = writeln!(
+        s,
+        r##"<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="6" markerHeight="6" orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" fill="#c60"/></marker></defs>"##
+    );
+    s.push_str("</svg>\n");
+    s
+}

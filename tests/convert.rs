@@ -1,0 +1,105 @@
+//! `kinechain convert`: every DH and axis-form robot of `robots/` written as URDF loads in
+//! kinechain and in the `k` crate, and all link poses agree with the original to 1e-12 at
+//! seeded random configurations. This is how the DH robots are cross-checked against `k`.
+
+mod common;
+
+use common::*;
+use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
+
+fn converted(name: &str) -> (Chain, Chain, std::path::PathBuf) {
+    let original = Chain::from_file(robots_dir().join(name)).unwrap();
+    let text = kinechain::convert::to_urdf(&original).unwrap();
+    let dir = std::env::temp_dir().join(format!("kinechain-convert-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name.replace(".yaml", ".urdf"));
+    std::fs::write(&path, &text).unwrap();
+    let urdf = Chain::from_file(&path)
+        .unwrap_or_else(|e| panic!("{name}: {}\n{text}", kinechain::cli::error_chain(&e)));
+    (original, urdf, path)
+}
+
+#[test]
+fn converted_robots_agree_with_the_original_in_kinechain_and_k() {
+    let mut rng = rng(71);
+    let mut checked = 0;
+    for name in [
+        "puma560.yaml",
+        "puma560_modified.yaml",
+        "stanford.yaml",
+        "scara.yaml",
+        "ur5.yaml",
+        "panda_mdh.yaml",
+        "iiwa7.yaml",
+        "irb140.yaml",
+        "cylindrical.yaml",
+        "planar3.yaml",
+        "snake50.yaml",
+    ] {
+        let (original, urdf, path) = converted(name);
+        assert_eq!(urdf.dof(), original.dof(), "{name}");
+        let k_robot = k::Chain::<f64>::from_urdf_file(&path)
+            .unwrap_or_else(|e| panic!("k cannot load {name}: {e}"));
+        let (mut a, mut b) = (Data::new(&original), Data::new(&urdf));
+        a.set_limit_policy(LimitPolicy::Ignore);
+        b.set_limit_policy(LimitPolicy::Ignore);
+        for _ in 0..20 {
+            let q = random_q(&original, &mut rng);
+            let ours = forward_kinematics(&original, &mut a, &q).unwrap();
+            let theirs = forward_kinematics(&urdf, &mut b, &q).unwrap();
+            // k's joint vector, by name (the URDF's q order is the original's).
+            let kq: Vec<f64> = k_robot
+                .iter_joints()
+                .map(|j| {
+                    q[urdf
+                        .joint(urdf.joint_id(&j.name).unwrap())
+                        .q_index()
+                        .unwrap()]
+                })
+                .collect();
+            k_robot.set_joint_positions_unchecked(&kq);
+            k_robot.update_transforms();
+            for link in original.links() {
+                let want = ours.world_from_link(original.link_id(link.name()).unwrap());
+                let got = theirs.world_from_link(urdf.link_id(link.name()).unwrap());
+                assert!(
+                    pose_error(&got, &want.to_rows()) < 1e-12,
+                    "{name} {}",
+                    link.name()
+                );
+                let m = k_robot
+                    .find_link(link.name())
+                    .unwrap()
+                    .world_transform()
+                    .unwrap()
+                    .to_homogeneous();
+                let k_rows: [[f64; 4]; 4] =
+                    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]));
+                assert!(
+                    pose_error(&want, &k_rows) < 1e-12,
+                    "{name} {} (k)",
+                    link.name()
+                );
+                checked += 1;
+            }
+        }
+        // Limits are carried over.
+        for j in original.joints().iter().filter(|j| j.dof() == 1) {
+            let u = urdf.joint(urdf.joint_id(j.name()).unwrap());
+            assert_eq!(u.limits(), j.limits(), "{name} {}", j.name());
+        }
+    }
+    assert!(checked > 2000);
+}
+
+#[test]
+fn prismatic_joints_without_limits_are_refused() {
+    let chain = Chain::from_dh_yaml_str(
+        "convention: standard\njoints:\n  - {name: slide, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    assert!(matches!(
+        kinechain::convert::to_urdf(&chain),
+        Err(kinechain::convert::ConvertError::UnlimitedPrismatic { .. })
+    ));
+}
