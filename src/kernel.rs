@@ -232,6 +232,16 @@ pub(crate) fn cross<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
     ]
 }
 
+/// `a × b + c` with multiply–adds.
+#[inline(always)]
+pub(crate) fn cross_add<N: Num, A: Arith>(a: V3<N>, b: V3<N>, c: V3<N>) -> V3<N> {
+    [
+        N::mul_add::<A>(a[1], b[2], N::mul_add::<A>(-a[2], b[1], c[0])),
+        N::mul_add::<A>(a[2], b[0], N::mul_add::<A>(-a[0], b[2], c[1])),
+        N::mul_add::<A>(a[0], b[1], N::mul_add::<A>(-a[1], b[0], c[2])),
+    ]
+}
+
 /// `R u + p` with a constant `u`.
 #[inline(always)]
 fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
@@ -330,6 +340,21 @@ fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
                 p: apply_const_add::<N, A>(&r, t.p, f.p),
             };
         }
+    }
+}
+
+/// The joint axis in the world frame, from a frame whose rotation maps the joint frame's axis
+/// (the joint frame or, the rotation about the axis leaving it fixed, the frame after the motion).
+#[inline(always)]
+fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
+    match *axis {
+        Axis::X => r[0],
+        Axis::Y => r[1],
+        Axis::Z => r[2],
+        Axis::NegX => r[0].map(|x| -x),
+        Axis::NegY => r[1].map(|x| -x),
+        Axis::NegZ => r[2].map(|x| -x),
+        Axis::General(v) => apply_const_add::<N, A>(r, v, [N::splat(0.0); 3]),
     }
 }
 
@@ -480,55 +505,77 @@ pub(crate) fn rates_step<N: Num, A: Arith, const ACC: bool>(
     q_ddot: &[N],
     sin_cos: (N, N),
 ) -> (Frame<N>, Rates<N>) {
-    // The same frame as `pose_step`, bit for bit; the joint origin and axis in the world frame
-    // follow from the parent frame and the constant `pre`.
+    // The same frame as `pose_step`, bit for bit.
     let local = local_frame::<N, A>(body, q, sin_cos);
-    let (f, p_joint, z) = match parent {
-        Some((frame, _)) => (
-            compose::<N, A>(frame, &local),
-            apply_const_add::<N, A>(&frame.r, body.pre_frame.p, frame.p),
-            apply_const_add::<N, A>(&frame.r, body.axis_in_parent, [N::splat(0.0); 3]),
-        ),
-        None => (
-            local,
-            body.pre_frame.p.map(N::splat),
-            body.axis_in_parent.map(N::splat),
-        ),
+    let f = match parent {
+        Some((frame, _)) => compose::<N, A>(frame, &local),
+        None => local,
+    };
+    // Without a placement after the motion, the child origin lies on the joint axis (u = d z), so
+    // z × u = 0 and the axis is a column of the child frame. Otherwise (standard DH) the joint
+    // origin and axis follow from the parent frame and the constant `pre`.
+    let (z, z_u) = if matches!(body.post, Placement::Identity) {
+        (axis_of::<N, A>(&f.r, &body.motion.axis), None)
+    } else {
+        let (p_joint, z) = match parent {
+            Some((frame, _)) => (
+                apply_const_add::<N, A>(&frame.r, body.pre_frame.p, frame.p),
+                apply_const_add::<N, A>(&frame.r, body.axis_in_parent, [N::splat(0.0); 3]),
+            ),
+            None => (
+                body.pre_frame.p.map(N::splat),
+                body.axis_in_parent.map(N::splat),
+            ),
+        };
+        (z, Some(cross(z, sub(f.p, p_joint))))
     };
     let (p_parent, parent) = match parent {
         Some((frame, rates)) => (frame.p, *rates),
         None => ([N::splat(0.0); 3], Rates::zero()),
     };
     let m = &body.motion;
-    let (th_d, d_d) = (term_rate(&m.theta, q_dot), term_rate(&m.d, q_dot));
-    let u = sub(f.p, p_joint);
+    let th_d = term_rate(&m.theta, q_dot);
     let r = sub(f.p, p_parent);
-    let z_u = cross(z, u);
-    // eq. (2.120): velocity of the origin relative to the parent.
-    let v_rel = add(scale(d_d, z), scale(th_d, z_u));
+    // eq. (2.120): velocity of the origin relative to the parent; zero for a turning joint whose
+    // child origin lies on its axis.
+    let slides = matches!(m.d, Term::Var { .. });
+    let v_rel = match (z_u, slides) {
+        (Some(z_u), true) => Some(add(scale(term_rate(&m.d, q_dot), z), scale(th_d, z_u))),
+        (Some(z_u), false) => Some(scale(th_d, z_u)),
+        (None, true) => Some(scale(term_rate(&m.d, q_dot), z)),
+        (None, false) => None,
+    };
     let w_r = cross(parent.omega, r);
+    let v = add(parent.v, w_r);
     let mut out = Rates {
         omega: axpy::<N, A>(th_d, z, parent.omega),
-        v: add(add(parent.v, w_r), v_rel),
+        v: v_rel.map_or(v, |v_rel| add(v, v_rel)),
         alpha: [N::splat(0.0); 3],
         a: [N::splat(0.0); 3],
     };
     if ACC {
-        let (th_dd, d_dd) = (term_rate(&m.theta, q_ddot), term_rate(&m.d, q_ddot));
-        // eq. (2.125): d'' z + α_rel × u + ω_rel × (ω_rel × u), relative to the parent.
-        let a_rel = add(
-            add(scale(d_dd, z), scale(th_dd, z_u)),
-            scale(th_d * th_d, cross(z, z_u)),
+        let th_dd = term_rate(&m.theta, q_ddot);
+        let w_rel = scale(th_d, z);
+        out.alpha = cross_add::<N, A>(parent.omega, w_rel, axpy::<N, A>(th_dd, z, parent.alpha));
+        // eq. (2.75): tangential and normal terms of the parent's motion ...
+        let mut a = cross_add::<N, A>(
+            parent.alpha,
+            r,
+            cross_add::<N, A>(parent.omega, w_r, parent.a),
         );
-        out.alpha = add(
-            add(parent.alpha, scale(th_dd, z)),
-            cross(parent.omega, scale(th_d, z)),
-        );
-        // eq. (2.75): tangential, normal, Coriolis and local terms.
-        let tangential = cross(parent.alpha, r);
-        let normal = cross(parent.omega, w_r);
-        let coriolis = scale(N::splat(2.0), cross(parent.omega, v_rel));
-        out.a = add(add(parent.a, add(tangential, normal)), add(coriolis, a_rel));
+        // ... and the Coriolis and local terms when the origin moves relative to the parent
+        // (eq. 2.125: d'' z + α_rel × u + ω_rel × (ω_rel × u)).
+        if let Some(v_rel) = v_rel {
+            a = cross_add::<N, A>(parent.omega, scale(N::splat(2.0), v_rel), a);
+            if slides {
+                a = axpy::<N, A>(term_rate(&m.d, q_ddot), z, a);
+            }
+            if let Some(z_u) = z_u {
+                a = axpy::<N, A>(th_dd, z_u, a);
+                a = cross_add::<N, A>(w_rel, scale(th_d, z_u), a);
+            }
+        }
+        out.a = a;
     }
     (f, out)
 }

@@ -455,10 +455,21 @@ fn angle_units_tags_and_the_degrees_warning() {
         let chain = Chain::from_dh_yaml_str(&text).unwrap();
         // The joint's origin is Rx(alpha): its rotation's (2,1) entry is sin(alpha).
         let t = chain.description().joints()[0].origin;
-        (t.rotation()[(2, 1)].atan2(t.rotation()[(1, 1)]), chain.warnings().len())
+        (
+            t.rotation()[(2, 1)].atan2(t.rotation()[(1, 1)]),
+            chain.warnings().len(),
+        )
     };
     let right = std::f64::consts::FRAC_PI_2;
-    for (unit, value) in [("deg", "90"), ("deg", "!radians 1.5707963267948966"), ("deg", "deg(90)"), ("rad", "!degrees 90"), ("rad", "1.5707963267948966"), ("rad", "pi/2"), ("rad", "deg(90)")] {
+    for (unit, value) in [
+        ("deg", "90"),
+        ("deg", "!radians 1.5707963267948966"),
+        ("deg", "deg(90)"),
+        ("rad", "!degrees 90"),
+        ("rad", "1.5707963267948966"),
+        ("rad", "pi/2"),
+        ("rad", "deg(90)"),
+    ] {
         let (a, warnings) = alpha(unit, value);
         assert!((a - right).abs() < 1e-15, "{unit} {value}: {a}");
         assert_eq!(warnings, 0, "{unit} {value}");
@@ -467,9 +478,15 @@ fn angle_units_tags_and_the_degrees_warning() {
     assert_eq!(warnings, 1);
     let path = std::env::temp_dir().join(format!("kinechain-warn-{}.yaml", std::process::id()));
     std::fs::write(&path, "convention: standard\njoints:\n  - {name: j1, type: revolute, a: 0.1, alpha: 90, d: 0, theta: 0}\n").unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_kinechain")).args(["info", path.to_str().unwrap()]).output().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args(["info", path.to_str().unwrap()])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     let stderr = String::from_utf8(out.stderr).unwrap();
-    assert!(stderr.starts_with("warning: ") && stderr.contains("degrees"), "{stderr}");
+    assert!(
+        stderr.starts_with("warning: ") && stderr.contains("degrees"),
+        "{stderr}"
+    );
     std::fs::remove_file(&path).unwrap();
 }
