@@ -11,8 +11,27 @@ use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Multiply–add policy of a kernel instantiation.
 pub(crate) trait Arith: Copy {
+    /// Four `f64` handled as one vector, with this policy's multiply–add.
+    type Col: Col;
     /// `a * b + c`.
     fn mul_add(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// Four `f64` (a padded column of a rigid frame) in one vector. Every operation is the same,
+/// entry by entry and bit for bit, as the scalar operation of the owning [`Arith`].
+pub(crate) trait Col: Copy {
+    fn load(v: &[f64; 4]) -> Self;
+    /// `[v, 0]`.
+    fn from3(v: &[f64; 3]) -> Self;
+    /// The first three entries.
+    fn store3(self, out: &mut [f64; 3]);
+    fn splat(x: f64) -> Self;
+    /// Every entry set to entry `i` (`i < 4`, a constant after inlining).
+    fn broadcast(self, i: usize) -> Self;
+    /// `a * b + c`, entry by entry.
+    fn mul_add(a: Self, b: Self, c: Self) -> Self;
+    fn mul(a: Self, b: Self) -> Self;
+    fn neg(self) -> Self;
 }
 
 /// Two roundings: `a * b` then `+ c`.
@@ -20,6 +39,7 @@ pub(crate) trait Arith: Copy {
 pub(crate) struct Separate;
 
 impl Arith for Separate {
+    type Col = Portable<Separate>;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
         a * b + c
@@ -27,14 +47,129 @@ impl Arith for Separate {
 }
 
 /// One rounding (hardware FMA). Only instantiated inside functions compiled with the `fma`
-/// target feature.
+/// and `avx2` target features, or (tests) after [`isa`] has reported them.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Fused;
 
 impl Arith for Fused {
+    #[cfg(target_arch = "x86_64")]
+    type Col = Avx;
+    #[cfg(not(target_arch = "x86_64"))]
+    type Col = Portable<Fused>;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
         a.mul_add(b, c)
+    }
+}
+
+/// [`Col`] as an array, for any [`Arith`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable<A>([f64; 4], std::marker::PhantomData<A>);
+
+impl<A: Arith> Portable<A> {
+    #[inline(always)]
+    fn map(f: impl Fn(usize) -> f64) -> Self {
+        Portable(std::array::from_fn(f), std::marker::PhantomData)
+    }
+}
+
+impl<A: Arith> Col for Portable<A> {
+    #[inline(always)]
+    fn load(v: &[f64; 4]) -> Self {
+        Portable(*v, std::marker::PhantomData)
+    }
+    #[inline(always)]
+    fn from3(v: &[f64; 3]) -> Self {
+        Portable([v[0], v[1], v[2], 0.0], std::marker::PhantomData)
+    }
+    #[inline(always)]
+    fn store3(self, out: &mut [f64; 3]) {
+        out.copy_from_slice(&self.0[..3]);
+    }
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        Portable([x; 4], std::marker::PhantomData)
+    }
+    #[inline(always)]
+    fn broadcast(self, i: usize) -> Self {
+        Self::splat(self.0[i])
+    }
+    #[inline(always)]
+    fn mul_add(a: Self, b: Self, c: Self) -> Self {
+        Self::map(|k| A::mul_add(a.0[k], b.0[k], c.0[k]))
+    }
+    #[inline(always)]
+    fn mul(a: Self, b: Self) -> Self {
+        Self::map(|k| a.0[k] * b.0[k])
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::map(|k| -self.0[k])
+    }
+}
+
+/// [`Col`] in an AVX register, with FMA.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx(std::arch::x86_64::__m256d);
+
+// SAFETY (every `unsafe` block below): `Avx` is the column type of `Fused` only, and `Fused` runs
+// only where `isa()` has reported AVX2 and FMA (inside the `fma_dispatch!` functions, or in tests
+// guarded by that check); the pointer operations read and write through references of the
+// stated sizes.
+#[cfg(target_arch = "x86_64")]
+impl Col for Avx {
+    #[inline(always)]
+    fn load(v: &[f64; 4]) -> Self {
+        use std::arch::x86_64::_mm256_loadu_pd;
+        Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
+    }
+    #[inline(always)]
+    fn from3(v: &[f64; 3]) -> Self {
+        use std::arch::x86_64::_mm256_setr_pd;
+        Avx(unsafe { _mm256_setr_pd(v[0], v[1], v[2], 0.0) })
+    }
+    #[inline(always)]
+    fn store3(self, out: &mut [f64; 3]) {
+        use std::arch::x86_64::{
+            _mm_store_sd, _mm_storeu_pd, _mm256_castpd256_pd128, _mm256_extractf128_pd,
+        };
+        unsafe {
+            _mm_storeu_pd(out.as_mut_ptr(), _mm256_castpd256_pd128(self.0));
+            _mm_store_sd(out.as_mut_ptr().add(2), _mm256_extractf128_pd::<1>(self.0));
+        }
+    }
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        use std::arch::x86_64::_mm256_set1_pd;
+        Avx(unsafe { _mm256_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn broadcast(self, i: usize) -> Self {
+        use std::arch::x86_64::_mm256_permute4x64_pd as permute;
+        Avx(unsafe {
+            match i {
+                0 => permute::<0x00>(self.0),
+                1 => permute::<0x55>(self.0),
+                2 => permute::<0xAA>(self.0),
+                _ => permute::<0xFF>(self.0),
+            }
+        })
+    }
+    #[inline(always)]
+    fn mul_add(a: Self, b: Self, c: Self) -> Self {
+        use std::arch::x86_64::_mm256_fmadd_pd;
+        Avx(unsafe { _mm256_fmadd_pd(a.0, b.0, c.0) })
+    }
+    #[inline(always)]
+    fn mul(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_mul_pd;
+        Avx(unsafe { _mm256_mul_pd(a.0, b.0) })
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        use std::arch::x86_64::{_mm256_set1_pd, _mm256_xor_pd};
+        Avx(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
     }
 }
 

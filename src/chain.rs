@@ -478,6 +478,9 @@ pub(crate) struct Body {
     pub(crate) pre_frame: Transform,
     /// The joint axis in the parent body frame, `R_pre v`.
     pub(crate) axis_in_parent: [f64; 3],
+    /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::padded`].
+    pub(crate) pre4: crate::padded::Stored,
+    pub(crate) axis4: crate::padded::C4,
 }
 
 impl Body {
@@ -496,6 +499,8 @@ impl Body {
             motion,
             post,
             joint,
+            pre4: crate::padded::stored(&pre_frame),
+            axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             pre_frame,
             axis_in_parent,
         }

@@ -271,6 +271,33 @@ fn plane<N: Num, A: Arith>(r: &mut [[N; 3]; 3], i: usize, j: usize, s: N, c: N) 
     }
 }
 
+/// Columns of Rodrigues' rotation matrix (eq. 2.112) about the unit axis `v`, given
+/// `s = sin θ`, `c = cos θ`, as `A = c I + s [v]x + (1 − c) v vᵀ`.
+#[inline(always)]
+pub(crate) fn rodrigues<N: Num, A: Arith>(v: [f64; 3], s: N, c: N) -> [[N; 3]; 3] {
+    let w = N::splat(1.0) - c;
+    let [x, y, z] = v.map(N::splat);
+    let (wx, wy, wz) = (w * x, w * y, w * z);
+    let (sx, sy, sz) = (s * x, s * y, s * z);
+    [
+        [
+            N::mul_add::<A>(wx, x, c),
+            N::mul_add::<A>(wx, y, sz),
+            N::mul_add::<A>(wx, z, -sy),
+        ],
+        [
+            N::mul_add::<A>(wy, x, -sz),
+            N::mul_add::<A>(wy, y, c),
+            N::mul_add::<A>(wy, z, sx),
+        ],
+        [
+            N::mul_add::<A>(wz, x, sy),
+            N::mul_add::<A>(wz, y, -sx),
+            N::mul_add::<A>(wz, z, c),
+        ],
+    ]
+}
+
 /// Replaces the columns `r` by `r · A(axis, θ)` given `s = sin θ`, `c = cos θ` (eq. 2.112).
 #[inline(always)]
 fn rotate_columns<N: Num, A: Arith>(r: &mut [[N; 3]; 3], axis: &Axis, s: N, c: N) {
@@ -282,28 +309,7 @@ fn rotate_columns<N: Num, A: Arith>(r: &mut [[N; 3]; 3], axis: &Axis, s: N, c: N
         Axis::NegY => plane::<N, A>(r, 2, 0, -s, c),
         Axis::NegZ => plane::<N, A>(r, 0, 1, -s, c),
         Axis::General(v) => {
-            // Rodrigues (eq. 2.112) as A = c I + s [v]x + (1 − c) v vᵀ, by columns.
-            let w = N::splat(1.0) - c;
-            let [x, y, z] = v.map(N::splat);
-            let (wx, wy, wz) = (w * x, w * y, w * z);
-            let (sx, sy, sz) = (s * x, s * y, s * z);
-            let a = [
-                [
-                    N::mul_add::<A>(wx, x, c),
-                    N::mul_add::<A>(wx, y, sz),
-                    N::mul_add::<A>(wx, z, -sy),
-                ],
-                [
-                    N::mul_add::<A>(wy, x, -sz),
-                    N::mul_add::<A>(wy, y, c),
-                    N::mul_add::<A>(wy, z, sx),
-                ],
-                [
-                    N::mul_add::<A>(wz, x, sy),
-                    N::mul_add::<A>(wz, y, -sx),
-                    N::mul_add::<A>(wz, z, c),
-                ],
-            ];
+            let a = rodrigues::<N, A>(v, s, c);
             let old = *r;
             for (j, col) in r.iter_mut().enumerate() {
                 for (k, out) in col.iter_mut().enumerate() {
@@ -360,7 +366,7 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 
 /// Value of a θ or d term at `q`.
 #[inline(always)]
-fn term_value<N: Num, A: Arith>(t: &Term, q: &[N]) -> N {
+pub(crate) fn term_value<N: Num, A: Arith>(t: &Term, q: &[N]) -> N {
     match *t {
         Term::Const(v) => N::splat(v),
         Term::Var {

@@ -39,6 +39,7 @@ use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
 use crate::joint::{Motion, Term};
 use crate::kernel;
+use crate::padded::{self, Frame4};
 use crate::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
 
@@ -581,16 +582,16 @@ pub fn forward_accelerations<'a>(
 fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
     kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
     let frames = &mut data.world_from_body;
-    let mut f = kernel::Frame::splat(&Transform::IDENTITY);
+    let mut f = Frame4::<A::Col>::identity();
     for (k, body) in chain.bodies.iter().enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
         let parent = match body.parent {
             Some(p) if p + 1 == k => Some(f),
-            Some(p) => Some(frames[p]),
+            Some(p) => Some(Frame4::from_frame(&frames[p])),
             None => None,
         };
-        f = kernel::pose_step::<f64, A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
-        frames[k] = f;
+        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
+        f.store(&mut frames[k]);
     }
 }
 
@@ -612,19 +613,14 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         k = chain.bodies[b].parent;
     }
     let frames = &mut data.world_from_body;
-    let mut f = kernel::Frame::splat(&Transform::IDENTITY);
-    let mut previous = usize::MAX;
+    let mut f = Frame4::<A::Col>::identity();
     for &k in data.path.iter().rev() {
+        // The path starts at a body hanging from the world; each next body's parent is the
+        // previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
-        let local = kernel::local_frame::<f64, A>(body, q, (data.sin[k], data.cos[k]));
-        f = match body.parent {
-            // The previous body on the path is always the parent; it stays in registers.
-            Some(p) if p == previous => kernel::compose::<f64, A>(&f, &local),
-            Some(p) => kernel::compose::<f64, A>(&frames[p], &local),
-            None => local,
-        };
-        frames[k] = f;
-        previous = k;
+        let parent = body.parent.map(|_| f);
+        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
+        f.store(&mut frames[k]);
     }
 }
 
@@ -640,10 +636,12 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             || body.parent.is_some_and(|p| data.dirty[p]);
         data.dirty[k] = dirty;
         if dirty {
-            let frames = &data.world_from_body;
+            let parent = body
+                .parent
+                .map(|p| Frame4::<A::Col>::from_frame(&data.world_from_body[p]));
             let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
-            data.world_from_body[k] =
-                kernel::pose_step::<f64, A>(body.parent.map(|p| &frames[p]), body, q, sin_cos);
+            let f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
+            f.store(&mut data.world_from_body[k]);
         }
     }
 }

@@ -18,6 +18,7 @@ pub mod io;
 pub mod joint;
 mod kernel;
 pub mod kinematics;
+mod padded;
 #[cfg(feature = "reference")]
 pub mod reference;
 pub mod render;
