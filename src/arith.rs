@@ -31,7 +31,13 @@ pub(crate) trait Col: Copy {
     /// `a * b + c`, entry by entry.
     fn mul_add(a: Self, b: Self, c: Self) -> Self;
     fn mul(a: Self, b: Self) -> Self;
+    fn add(a: Self, b: Self) -> Self;
+    fn sub(a: Self, b: Self) -> Self;
     fn neg(self) -> Self;
+    /// Entries `[1, 2, 0, 3]` (for cross products).
+    fn yzx(self) -> Self;
+    /// Entries `[2, 0, 1, 3]`.
+    fn zxy(self) -> Self;
 }
 
 /// Two roundings: `a * b` then `+ c`.
@@ -103,8 +109,26 @@ impl<A: Arith> Col for Portable<A> {
         Self::map(|k| a.0[k] * b.0[k])
     }
     #[inline(always)]
+    fn add(a: Self, b: Self) -> Self {
+        Self::map(|k| a.0[k] + b.0[k])
+    }
+    #[inline(always)]
+    fn sub(a: Self, b: Self) -> Self {
+        Self::map(|k| a.0[k] - b.0[k])
+    }
+    #[inline(always)]
     fn neg(self) -> Self {
         Self::map(|k| -self.0[k])
+    }
+    #[inline(always)]
+    fn yzx(self) -> Self {
+        let v = self.0;
+        Portable([v[1], v[2], v[0], v[3]], std::marker::PhantomData)
+    }
+    #[inline(always)]
+    fn zxy(self) -> Self {
+        let v = self.0;
+        Portable([v[2], v[0], v[1], v[3]], std::marker::PhantomData)
     }
 }
 
@@ -167,9 +191,29 @@ impl Col for Avx {
         Avx(unsafe { _mm256_mul_pd(a.0, b.0) })
     }
     #[inline(always)]
+    fn add(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_add_pd;
+        Avx(unsafe { _mm256_add_pd(a.0, b.0) })
+    }
+    #[inline(always)]
+    fn sub(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_sub_pd;
+        Avx(unsafe { _mm256_sub_pd(a.0, b.0) })
+    }
+    #[inline(always)]
     fn neg(self) -> Self {
         use std::arch::x86_64::{_mm256_set1_pd, _mm256_xor_pd};
         Avx(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+    }
+    #[inline(always)]
+    fn yzx(self) -> Self {
+        use std::arch::x86_64::_mm256_permute4x64_pd;
+        Avx(unsafe { _mm256_permute4x64_pd::<0b11_00_10_01>(self.0) })
+    }
+    #[inline(always)]
+    fn zxy(self) -> Self {
+        use std::arch::x86_64::_mm256_permute4x64_pd;
+        Avx(unsafe { _mm256_permute4x64_pd::<0b11_01_00_10>(self.0) })
     }
 }
 

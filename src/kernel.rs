@@ -3,8 +3,9 @@
 //! with fused or separate multiply–add ([`Arith`]).
 //!
 //! One body (a moving joint with its constant placements folded in) is evaluated as
-//! `frame = parent · pre · M(θ, d) · post` (eq. 2.119 for `M`), and its rates by the recursion
-//! documented in [`crate::kinematics`].
+//! `frame = parent · pre · M(θ, d) · post` (eq. 2.119 for `M`). The batch kernels use these
+//! directly; single configurations use the same operations on padded columns
+//! ([`crate::padded`]), which also holds the rate recursion.
 
 // Index loops over lanes and rows are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
@@ -197,21 +198,6 @@ impl From<Frame<f64>> for crate::transform::Transform {
 
 pub(crate) type V3<N> = [N; 3];
 
-#[inline(always)]
-pub(crate) fn add<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-
-#[inline(always)]
-pub(crate) fn sub<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-#[inline(always)]
-pub(crate) fn scale<N: Num>(s: N, a: V3<N>) -> V3<N> {
-    [s * a[0], s * a[1], s * a[2]]
-}
-
 /// `s x + y`.
 #[inline(always)]
 pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
@@ -219,26 +205,6 @@ pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
         N::mul_add::<A>(s, x[0], y[0]),
         N::mul_add::<A>(s, x[1], y[1]),
         N::mul_add::<A>(s, x[2], y[2]),
-    ]
-}
-
-/// `a × b`.
-#[inline(always)]
-pub(crate) fn cross<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// `a × b + c` with multiply–adds.
-#[inline(always)]
-pub(crate) fn cross_add<N: Num, A: Arith>(a: V3<N>, b: V3<N>, c: V3<N>) -> V3<N> {
-    [
-        N::mul_add::<A>(a[1], b[2], N::mul_add::<A>(-a[2], b[1], c[0])),
-        N::mul_add::<A>(a[2], b[0], N::mul_add::<A>(-a[0], b[2], c[1])),
-        N::mul_add::<A>(a[0], b[1], N::mul_add::<A>(-a[1], b[0], c[2])),
     ]
 }
 
@@ -349,21 +315,6 @@ fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
     }
 }
 
-/// The joint axis in the world frame, from a frame whose rotation maps the joint frame's axis
-/// (the joint frame or, the rotation about the axis leaving it fixed, the frame after the motion).
-#[inline(always)]
-fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
-    match *axis {
-        Axis::X => r[0],
-        Axis::Y => r[1],
-        Axis::Z => r[2],
-        Axis::NegX => r[0].map(|x| -x),
-        Axis::NegY => r[1].map(|x| -x),
-        Axis::NegZ => r[2].map(|x| -x),
-        Axis::General(v) => apply_const_add::<N, A>(r, v, [N::splat(0.0); 3]),
-    }
-}
-
 /// Value of a θ or d term at `q`.
 #[inline(always)]
 pub(crate) fn term_value<N: Num, A: Arith>(t: &Term, q: &[N]) -> N {
@@ -374,15 +325,6 @@ pub(crate) fn term_value<N: Num, A: Arith>(t: &Term, q: &[N]) -> N {
             scale,
             offset,
         } => N::mul_add::<A>(N::splat(scale), q[index], N::splat(offset)),
-    }
-}
-
-/// Rate of a θ or d term given `q_dot` (or `q_ddot`).
-#[inline(always)]
-fn term_rate<N: Num>(t: &Term, rates: &[N]) -> N {
-    match *t {
-        Term::Const(_) => N::splat(0.0),
-        Term::Var { index, scale, .. } => N::splat(scale) * rates[index],
     }
 }
 
@@ -478,7 +420,7 @@ pub(crate) fn all_sin_cos<A: Arith>(
     }
 }
 
-/// Per-body motion state for the rate recursion.
+/// Per-body motion state of the rate recursion, as stored in [`crate::Data`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Rates<N> {
     pub(crate) omega: V3<N>,
@@ -498,92 +440,6 @@ impl<N: Num> Rates<N> {
             a: z,
         }
     }
-}
-
-/// Frame and rates of a body from its parent's (eqs. 2.120, 2.123–2.125 for the joint, 2.75 for
-/// the composition). With `ACC = false`, α and a are left untouched.
-#[inline(always)]
-pub(crate) fn rates_step<N: Num, A: Arith, const ACC: bool>(
-    parent: Option<(&Frame<N>, &Rates<N>)>,
-    body: &Body,
-    q: &[N],
-    q_dot: &[N],
-    q_ddot: &[N],
-    sin_cos: (N, N),
-) -> (Frame<N>, Rates<N>) {
-    // The same frame as `pose_step`, bit for bit.
-    let local = local_frame::<N, A>(body, q, sin_cos);
-    let f = match parent {
-        Some((frame, _)) => compose::<N, A>(frame, &local),
-        None => local,
-    };
-    // Without a placement after the motion, the child origin lies on the joint axis (u = d z), so
-    // z × u = 0 and the axis is a column of the child frame. Otherwise (standard DH) the joint
-    // origin and axis follow from the parent frame and the constant `pre`.
-    let (z, z_u) = if matches!(body.post, Placement::Identity) {
-        (axis_of::<N, A>(&f.r, &body.motion.axis), None)
-    } else {
-        let (p_joint, z) = match parent {
-            Some((frame, _)) => (
-                apply_const_add::<N, A>(&frame.r, body.pre_frame.p, frame.p),
-                apply_const_add::<N, A>(&frame.r, body.axis_in_parent, [N::splat(0.0); 3]),
-            ),
-            None => (
-                body.pre_frame.p.map(N::splat),
-                body.axis_in_parent.map(N::splat),
-            ),
-        };
-        (z, Some(cross(z, sub(f.p, p_joint))))
-    };
-    let (p_parent, parent) = match parent {
-        Some((frame, rates)) => (frame.p, *rates),
-        None => ([N::splat(0.0); 3], Rates::zero()),
-    };
-    let m = &body.motion;
-    let th_d = term_rate(&m.theta, q_dot);
-    let r = sub(f.p, p_parent);
-    // eq. (2.120): velocity of the origin relative to the parent; zero for a turning joint whose
-    // child origin lies on its axis.
-    let slides = matches!(m.d, Term::Var { .. });
-    let v_rel = match (z_u, slides) {
-        (Some(z_u), true) => Some(add(scale(term_rate(&m.d, q_dot), z), scale(th_d, z_u))),
-        (Some(z_u), false) => Some(scale(th_d, z_u)),
-        (None, true) => Some(scale(term_rate(&m.d, q_dot), z)),
-        (None, false) => None,
-    };
-    let w_r = cross(parent.omega, r);
-    let v = add(parent.v, w_r);
-    let mut out = Rates {
-        omega: axpy::<N, A>(th_d, z, parent.omega),
-        v: v_rel.map_or(v, |v_rel| add(v, v_rel)),
-        alpha: [N::splat(0.0); 3],
-        a: [N::splat(0.0); 3],
-    };
-    if ACC {
-        let th_dd = term_rate(&m.theta, q_ddot);
-        let w_rel = scale(th_d, z);
-        out.alpha = cross_add::<N, A>(parent.omega, w_rel, axpy::<N, A>(th_dd, z, parent.alpha));
-        // eq. (2.75): tangential and normal terms of the parent's motion ...
-        let mut a = cross_add::<N, A>(
-            parent.alpha,
-            r,
-            cross_add::<N, A>(parent.omega, w_r, parent.a),
-        );
-        // ... and the Coriolis and local terms when the origin moves relative to the parent
-        // (eq. 2.125: d'' z + α_rel × u + ω_rel × (ω_rel × u)).
-        if let Some(v_rel) = v_rel {
-            a = cross_add::<N, A>(parent.omega, scale(N::splat(2.0), v_rel), a);
-            if slides {
-                a = axpy::<N, A>(term_rate(&m.d, q_ddot), z, a);
-            }
-            if let Some(z_u) = z_u {
-                a = axpy::<N, A>(th_dd, z_u, a);
-                a = cross_add::<N, A>(w_rel, scale(th_d, z_u), a);
-            }
-        }
-        out.a = a;
-    }
-    (f, out)
 }
 
 #[cfg(test)]

@@ -39,7 +39,7 @@ use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
 use crate::joint::{Motion, Term};
 use crate::kernel;
-use crate::padded::{self, Frame4};
+use crate::padded::{self, Frame4, Rates4};
 use crate::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
 
@@ -655,17 +655,22 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_ddot: &[f64],
 ) {
     kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
-    let mut previous = (
-        kernel::Frame::splat(&Transform::IDENTITY),
-        kernel::Rates::zero(),
-    );
+    let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
     for (k, body) in chain.bodies.iter().enumerate() {
+        // The previous body's state stays in registers; only branches read a parent from memory.
+        let loaded;
         let parent = match body.parent {
-            Some(p) if p + 1 == k => Some((&previous.0, &previous.1)),
-            Some(p) => Some((&data.world_from_body[p], &data.rates[p])),
+            Some(p) if p + 1 == k => Some(&previous),
+            Some(p) => {
+                loaded = (
+                    Frame4::from_frame(&data.world_from_body[p]),
+                    Rates4::from_rates(&data.rates[p]),
+                );
+                Some(&loaded)
+            }
             None => None,
         };
-        previous = kernel::rates_step::<f64, A, ACC>(
+        previous = padded::rates_step::<A, ACC>(
             parent,
             body,
             q,
@@ -673,8 +678,8 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
             q_ddot,
             (data.sin[k], data.cos[k]),
         );
-        data.world_from_body[k] = previous.0;
-        data.rates[k] = previous.1;
+        previous.0.store(&mut data.world_from_body[k]);
+        previous.1.store::<ACC>(&mut data.rates[k]);
     }
 }
 

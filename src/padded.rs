@@ -1,15 +1,16 @@
-//! The single-configuration pose kernel on padded columns.
+//! The single-configuration kernels (poses, velocities, accelerations) on padded columns.
 //!
 //! A frame is held as four columns of four `f64` (the rotation columns and the origin, each with a
 //! zero fourth entry), so that a column fits one 256-bit register and composing two frames is
-//! twelve vector multiply–adds. Every entry goes through the same operations, in the same order,
-//! as in the generic kernel of [`crate::kernel`]: the results are the same bit for bit (the
-//! tests below check it), only the instructions differ.
+//! twelve vector multiply–adds. Every pose entry goes through the same operations, in the same
+//! order, as in the generic kernel of [`crate::kernel`] that the batch path runs: single and batch
+//! results are the same bit for bit (the tests below check it), only the instructions differ. The
+//! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
 use crate::chain::{Body, Placement};
 use crate::joint::{Axis, Term};
-use crate::kernel::{Frame, term_value};
+use crate::kernel::{Frame, Rates, term_value};
 use crate::transform::Transform;
 
 /// A column padded to four entries (the last one is zero), as stored.
@@ -187,6 +188,179 @@ pub(crate) fn pose_step<A: Arith>(
         Some(f) => compose(f, &local),
         None => local,
     }
+}
+
+/// Motion state of a body (see `kernel::Rates`) in vector registers.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rates4<C> {
+    pub(crate) omega: C,
+    pub(crate) v: C,
+    pub(crate) alpha: C,
+    pub(crate) a: C,
+}
+
+impl<C: Col> Rates4<C> {
+    #[inline(always)]
+    pub(crate) fn zero() -> Self {
+        let z = C::splat(0.0);
+        Rates4 {
+            omega: z,
+            v: z,
+            alpha: z,
+            a: z,
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn from_rates(r: &Rates<f64>) -> Self {
+        Rates4 {
+            omega: C::from3(&r.omega),
+            v: C::from3(&r.v),
+            alpha: C::from3(&r.alpha),
+            a: C::from3(&r.a),
+        }
+    }
+
+    /// Stores ω and v, and α and a when `ACC`.
+    #[inline(always)]
+    pub(crate) fn store<const ACC: bool>(self, out: &mut Rates<f64>) {
+        self.omega.store3(&mut out.omega);
+        self.v.store3(&mut out.v);
+        if ACC {
+            self.alpha.store3(&mut out.alpha);
+            self.a.store3(&mut out.a);
+        }
+    }
+}
+
+/// Frame and rates of a body.
+pub(crate) type State<C> = (Frame4<C>, Rates4<C>);
+
+/// `a × b` (the operations of `kernel::cross`).
+#[inline(always)]
+fn cross<C: Col>(a: C, b: C) -> C {
+    C::sub(C::mul(a.yzx(), b.zxy()), C::mul(a.zxy(), b.yzx()))
+}
+
+/// `a × b + c` (the operations of `kernel::cross_add`).
+#[inline(always)]
+fn cross_add<C: Col>(a: C, b: C, c: C) -> C {
+    C::mul_add(a.yzx(), b.zxy(), C::mul_add(a.zxy().neg(), b.yzx(), c))
+}
+
+/// `s x + y`.
+#[inline(always)]
+fn axpy<C: Col>(s: f64, x: C, y: C) -> C {
+    C::mul_add(C::splat(s), x, y)
+}
+
+/// `s x`.
+#[inline(always)]
+fn scale<C: Col>(s: f64, x: C) -> C {
+    C::mul(C::splat(s), x)
+}
+
+/// The joint axis in the world frame from a frame whose rotation maps the joint's axis.
+#[inline(always)]
+fn axis_of<C: Col>(f: &[C; 4], axis: &Axis) -> C {
+    match *axis {
+        Axis::X => f[0],
+        Axis::Y => f[1],
+        Axis::Z => f[2],
+        Axis::NegX => f[0].neg(),
+        Axis::NegY => f[1].neg(),
+        Axis::NegZ => f[2].neg(),
+        Axis::General(v) => combine_const(f, v, C::splat(0.0)),
+    }
+}
+
+/// Rate of a θ or d term given `q_dot` (or `q_ddot`).
+#[inline(always)]
+fn term_rate(t: &Term, rates: &[f64]) -> f64 {
+    match *t {
+        Term::Const(_) => 0.0,
+        Term::Var { index, scale, .. } => scale * rates[index],
+    }
+}
+
+/// Frame and rates of a body from its parent's (eqs. 2.120, 2.123–2.125 for the joint, 2.75 for
+/// the composition). With `ACC = false`, α and a are zero.
+#[inline(always)]
+pub(crate) fn rates_step<A: Arith, const ACC: bool>(
+    parent: Option<&State<A::Col>>,
+    body: &Body,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+    sin_cos: (f64, f64),
+) -> State<A::Col> {
+    type C<A> = <A as Arith>::Col;
+    let zero = C::<A>::splat(0.0);
+    // The same frame as `pose_step`, bit for bit.
+    let f = pose_step::<A>(parent.map(|(frame, _)| frame), body, q, sin_cos);
+    // Without a placement after the motion, the child origin lies on the joint axis (u = d z), so
+    // z × u = 0 and the axis is a column of the child frame. Otherwise (standard DH) the joint
+    // origin and axis follow from the parent frame and the constant `pre`.
+    let (z, z_u) = if matches!(body.post, Placement::Identity) {
+        (axis_of(&f.0, &body.motion.axis), None)
+    } else {
+        let (p_joint, z) = match parent {
+            Some((frame, _)) => (
+                combine_const(&frame.0, body.pre_frame.p, frame.0[3]),
+                combine_const(&frame.0, body.axis_in_parent, zero),
+            ),
+            None => (C::<A>::load(&body.pre4[3]), C::<A>::load(&body.axis4)),
+        };
+        (z, Some(cross(z, C::<A>::sub(f.0[3], p_joint))))
+    };
+    let (p_parent, parent) = match parent {
+        Some((frame, rates)) => (frame.0[3], *rates),
+        None => (zero, Rates4::zero()),
+    };
+    let m = &body.motion;
+    let th_d = term_rate(&m.theta, q_dot);
+    let r = C::<A>::sub(f.0[3], p_parent);
+    // eq. (2.120): velocity of the origin relative to the parent; zero for a turning joint whose
+    // child origin lies on its axis.
+    let slides = matches!(m.d, Term::Var { .. });
+    let v_rel = match (z_u, slides) {
+        (Some(z_u), true) => Some(C::<A>::add(
+            scale(term_rate(&m.d, q_dot), z),
+            scale(th_d, z_u),
+        )),
+        (Some(z_u), false) => Some(scale(th_d, z_u)),
+        (None, true) => Some(scale(term_rate(&m.d, q_dot), z)),
+        (None, false) => None,
+    };
+    let w_r = cross(parent.omega, r);
+    let v = C::<A>::add(parent.v, w_r);
+    let mut out = Rates4 {
+        omega: axpy(th_d, z, parent.omega),
+        v: v_rel.map_or(v, |v_rel| C::<A>::add(v, v_rel)),
+        alpha: zero,
+        a: zero,
+    };
+    if ACC {
+        let th_dd = term_rate(&m.theta, q_ddot);
+        let w_rel = scale(th_d, z);
+        out.alpha = cross_add(parent.omega, w_rel, axpy(th_dd, z, parent.alpha));
+        // eq. (2.75): tangential and normal terms of the parent's motion ...
+        let mut a = cross_add(parent.alpha, r, cross_add(parent.omega, w_r, parent.a));
+        // ... and the Coriolis and local terms when the origin moves relative to the parent
+        // (eq. 2.125: d'' z + α_rel × u + ω_rel × (ω_rel × u)).
+        if let Some(v_rel) = v_rel {
+            a = cross_add(parent.omega, scale(2.0, v_rel), a);
+            if slides {
+                a = axpy(term_rate(&m.d, q_ddot), z, a);
+            }
+            if let Some(z_u) = z_u {
+                a = axpy(th_dd, z_u, a);
+                a = cross_add(w_rel, scale(th_d, z_u), a);
+            }
+        }
+        out.a = a;
+    }
+    (f, out)
 }
 
 #[cfg(test)]
