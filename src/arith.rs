@@ -243,24 +243,17 @@ impl Isa {
 
 static DETECTED: AtomicU8 = AtomicU8::new(0);
 static FORCED: AtomicU8 = AtomicU8::new(0);
+/// `min(FORCED, DETECTED)`, or 0 until first computed (read on every kernel call).
+static LEVEL: AtomicU8 = AtomicU8::new(0);
 
 /// The instruction set the kernels use on this machine (detected once), unless lowered with
 /// [`force_isa`].
 #[must_use]
+#[inline]
 pub fn isa() -> Isa {
-    let forced = FORCED.load(Ordering::Relaxed);
-    let detected = match DETECTED.load(Ordering::Relaxed) {
-        0 => {
-            let d = detect() as u8;
-            DETECTED.store(d, Ordering::Relaxed);
-            d
-        }
-        d => d,
-    };
-    let level = if forced != 0 {
-        forced.min(detected)
-    } else {
-        detected
+    let level = match LEVEL.load(Ordering::Relaxed) {
+        0 => update_level(),
+        level => level,
     };
     match level {
         3 => Isa::Avx512,
@@ -269,10 +262,28 @@ pub fn isa() -> Isa {
     }
 }
 
+fn update_level() -> u8 {
+    let detected = match DETECTED.load(Ordering::Relaxed) {
+        0 => {
+            let d = detect() as u8;
+            DETECTED.store(d, Ordering::Relaxed);
+            d
+        }
+        d => d,
+    };
+    let level = match FORCED.load(Ordering::Relaxed) {
+        0 => detected,
+        forced => forced.min(detected),
+    };
+    LEVEL.store(level, Ordering::Relaxed);
+    level
+}
+
 /// Makes the kernels use at most `isa` (for comparing paths in tests and benchmarks); `None`
 /// restores detection. A request above what the CPU supports is lowered to what it supports.
 pub fn force_isa(isa: Option<Isa>) {
     FORCED.store(isa.map_or(0, |i| i as u8), Ordering::Relaxed);
+    update_level();
 }
 
 fn detect() -> Isa {

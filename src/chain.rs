@@ -541,6 +541,8 @@ pub struct Chain {
     pub(crate) bodies: Vec<Body>,
     /// θ of the bodies, [`LANES`](crate::kernel::LANES) at a time.
     pub(crate) theta_gather: Vec<ThetaGather>,
+    /// For each entry of `q`, the first body whose θ or d reads it (`usize::MAX` if none).
+    pub(crate) first_body_of_variable: Vec<usize>,
     /// For each entry of `q`: (joint, component name for cylindrical joints).
     variables: Vec<(usize, Option<&'static str>)>,
     pub(crate) limit_checks: Vec<LimitCheck>,
@@ -1097,6 +1099,14 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         .iter()
         .enumerate()
         .all(|(k, b)| b.parent == k.checked_sub(1));
+    let mut first_body_of_variable = vec![usize::MAX; variables.len()];
+    for (k, b) in bodies.iter().enumerate() {
+        for t in [b.motion.theta, b.motion.d] {
+            if let Term::Var { index, .. } = t {
+                first_body_of_variable[index] = first_body_of_variable[index].min(k);
+            }
+        }
+    }
     let theta_gather = bodies
         .chunks(crate::kernel::LANES)
         .map(|chunk| {
@@ -1172,6 +1182,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         links,
         bodies,
         theta_gather,
+        first_body_of_variable,
         variables,
         limit_checks,
         serial,

@@ -401,8 +401,7 @@ pub(crate) fn check_values(
             got: values.len(),
         });
     }
-    // Fast path: one vectorisable pass; the position is looked for only when something is wrong.
-    if values.iter().fold(true, |ok, x| ok & x.is_finite()) {
+    if values.iter().all(|x| x.is_finite()) {
         return Ok(());
     }
     if let Some(index) = values.iter().position(|x| !x.is_finite()) {
@@ -626,23 +625,41 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
 
 #[inline(always)]
 fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
+    // Bodies come parents first, so none before the first body reading a changed entry moves.
+    let mut first = usize::MAX;
+    for ((x, last), &body) in q
+        .iter()
+        .zip(&data.last_q)
+        .zip(&chain.first_body_of_variable)
+    {
+        if x.to_bits() != last.to_bits() {
+            first = first.min(body);
+        }
+    }
     let changed = |t: &Term| match *t {
         Term::Var { index, .. } => q[index].to_bits() != data.last_q[index].to_bits(),
         Term::Const(_) => false,
     };
-    for (k, body) in chain.bodies.iter().enumerate() {
-        let dirty = changed(&body.motion.theta)
-            || changed(&body.motion.d)
-            || body.parent.is_some_and(|p| data.dirty[p]);
+    let frames = &mut data.world_from_body;
+    let mut f = Frame4::<A::Col>::identity();
+    let mut previous_done = false;
+    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
+        let dirty = body.parent.is_some_and(|p| p >= first && data.dirty[p])
+            || changed(&body.motion.theta)
+            || changed(&body.motion.d);
         data.dirty[k] = dirty;
         if dirty {
-            let parent = body
-                .parent
-                .map(|p| Frame4::<A::Col>::from_frame(&data.world_from_body[p]));
+            // The frame just computed stays in registers when it is the parent's.
+            let parent = match body.parent {
+                Some(p) if p + 1 == k && previous_done => Some(f),
+                Some(p) => Some(Frame4::from_frame(&frames[p])),
+                None => None,
+            };
             let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
-            let f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
-            f.store(&mut data.world_from_body[k]);
+            f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
+            f.store(&mut frames[k]);
         }
+        previous_done = dirty;
     }
 }
 
