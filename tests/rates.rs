@@ -385,7 +385,12 @@ fn vel_of(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    // A fixed seed: the same cases on every run.
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x7261_7465),
+        ..ProptestConfig::default()
+    })]
 
     /// v and ω are linear in q̇; with q̇ = 0, α and a are linear in q̈; the base is at rest.
     #[test]
