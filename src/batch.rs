@@ -10,7 +10,7 @@ use crate::chain::{Chain, LinkId, Placement};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::kernel::{self, Frame, LANES, Lanes, Num};
-use crate::kinematics::check_q;
+use crate::kinematics::{all_valid, check_q};
 use crate::transform::Transform;
 use rayon::prelude::*;
 
@@ -80,18 +80,29 @@ impl BatchData {
         let check = |(index, q): (usize, &[f64])| {
             check_q(chain, q, policy).map_err(|source| BatchError { index, source })
         };
-        if parallel {
-            // The first bad configuration, as the sequential check would report it.
-            if let Some(bad) = qs
-                .par_chunks_exact(dof)
-                .enumerate()
-                .with_min_len(64)
-                .find_first(|&(i, q)| check((i, q)).is_err())
-            {
+        // One pass over the whole buffer; configurations are checked one by one (to name the
+        // first bad one) only when it finds something wrong.
+        let valid = if parallel {
+            qs.par_chunks(dof * 1024)
+                .all(|part| all_valid(chain, part, policy))
+        } else {
+            all_valid(chain, qs, policy)
+        };
+        if !valid {
+            // The first bad configuration, in order even when searched in parallel.
+            let bad = if parallel {
+                qs.par_chunks_exact(dof)
+                    .enumerate()
+                    .with_min_len(64)
+                    .find_first(|&(i, q)| check((i, q)).is_err())
+            } else {
+                qs.chunks_exact(dof)
+                    .enumerate()
+                    .find(|&(i, q)| check((i, q)).is_err())
+            };
+            if let Some(bad) = bad {
                 check(bad)?;
             }
-        } else {
-            qs.chunks_exact(dof).enumerate().try_for_each(check)?;
         }
         let chunks = n.div_ceil(LANES);
         let zero = Frame::splat(&Transform::IDENTITY);

@@ -417,6 +417,22 @@ pub(crate) fn check_values(
     Ok(())
 }
 
+/// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
+/// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for a
+/// whole batch in one vectorisable pass.
+pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool {
+    if !qs.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return false;
+    }
+    policy == LimitPolicy::Ignore
+        || qs.chunks_exact(chain.dof()).all(|q| {
+            chain
+                .limit_checks
+                .iter()
+                .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
+        })
+}
+
 /// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
 ///
 /// # Errors

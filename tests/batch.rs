@@ -75,4 +75,20 @@ fn batch_errors_name_the_configuration() {
             .unwrap()
             .is_empty()
     );
+    // Many configurations (checked in parts, in parallel): the first bad one is named, by both
+    // entry points, whatever part it falls in.
+    let mut qs = vec![0.0; 6 * 5000];
+    qs[6 * 4500 + 1] = f64::INFINITY;
+    qs[6 * 3001 + 4] = -10.0;
+    for e in [
+        forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err(),
+        forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap_err(),
+    ] {
+        assert_eq!(e.index, 3001);
+        assert!(matches!(e.source, StateError::OutOfLimits { .. }));
+    }
+    batch.set_limit_policy(LimitPolicy::Ignore);
+    let e = forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap_err();
+    assert_eq!(e.index, 4500);
+    assert!(matches!(e.source, StateError::NonFinite { index: 1, .. }));
 }
