@@ -108,8 +108,11 @@ fn mat_vec_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: &V3<N>, p: V3<N>) -> V3<N> 
 pub(crate) const LANES: usize = 8;
 
 /// [`LANES`] values, one per configuration; arithmetic is lane-wise.
+/// Aligned to its size, so that a lane vector never straddles two cache lines (a load that
+/// does cannot be forwarded from the store before it, and spilled frames are stored and reloaded
+/// once per joint).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(transparent)]
+#[repr(C, align(64))]
 pub(crate) struct Lanes(pub(crate) [f64; LANES]);
 
 macro_rules! lanewise {
