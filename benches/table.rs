@@ -175,15 +175,9 @@ fn rows_for(path: &Path) -> Vec<Row> {
                 robot
                     .iter_joints()
                     .map(|j| {
-                        let ours = chain.joint(chain.joint_id(&j.name).unwrap());
-                        match (ours.q_index(), ours.mimic()) {
-                            (Some(i), _) => q[i],
-                            (None, Some(m)) => {
-                                m.multiplier * q[chain.joint(m.primary).q_index().unwrap()]
-                                    + m.offset
-                            }
-                            _ => 0.0,
-                        }
+                        chain
+                            .joint_position(chain.joint_id(&j.name).unwrap(), q)
+                            .unwrap_or(0.0)
                     })
                     .collect()
             })

@@ -675,6 +675,48 @@ impl Chain {
         self.variables[index]
     }
 
+    /// `(index, multiplier, offset)` of a joint's own coordinate(s) in `q`: its own entries, or
+    /// its primary's for a mimic joint; `None` for a fixed joint.
+    fn coordinate_source(&self, joint: JointId) -> Option<(usize, f64, f64)> {
+        let j = &self.joints[joint.0];
+        match (j.q_index, j.mimic) {
+            (Some(i), _) => Some((i, 1.0, 0.0)),
+            (None, Some(m)) => self.joints[m.primary.0]
+                .q_index
+                .map(|i| (i, m.multiplier, m.offset)),
+            (None, None) => None,
+        }
+    }
+
+    /// The position of a joint at `q`, as URDF tools count it: its entry of `q` (θ for a
+    /// cylindrical joint) or, for a mimic joint, `multiplier · q_primary + offset`. `None` for a
+    /// fixed joint, or when `q` is too short.
+    ///
+    /// # Panics
+    /// If `joint` comes from another chain with more joints.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{ChainBuilder, JointKind, JointSpec};
+    /// let mut b = ChainBuilder::new("gripper");
+    /// b.link("palm").link("left").link("right").link("tip");
+    /// b.joint(JointSpec::new("left", JointKind::Prismatic, "palm", "left"));
+    /// b.joint(JointSpec::new("right", JointKind::Prismatic, "palm", "right").with_mimic("left", -2.0, 0.01));
+    /// b.joint(JointSpec::new("tip", JointKind::Fixed, "left", "tip"));
+    /// let chain = b.build()?;
+    /// let q = [0.02];
+    /// assert_eq!(chain.joint_position(chain.joint_id("left")?, &q), Some(0.02));
+    /// assert_eq!(chain.joint_position(chain.joint_id("right")?, &q), Some(-2.0 * 0.02 + 0.01));
+    /// assert_eq!(chain.joint_position(chain.joint_id("tip")?, &q), None);
+    /// assert_eq!(chain.joint_position(chain.joint_id("left")?, &[]), None);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn joint_position(&self, joint: JointId, q: &[f64]) -> Option<f64> {
+        let (i, multiplier, offset) = self.coordinate_source(joint)?;
+        q.get(i).map(|x| multiplier * x + offset)
+    }
+
     /// θ, d and their rates for one joint at `(q, q_dot, q_ddot)`, from which its relative 4×4
     /// transform and derivatives follow (eqs. 2.119, 2.122, 2.127). A fixed joint has constant θ
     /// and d; a mimic joint follows its primary.
@@ -701,14 +743,7 @@ impl Chain {
             }
         }
         let j = &self.joints[joint.0];
-        // (index, multiplier, offset) of the joint's own coordinate(s).
-        let source = match (j.q_index, j.mimic) {
-            (Some(i), _) => Some((i, 1.0, 0.0)),
-            (None, Some(m)) => self.joints[m.primary.0]
-                .q_index
-                .map(|i| (i, m.multiplier, m.offset)),
-            (None, None) => None,
-        };
+        let source = self.coordinate_source(joint);
         let coordinate = |k: usize| match source {
             Some((i, m, o)) => (m * q[i + k] + o, m * q_dot[i + k], m * q_ddot[i + k]),
             None => (0.0, 0.0, 0.0),

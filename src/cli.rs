@@ -1151,18 +1151,11 @@ fn k_time(path: &std::path::Path, chain: &Chain, qs: &[Vec<f64>]) -> Option<f64>
             robot
                 .iter_joints()
                 .map(|j| {
-                    let Ok(id) = chain.joint_id(&j.name) else {
-                        return 0.0;
-                    };
-                    let ours = chain.joint(id);
-                    match (ours.q_index(), ours.mimic()) {
-                        (Some(i), _) => q[i],
-                        (None, Some(m)) => chain
-                            .joint(m.primary)
-                            .q_index()
-                            .map_or(0.0, |i| m.multiplier * q[i] + m.offset),
-                        _ => 0.0,
-                    }
+                    chain
+                        .joint_id(&j.name)
+                        .ok()
+                        .and_then(|id| chain.joint_position(id, q))
+                        .unwrap_or(0.0)
                 })
                 .collect()
         })

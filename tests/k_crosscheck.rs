@@ -30,15 +30,9 @@ fn k_positions(chain: &Chain, robot: &k::Chain<f64>, q: &[f64]) -> Vec<f64> {
     robot
         .iter_joints()
         .map(|j| {
-            let ours = chain.joint(chain.joint_id(&j.name).unwrap());
-            match (ours.q_index(), ours.mimic()) {
-                (Some(i), _) => q[i],
-                (None, Some(m)) => {
-                    let primary = chain.joint(m.primary).q_index().unwrap();
-                    m.multiplier * q[primary] + m.offset
-                }
-                (None, None) => panic!("{} is movable in k but fixed here", j.name),
-            }
+            chain
+                .joint_position(chain.joint_id(&j.name).unwrap(), q)
+                .unwrap_or_else(|| panic!("{} is movable in k but fixed here", j.name))
         })
         .collect()
 }

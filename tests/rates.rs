@@ -472,32 +472,19 @@ fn end_link_twist_equals_k_jacobian_times_q_dot() {
                 };
                 let arm = k::SerialChain::from_end(node);
                 // k's joint vector along the path, from our q (mimic joints follow their primary).
-                let value = |name: &str, v: &[f64]| {
-                    let j = chain.joint(chain.joint_id(name).unwrap());
-                    match (j.q_index(), j.mimic()) {
-                        (Some(i), _) => (v[i], 1.0),
-                        (None, Some(m)) => {
-                            let i = chain.joint(m.primary).q_index().unwrap();
-                            (v[i], m.multiplier)
-                        }
-                        _ => unreachable!(),
-                    }
-                };
-                let positions: Vec<f64> = arm
+                let ids: Vec<_> = arm
                     .iter_joints()
-                    .map(|j| {
-                        let jj = chain.joint(chain.joint_id(&j.name).unwrap());
-                        match jj.mimic() {
-                            Some(m) => m.multiplier * value(&j.name, &q).0 + m.offset,
-                            None => value(&j.name, &q).0,
-                        }
-                    })
+                    .map(|j| chain.joint_id(&j.name).unwrap())
                     .collect();
-                let rates: Vec<f64> = arm
-                    .iter_joints()
-                    .map(|j| {
-                        let (v, m) = value(&j.name, &qd);
-                        m * v
+                let positions: Vec<f64> = ids
+                    .iter()
+                    .map(|&id| chain.joint_position(id, &q).unwrap())
+                    .collect();
+                let rates: Vec<f64> = ids
+                    .iter()
+                    .map(|&id| {
+                        let s = chain.joint_screw(id, &q, &qd, &qd).unwrap();
+                        s.theta_dot + s.d_dot
                     })
                     .collect();
                 arm.set_joint_positions(&positions).unwrap();
