@@ -5,40 +5,13 @@
 //! `cargo bench --bench table`.
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use kinechain::measure::configurations;
 use kinechain::{
     Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
 };
 use std::hint::black_box;
 use std::path::Path;
-
-/// Deterministic configurations (no RNG dependency in the timed loop).
-fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut state = seed;
-    let mut next = move || {
-        // SplitMix64.
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..n)
-        .map(|_| {
-            let mut q = vec![0.0; chain.dof()];
-            for j in chain.joints() {
-                let Some(first) = j.q_index() else { continue };
-                for (k, l) in j.limits().iter().enumerate() {
-                    let (lo, hi) = l.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| {
-                        (l.lower, l.upper)
-                    });
-                    q[first + k] = lo + (hi - lo) * next();
-                }
-            }
-            q
-        })
-        .collect()
-}
 
 fn robots() -> Vec<(&'static str, &'static str)> {
     vec![

@@ -18,32 +18,10 @@ use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Instant;
 
 /// Median over seven runs of the time of `f` per call, in ns; each run lasts at least 100 ms.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let mut calls = 1u64;
-    loop {
-        let t = Instant::now();
-        for _ in 0..calls {
-            f();
-        }
-        if t.elapsed().as_millis() >= 100 {
-            break;
-        }
-        calls *= 2;
-    }
-    let mut runs: Vec<f64> = (0..7)
-        .map(|_| {
-            let t = Instant::now();
-            for _ in 0..calls {
-                f();
-            }
-            t.elapsed().as_nanos() as f64 / calls as f64
-        })
-        .collect();
-    runs.sort_by(f64::total_cmp);
-    runs[3]
+fn time_per_call(f: impl FnMut()) -> f64 {
+    kinechain::measure::time_per_call(std::time::Duration::from_millis(100), 7, f)
 }
 
 struct Row {

@@ -10,33 +10,9 @@ use kinechain::batch::{BatchData, forward_kinematics_batch_par};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let chain = Chain::from_file("robots/panda_mdh.yaml")?;
     let tcp = chain.link_id("tcp")?;
-    let limits: Vec<(f64, f64)> = chain
-        .joints()
-        .iter()
-        .filter(|j| j.dof() == 1)
-        .map(|j| {
-            j.limits()[0].map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| {
-                (l.lower, l.upper)
-            })
-        })
-        .collect();
     let n = 1_000_000;
-    // A small deterministic generator (xorshift) keeps the example free of dependencies.
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut unit = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    let qs: Vec<f64> = (0..n)
-        .flat_map(|_| {
-            limits
-                .iter()
-                .map(|(lo, hi)| lo + (hi - lo) * unit())
-                .collect::<Vec<_>>()
-        })
-        .collect();
+    // Uniform within the joint limits, seeded (row-major: one configuration after another).
+    let qs: Vec<f64> = kinechain::measure::configurations(&chain, n, 7).concat();
     // Chunks of a few thousand configurations: the poses of each chunk are read while they are
     // still in cache, and the buffers are reused (all million at once would take ~0.7 GB).
     let chunk = 8192 * chain.dof();

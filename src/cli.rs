@@ -892,64 +892,9 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
     })
 }
 
-/// A deterministic generator (SplitMix64) for benchmark configurations.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// Configurations within the joint limits (±π where a joint has none).
-fn random_configurations(chain: &Chain, n: usize) -> Vec<Vec<f64>> {
-    let mut rng = SplitMix(0x6b69_6e65);
-    (0..n)
-        .map(|_| {
-            let mut q = vec![0.0; chain.dof()];
-            for j in chain.joints() {
-                let Some(first) = j.q_index() else { continue };
-                for (k, l) in j.limits().iter().enumerate() {
-                    let (lo, hi) = match l {
-                        Some(l) if l.lower.is_finite() && l.upper.is_finite() => (l.lower, l.upper),
-                        _ => (-std::f64::consts::PI, std::f64::consts::PI),
-                    };
-                    q[first + k] = lo + (hi - lo) * rng.unit();
-                }
-            }
-            q
-        })
-        .collect()
-}
-
 /// Median over five runs of the time per call of `f`, each run lasting at least 20 ms.
-fn time_per_call(mut f: impl FnMut()) -> f64 {
-    let mut calls = 1u64;
-    loop {
-        let t = std::time::Instant::now();
-        for _ in 0..calls {
-            f();
-        }
-        if t.elapsed().as_millis() >= 20 {
-            break;
-        }
-        calls *= 2;
-    }
-    let mut runs: Vec<f64> = (0..5)
-        .map(|_| {
-            let t = std::time::Instant::now();
-            for _ in 0..calls {
-                f();
-            }
-            t.elapsed().as_nanos() as f64 / calls as f64
-        })
-        .collect();
-    runs.sort_by(f64::total_cmp);
-    runs[2]
+fn time_per_call(f: impl FnMut()) -> f64 {
+    crate::measure::time_per_call(std::time::Duration::from_millis(20), 5, f)
 }
 
 fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<(), CliError> {
@@ -958,7 +903,7 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
     use std::hint::black_box;
 
     let chain = load(path)?;
-    let qs = random_configurations(&chain, n);
+    let qs = crate::measure::configurations(&chain, n, 0x6b69_6e65);
     let qd: Vec<Vec<f64>> = qs
         .iter()
         .map(|q| q.iter().map(|x| 0.5 * x.sin()).collect())

@@ -18,6 +18,7 @@ pub mod io;
 pub mod joint;
 mod kernel;
 pub mod kinematics;
+pub mod measure;
 mod padded;
 #[cfg(feature = "reference")]
 pub mod reference;
