@@ -930,18 +930,19 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
     let per = |ns: f64| ns / qs.len() as f64;
     match level {
         Level::Pose => {
-            rows.push((
-                "kinechain, all links".into(),
+            // Every link of every configuration (also timed on the baseline path below).
+            let all_links = |data: &mut Data| {
                 per(time_per_call(|| {
                     for q in &qs {
                         black_box(
-                            forward_kinematics(&chain, &mut data, black_box(q))
+                            forward_kinematics(&chain, data, black_box(q))
                                 .ok()
                                 .map(|p| p.world_from_link(end)),
                         );
                     }
-                })),
-            ));
+                }))
+            };
+            rows.push(("kinechain, all links".into(), all_links(&mut data)));
             rows.push((
                 format!("kinechain, end link {} only", chain.link(end).name()),
                 per(time_per_call(|| {
@@ -1000,15 +1001,7 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
             crate::force_isa(Some(crate::Isa::Baseline));
             rows.push((
                 "kinechain, baseline x86-64 path".into(),
-                per(time_per_call(|| {
-                    for q in &qs {
-                        black_box(
-                            forward_kinematics(&chain, &mut data, black_box(q))
-                                .ok()
-                                .map(|p| p.world_from_link(end)),
-                        );
-                    }
-                })),
+                all_links(&mut data),
             ));
             crate::force_isa(None);
             if let Some(ns) = k_time(path, &chain, &qs) {

@@ -8,22 +8,6 @@ mod common;
 
 use common::*;
 use kinechain::{Chain, Data, forward_kinematics};
-use std::path::PathBuf;
-
-fn urdf_files() -> Vec<PathBuf> {
-    let mut files = vec![robots_dir().join("panda.urdf")];
-    for kind in ["urdf", "dh", "axis", "stress"] {
-        let dir = reference_dir().join(kind);
-        let mut more: Vec<PathBuf> = std::fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "urdf"))
-            .collect();
-        more.sort();
-        files.extend(more);
-    }
-    files
-}
 
 /// `k`'s joint vector for our `q`: each movable `k` joint by name.
 fn k_positions(chain: &Chain, robot: &k::Chain<f64>, q: &[f64]) -> Vec<f64> {
@@ -40,7 +24,7 @@ fn k_positions(chain: &Chain, robot: &k::Chain<f64>, q: &[f64]) -> Vec<f64> {
 #[test]
 fn link_poses_agree_with_k() {
     let mut robots_checked = 0;
-    for path in urdf_files() {
+    for path in k_urdf_files() {
         let chain = Chain::from_file(&path).unwrap();
         let robot = k::Chain::<f64>::from_urdf_file(&path)
             .unwrap_or_else(|e| panic!("k cannot load {}: {e}", path.display()));

@@ -13,13 +13,7 @@ use kinechain::{
 use proptest::prelude::*;
 
 fn robots() -> Vec<(String, Chain)> {
-    let mut files: Vec<_> = std::fs::read_dir(robots_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .collect();
-    files.sort();
-    files
+    robot_files()
         .into_iter()
         .map(|p| {
             let name = p.file_name().unwrap().to_string_lossy().into_owned();
@@ -442,16 +436,7 @@ proptest! {
 /// The twist of every leaf link equals `k`'s Jacobian times q̇ (1e-12), for every URDF `k` loads.
 #[test]
 fn end_link_twist_equals_k_jacobian_times_q_dot() {
-    let mut files = vec![robots_dir().join("panda.urdf")];
-    for kind in ["urdf", "dh", "axis", "stress"] {
-        let mut more: Vec<_> = std::fs::read_dir(reference_dir().join(kind))
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "urdf"))
-            .collect();
-        more.sort();
-        files.extend(more);
-    }
+    let files = k_urdf_files();
     let mut rng = rng(9);
     let mut checked = 0;
     for path in files {

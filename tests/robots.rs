@@ -6,17 +6,6 @@ mod common;
 
 use common::*;
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
-use std::path::PathBuf;
-
-fn robot_files() -> Vec<PathBuf> {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(robots_dir())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.is_file())
-        .collect();
-    files.sort();
-    files
-}
 
 #[test]
 fn every_robot_loads_with_its_published_dof() {

@@ -16,6 +16,33 @@ pub fn robots_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("robots")
 }
 
+/// Every file of `robots/`, sorted.
+pub fn robot_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(robots_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    files
+}
+
+/// Every URDF the `k` crate is compared on: the bundled Panda and the reference data's URDFs.
+pub fn k_urdf_files() -> Vec<PathBuf> {
+    let mut files = vec![robots_dir().join("panda.urdf")];
+    for kind in ["urdf", "dh", "axis", "stress"] {
+        let dir = reference_dir().join(kind);
+        let mut more: Vec<PathBuf> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "urdf"))
+            .collect();
+        more.sort();
+        files.extend(more);
+    }
+    files
+}
+
 /// Every double-precision reference file (`*.json`, not `*.hp.json`), sorted.
 pub fn reference_files() -> Vec<PathBuf> {
     let mut out = Vec::new();
