@@ -23,20 +23,6 @@ pub(crate) trait Num:
     fn splat(x: f64) -> Self;
     fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self;
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self);
-
-    /// `a · b`, the only work on a chain's dependency path.
-    #[inline(always)]
-    fn compose<A: Arith>(a: &Frame<Self>, b: &Frame<Self>) -> Frame<Self> {
-        let zero = [Self::splat(0.0); 3];
-        Frame {
-            r: [
-                mat_vec_add::<Self, A>(&a.r, &b.r[0], zero),
-                mat_vec_add::<Self, A>(&a.r, &b.r[1], zero),
-                mat_vec_add::<Self, A>(&a.r, &b.r[2], zero),
-            ],
-            p: mat_vec_add::<Self, A>(&a.r, &b.p, a.p),
-        }
-    }
 }
 
 impl Num for f64 {
@@ -52,42 +38,6 @@ impl Num for f64 {
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
         trig::sin_cos::<A>(x)
     }
-
-    /// Column by column in 4-wide vectors (the fourth lane is padding): 12 vector multiply–adds
-    /// instead of 36 scalar ones, in the same order of operations per entry as the generic form.
-    #[inline(always)]
-    fn compose<A: Arith>(a: &Frame<f64>, b: &Frame<f64>) -> Frame<f64> {
-        let c = [pad(&a.r[0]), pad(&a.r[1]), pad(&a.r[2])];
-        let zero = [0.0; 4];
-        Frame {
-            r: [
-                padded_col::<A>(&c, &b.r[0], zero),
-                padded_col::<A>(&c, &b.r[1], zero),
-                padded_col::<A>(&c, &b.r[2], zero),
-            ],
-            p: padded_col::<A>(&c, &b.p, pad(&a.p)),
-        }
-    }
-}
-
-/// `[v, 0]`.
-#[inline(always)]
-fn pad(v: &[f64; 3]) -> [f64; 4] {
-    [v[0], v[1], v[2], 0.0]
-}
-
-/// `c u + base` with 4-wide columns `c` (the fourth lane is padding).
-#[inline(always)]
-fn padded_col<A: Arith>(c: &[[f64; 4]; 3], u: &[f64; 3], base: [f64; 4]) -> [f64; 3] {
-    let mut out = [0.0; 4];
-    for k in 0..4 {
-        out[k] = A::mul_add(
-            c[0][k],
-            u[0],
-            A::mul_add(c[1][k], u[1], A::mul_add(c[2][k], u[2], base[k])),
-        );
-    }
-    [out[0], out[1], out[2]]
 }
 
 /// `r u + p` (the columns of `r` are its vectors).
@@ -214,19 +164,7 @@ pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
 /// `R u + p` with a constant `u`.
 #[inline(always)]
 fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
-    let mut out = p;
-    for (k, o) in out.iter_mut().enumerate() {
-        *o = N::mul_add::<A>(
-            r[0][k],
-            N::splat(u[0]),
-            N::mul_add::<A>(
-                r[1][k],
-                N::splat(u[1]),
-                N::mul_add::<A>(r[2][k], N::splat(u[2]), p[k]),
-            ),
-        );
-    }
-    out
+    mat_vec_add::<N, A>(r, &u.map(N::splat), p)
 }
 
 /// A rotation about +e_k mixes the two other columns (i, j) in cyclic order:
@@ -375,10 +313,18 @@ pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N
     m
 }
 
-/// `a · b`.
+/// `a · b`, the only work on a chain's dependency path.
 #[inline(always)]
 pub(crate) fn compose<N: Num, A: Arith>(a: &Frame<N>, b: &Frame<N>) -> Frame<N> {
-    N::compose::<A>(a, b)
+    let zero = [N::splat(0.0); 3];
+    Frame {
+        r: [
+            mat_vec_add::<N, A>(&a.r, &b.r[0], zero),
+            mat_vec_add::<N, A>(&a.r, &b.r[1], zero),
+            mat_vec_add::<N, A>(&a.r, &b.r[2], zero),
+        ],
+        p: mat_vec_add::<N, A>(&a.r, &b.p, a.p),
+    }
 }
 
 /// Frame of a body from its parent's frame (`None`: the body hangs from the world), given
