@@ -2,11 +2,7 @@
 mod common;
 
 fn main() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let chains = [
-        kinechain::Chain::from_file(dir.join("robots/cylindrical.yaml")).expect("bundled robot"),
-        kinechain::Chain::from_file(dir.join("robots/panda.urdf")).expect("bundled robot"),
-    ];
+    let chains = common::input_chains();
     afl::fuzz!(|data: &[u8]| {
         if let Ok(text) = std::str::from_utf8(data) {
             for chain in &chains {

@@ -1,5 +1,7 @@
 //! What every target checks once an input has been accepted: the chain evaluates at a
 //! configuration without panicking, and every pose is finite.
+// Each target uses part of this module.
+#![allow(dead_code)]
 
 use kinechain::{Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics};
 
@@ -24,4 +26,14 @@ pub fn evaluate(chain: &Chain, q: &[f64]) {
 
 pub fn zero(chain: &Chain) -> Vec<f64> {
     vec![0.0; chain.dof()]
+}
+
+/// The chains the input-parser targets read joint vectors for: one with a cylindrical joint
+/// (two entries), one with a mimic joint (no entry of its own).
+pub fn input_chains() -> [Chain; 2] {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    [
+        Chain::from_file(dir.join("robots/cylindrical.yaml")).expect("bundled robot"),
+        Chain::from_file(dir.join("robots/panda.urdf")).expect("bundled robot"),
+    ]
 }
