@@ -105,17 +105,13 @@ fn k_baseline(c: &mut Criterion) {
         let chain = Chain::from_file(root.join(file)).unwrap();
         let robot = k::Chain::<f64>::from_urdf_file(root.join(file)).unwrap();
         // k's joint vector (mimic joints included) for each configuration.
+        let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
         let qs: Vec<Vec<f64>> = configurations(&chain, 64, 1)
             .iter()
             .map(|q| {
-                robot
-                    .iter_joints()
-                    .map(|j| {
-                        chain
-                            .joint_position(chain.joint_id(&j.name).unwrap(), q)
-                            .unwrap_or(0.0)
-                    })
-                    .collect()
+                chain
+                    .positions_by_name(names.iter().map(String::as_str), q)
+                    .unwrap()
             })
             .collect();
         let mut i = 0;

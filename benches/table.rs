@@ -147,17 +147,13 @@ fn rows_for(path: &Path) -> Vec<Row> {
             path.with_file_name(reference["model"]["file"].as_str().unwrap()),
         )
         .unwrap();
+        let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
         let kq: Vec<Vec<f64>> = qs
             .iter()
             .map(|q| {
-                robot
-                    .iter_joints()
-                    .map(|j| {
-                        chain
-                            .joint_position(chain.joint_id(&j.name).unwrap(), q)
-                            .unwrap_or(0.0)
-                    })
-                    .collect()
+                chain
+                    .positions_by_name(names.iter().map(String::as_str), q)
+                    .unwrap()
             })
             .collect();
         let poses: Vec<Vec<[[f64; 4]; 4]>> = kq

@@ -717,6 +717,33 @@ impl Chain {
         q.get(i).map(|x| multiplier * x + offset)
     }
 
+    /// The positions of the named joints at `q`, in the order given (see
+    /// [`Chain::joint_position`]; a fixed joint reads 0): the joint vector of another tool that
+    /// orders joints its own way, such as a URDF library listing its movable joints.
+    ///
+    /// # Errors
+    /// [`NameError::UnknownJoint`] for a name this chain does not have.
+    ///
+    /// # Examples
+    /// ```
+    /// let chain = kinechain::Chain::from_file("robots/panda.urdf")?;
+    /// let q = [0.1, 0.2, 0.3, -1.0, 0.5, 1.5, 0.7, 0.03];
+    /// let theirs = chain.positions_by_name(["panda_finger_joint2", "panda_joint8", "panda_joint2"], &q)?;
+    /// assert_eq!(theirs, [0.03, 0.0, 0.2]); // a mimic joint, a fixed joint, an arm joint
+    /// assert!(chain.positions_by_name(["elbow"], &q).is_err());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn positions_by_name<'n>(
+        &self,
+        names: impl IntoIterator<Item = &'n str>,
+        q: &[f64],
+    ) -> Result<Vec<f64>, NameError> {
+        names
+            .into_iter()
+            .map(|name| Ok(self.joint_position(self.joint_id(name)?, q).unwrap_or(0.0)))
+            .collect()
+    }
+
     /// θ, d and their rates for one joint at `(q, q_dot, q_ddot)`, from which its relative 4×4
     /// transform and derivatives follow (eqs. 2.119, 2.122, 2.127). A fixed joint has constant θ
     /// and d; a mimic joint follows its primary.

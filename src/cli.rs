@@ -1083,21 +1083,12 @@ fn k_time(path: &std::path::Path, chain: &Chain, qs: &[Vec<f64>]) -> Option<f64>
         return None;
     }
     let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
+    let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
     let kq: Vec<Vec<f64>> = qs
         .iter()
-        .map(|q| {
-            robot
-                .iter_joints()
-                .map(|j| {
-                    chain
-                        .joint_id(&j.name)
-                        .ok()
-                        .and_then(|id| chain.joint_position(id, q))
-                        .unwrap_or(0.0)
-                })
-                .collect()
-        })
-        .collect();
+        .map(|q| chain.positions_by_name(names.iter().map(String::as_str), q))
+        .collect::<Result<_, _>>()
+        .ok()?;
     Some(
         time_per_call(|| {
             for q in &kq {
