@@ -255,11 +255,10 @@ fn chunk_poses_generic<A: Arith>(
     let mut f = Frame::splat(&Transform::IDENTITY);
     for (k, body) in chain.bodies.iter().enumerate() {
         let sin_cos = (frames[k].r[0][0], frames[k].r[0][1]);
-        let local = kernel::local_frame::<Lanes, A>(body, q, sin_cos);
         f = match body.parent {
-            Some(p) if p + 1 == k => kernel::compose::<Lanes, A>(&f, &local),
-            Some(p) => kernel::compose::<Lanes, A>(&frames[p], &local),
-            None => local,
+            Some(p) if p + 1 == k => kernel::pose_step::<Lanes, A>(Some(&f), body, q, sin_cos),
+            Some(p) => kernel::pose_step::<Lanes, A>(Some(&frames[p]), body, q, sin_cos),
+            None => kernel::pose_step::<Lanes, A>(None, body, q, sin_cos),
         };
         frames[k] = f;
     }

@@ -417,6 +417,13 @@ pub(crate) enum Placement {
         c: f64,
         s: f64,
     },
+    /// `T(t) Rx(α)` with `(c, s) = (cos α, sin α)`: a translation, then a rotation about the new
+    /// x axis (the URDF origin of many arms, `rpy = (α, 0, 0)`).
+    OffsetRotX {
+        t: [f64; 3],
+        c: f64,
+        s: f64,
+    },
     General(Transform),
 }
 
@@ -435,13 +442,12 @@ impl Placement {
             && r[2][0] == 0.0
             && r[1][1] == r[2][2]
             && r[1][2] == -r[2][1]
-            && t.p[1] == 0.0
-            && t.p[2] == 0.0
         {
-            Placement::ScrewX {
-                a: t.p[0],
-                c: r[1][1],
-                s: r[1][2],
+            let (c, s) = (r[1][1], r[1][2]);
+            if t.p[1] == 0.0 && t.p[2] == 0.0 {
+                Placement::ScrewX { a: t.p[0], c, s }
+            } else {
+                Placement::OffsetRotX { t: t.p, c, s }
             }
         } else {
             Placement::General(*t)
@@ -458,6 +464,10 @@ impl Placement {
             Placement::ScrewX { a, c, s } => Transform {
                 r: [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]],
                 p: [a, 0.0, 0.0],
+            },
+            Placement::OffsetRotX { t, c, s } => Transform {
+                r: [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]],
+                p: t,
             },
             Placement::General(t) => t,
         }
@@ -481,6 +491,55 @@ pub(crate) struct Body {
     /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::padded`].
     pub(crate) pre4: crate::padded::Stored,
     pub(crate) axis4: crate::padded::C4,
+    /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
+    /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
+    pub(crate) in_place: bool,
+    /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
+    /// translation and a rotation about x): no dispatch on kinds left in the kernels.
+    pub(crate) z_steps: Option<ZSteps>,
+}
+
+/// The in-place evaluation of a body about its z axis, `f ← f · pre · M(θ, d) · post`, with the
+/// kinds of `pre` and `post` resolved at load time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ZSteps {
+    /// `pre` translates along x by this (a [`Placement::ScrewX`]: one multiply–add per entry) ...
+    pub(crate) pre_x: Option<f64>,
+    /// ... or by this vector (three).
+    pub(crate) pre_t: Option<[f64; 3]>,
+    /// `pre` then rotates about x: `(cos α, sin α)`.
+    pub(crate) pre_rot: Option<(f64, f64)>,
+    /// `post` is [`Placement::ScrewX`] `(a, cos α, sin α)`.
+    pub(crate) post: Option<(f64, f64, f64)>,
+}
+
+impl ZSteps {
+    fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
+        if motion.axis != crate::joint::Axis::Z {
+            return None;
+        }
+        let mut steps = ZSteps {
+            pre_x: None,
+            pre_t: None,
+            pre_rot: None,
+            post: None,
+        };
+        match *pre {
+            Placement::Identity => {}
+            Placement::Translation(t) => steps.pre_t = Some(t),
+            Placement::ScrewX { a, c, s } => (steps.pre_x, steps.pre_rot) = (Some(a), Some((c, s))),
+            Placement::OffsetRotX { t, c, s } => {
+                (steps.pre_t, steps.pre_rot) = (Some(t), Some((c, s)))
+            }
+            Placement::General(_) => return None,
+        }
+        match *post {
+            Placement::Identity => {}
+            Placement::ScrewX { a, c, s } => steps.post = Some((a, c, s)),
+            _ => return None,
+        }
+        Some(steps)
+    }
 }
 
 impl Body {
@@ -501,6 +560,8 @@ impl Body {
             joint,
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
+            in_place: !matches!(pre, Placement::General(_)),
+            z_steps: ZSteps::new(&pre, &motion, &post),
             pre_frame,
             axis_in_parent,
         }

@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, Placement};
+use crate::chain::{Body, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -241,6 +241,10 @@ fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
             f.p = axpy::<N, A>(N::splat(*a), f.r[0], f.p);
             rotate_columns::<N, A>(&mut f.r, &Axis::X, N::splat(*s), N::splat(*c));
         }
+        Placement::OffsetRotX { t, c, s } => {
+            f.p = apply_const_add::<N, A>(&f.r, *t, f.p);
+            rotate_columns::<N, A>(&mut f.r, &Axis::X, N::splat(*s), N::splat(*c));
+        }
         Placement::General(t) => {
             let zero = [N::splat(0.0); 3];
             let r = f.r;
@@ -278,20 +282,21 @@ pub(crate) fn body_sin_cos<N: Num, A: Arith>(body: &Body, q: &[N]) -> (N, N) {
     }
 }
 
-/// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the world axis `z`, rotate by θ about
-/// it (the two commute). `sin_cos` is `(sin θ, cos θ)` when θ varies.
+/// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the axis, rotate by θ about it (the two
+/// commute). `z` gives the axis in the frame `f` is expressed in (called only for a sliding
+/// joint); `sin_cos` is `(sin θ, cos θ)` when θ varies.
 #[inline(always)]
 fn apply_motion<N: Num, A: Arith>(
     f: &mut Frame<N>,
     body: &Body,
     q: &[N],
-    z: &V3<N>,
+    z: impl FnOnce(&Frame<N>) -> V3<N>,
     sin_cos: (N, N),
 ) {
     let m = &body.motion;
     match m.d {
         Term::Const(0.0) => {}
-        d => f.p = axpy::<N, A>(term_value::<N, A>(&d, q), *z, f.p),
+        d => f.p = axpy::<N, A>(term_value::<N, A>(&d, q), z(f), f.p),
     }
     let (s, c) = match m.theta {
         Term::Const(0.0) => return,
@@ -301,14 +306,65 @@ fn apply_motion<N: Num, A: Arith>(
     rotate_columns::<N, A>(&mut f.r, &m.axis, s, c);
 }
 
+/// The in-place order for the shape [`ZSteps`] describes: the same operations as the general
+/// in-place order (`place`, `apply_motion`) without matching on kinds.
+#[inline(always)]
+fn z_steps<N: Num, A: Arith>(
+    mut f: Frame<N>,
+    body: &Body,
+    steps: &ZSteps,
+    q: &[N],
+    sin_cos: (N, N),
+) -> Frame<N> {
+    if let Some(a) = steps.pre_x {
+        f.p = axpy::<N, A>(N::splat(a), f.r[0], f.p);
+    }
+    if let Some(t) = steps.pre_t {
+        f.p = apply_const_add::<N, A>(&f.r, t, f.p);
+    }
+    if let Some((c, s)) = steps.pre_rot {
+        plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c));
+    }
+    let m = &body.motion;
+    if !matches!(m.d, Term::Const(0.0)) {
+        f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
+    }
+    let (s, c) = match m.theta {
+        Term::Const(_) => (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1)),
+        Term::Var { .. } => sin_cos,
+    };
+    if !matches!(m.theta, Term::Const(0.0)) {
+        plane::<N, A>(&mut f.r, 0, 1, s, c);
+    }
+    if let Some((a, c, s)) = steps.post {
+        f.p = axpy::<N, A>(N::splat(a), f.r[0], f.p);
+        plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c));
+    }
+    f
+}
+
+/// The axis `r · axis`.
+#[inline(always)]
+fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
+    match *axis {
+        Axis::X => r[0],
+        Axis::Y => r[1],
+        Axis::Z => r[2],
+        Axis::NegX => r[0].map(|x| -x),
+        Axis::NegY => r[1].map(|x| -x),
+        Axis::NegZ => r[2].map(|x| -x),
+        Axis::General(v) => apply_const_add::<N, A>(r, v, [N::splat(0.0); 3]),
+    }
+}
+
 /// The body's frame relative to its parent body, `pre · M(θ, d) · post`: independent of the
 /// parent, so that the joints of a chain can be worked on in parallel and only [`compose`]
 /// remains on the chain's dependency path.
 #[inline(always)]
 pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
     let mut m = Frame::splat(&body.pre_frame);
-    let z = body.axis_in_parent.map(N::splat);
-    apply_motion::<N, A>(&mut m, body, q, &z, sin_cos);
+    let z = |_: &Frame<N>| body.axis_in_parent.map(N::splat);
+    apply_motion::<N, A>(&mut m, body, q, z, sin_cos);
     place::<N, A>(&mut m, &body.post);
     m
 }
@@ -329,6 +385,15 @@ pub(crate) fn compose<N: Num, A: Arith>(a: &Frame<N>, b: &Frame<N>) -> Frame<N> 
 
 /// Frame of a body from its parent's frame (`None`: the body hangs from the world), given
 /// `(sin θ, cos θ)` of its joint.
+///
+/// Two orders of the same product `parent · pre · M(θ, d) · post`, chosen per body at load time
+/// ([`Body::in_place`]):
+/// - in place, `((parent · pre) · M) · post`, each factor applied to the running frame: a DH row
+///   or an `rpy = (α, 0, 0)` origin costs a few column rotations and one or three multiply–adds
+///   per origin entry, about half the work of a composition;
+/// - local, `parent · (pre · M · post)`, when `pre` is a general rotation: applying it would cost
+///   a full composition on the chain's dependency path, while the local frame does not depend on
+///   the parent and is composed in one product.
 #[inline(always)]
 pub(crate) fn pose_step<N: Num, A: Arith>(
     parent: Option<&Frame<N>>,
@@ -336,6 +401,20 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
     q: &[N],
     sin_cos: (N, N),
 ) -> Frame<N> {
+    if body.in_place {
+        let mut f = match parent {
+            Some(f) => *f,
+            None => Frame::splat(&crate::transform::Transform::IDENTITY),
+        };
+        if let Some(steps) = &body.z_steps {
+            return z_steps::<N, A>(f, body, steps, q, sin_cos);
+        }
+        place::<N, A>(&mut f, &body.pre);
+        let axis = &body.motion.axis;
+        apply_motion::<N, A>(&mut f, body, q, |f| axis_of::<N, A>(&f.r, axis), sin_cos);
+        place::<N, A>(&mut f, &body.post);
+        return f;
+    }
     let m = local_frame::<N, A>(body, q, sin_cos);
     match parent {
         Some(f) => compose::<N, A>(f, &m),

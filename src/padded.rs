@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, Placement};
+use crate::chain::{Body, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::kernel::{Frame, Rates, term_value};
 use crate::transform::Transform;
@@ -122,6 +122,10 @@ fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
             f[3] = A::Col::mul_add(A::Col::splat(*a), f[0], f[3]);
             rotate_columns::<A>(f, &Axis::X, *s, *c);
         }
+        Placement::OffsetRotX { t, c, s } => {
+            f[3] = combine_const(f, *t, f[3]);
+            rotate_columns::<A>(f, &Axis::X, *s, *c);
+        }
         Placement::General(t) => {
             let zero = A::Col::splat(0.0);
             *f = [
@@ -134,27 +138,78 @@ fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
     }
 }
 
-/// The body's frame relative to its parent body, `pre · M(θ, d) · post` (eq. 2.119 for `M`),
-/// given `(sin θ, cos θ)` when θ varies.
+/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`), `z` giving the axis in `f`'s frame.
 #[inline(always)]
-pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
-    let mut f: [A::Col; 4] = std::array::from_fn(|j| A::Col::load(&body.pre4[j]));
+fn apply_motion<A: Arith>(
+    f: &mut [A::Col; 4],
+    body: &Body,
+    q: &[f64],
+    z: impl FnOnce(&[A::Col; 4]) -> A::Col,
+    sin_cos: (f64, f64),
+) {
     let m = &body.motion;
     match m.d {
         Term::Const(0.0) => {}
         d => {
             let d = A::Col::splat(term_value::<f64, A>(&d, q));
-            f[3] = A::Col::mul_add(d, A::Col::load(&body.axis4), f[3]);
+            f[3] = A::Col::mul_add(d, z(f), f[3]);
         }
     }
     match m.theta {
         Term::Const(0.0) => {}
         Term::Const(_) => {
             let (s, c) = m.const_sin_cos;
-            rotate_columns::<A>(&mut f, &m.axis, s, c);
+            rotate_columns::<A>(f, &m.axis, s, c);
         }
-        Term::Var { .. } => rotate_columns::<A>(&mut f, &m.axis, sin_cos.0, sin_cos.1),
+        Term::Var { .. } => rotate_columns::<A>(f, &m.axis, sin_cos.0, sin_cos.1),
     }
+}
+
+/// The in-place order for the shape [`ZSteps`] describes (see `kernel::z_steps`).
+#[inline(always)]
+fn z_steps<A: Arith>(
+    mut f: [A::Col; 4],
+    body: &Body,
+    steps: &ZSteps,
+    q: &[f64],
+    sin_cos: (f64, f64),
+) -> [A::Col; 4] {
+    type C<A> = <A as Arith>::Col;
+    if let Some(a) = steps.pre_x {
+        f[3] = C::<A>::mul_add(C::<A>::splat(a), f[0], f[3]);
+    }
+    if let Some(t) = steps.pre_t {
+        f[3] = combine_const(&f, t, f[3]);
+    }
+    if let Some((c, s)) = steps.pre_rot {
+        plane(&mut f, 1, 2, s, c);
+    }
+    let m = &body.motion;
+    if !matches!(m.d, Term::Const(0.0)) {
+        let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
+        f[3] = C::<A>::mul_add(d, f[2], f[3]);
+    }
+    let (s, c) = match m.theta {
+        Term::Const(_) => m.const_sin_cos,
+        Term::Var { .. } => sin_cos,
+    };
+    if !matches!(m.theta, Term::Const(0.0)) {
+        plane(&mut f, 0, 1, s, c);
+    }
+    if let Some((a, c, s)) = steps.post {
+        f[3] = C::<A>::mul_add(C::<A>::splat(a), f[0], f[3]);
+        plane(&mut f, 1, 2, s, c);
+    }
+    f
+}
+
+/// The body's frame relative to its parent body, `pre · M(θ, d) · post` (eq. 2.119 for `M`),
+/// given `(sin θ, cos θ)` when θ varies.
+#[inline(always)]
+pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
+    let mut f: [A::Col; 4] = std::array::from_fn(|j| A::Col::load(&body.pre4[j]));
+    let axis = A::Col::load(&body.axis4);
+    apply_motion::<A>(&mut f, body, q, |_| axis, sin_cos);
     place::<A>(&mut f, &body.post);
     Frame4(f)
 }
@@ -175,7 +230,8 @@ pub(crate) fn compose<C: Col>(a: &Frame4<C>, b: &Frame4<C>) -> Frame4<C> {
     ])
 }
 
-/// The frame of a body from its parent's frame (`None`: the body hangs from the world).
+/// The frame of a body from its parent's frame (`None`: the body hangs from the world), in the
+/// order `kernel::pose_step` chose for the body.
 #[inline(always)]
 pub(crate) fn pose_step<A: Arith>(
     parent: Option<&Frame4<A::Col>>,
@@ -183,6 +239,21 @@ pub(crate) fn pose_step<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) -> Frame4<A::Col> {
+    if body.in_place {
+        let f = match parent {
+            Some(f) => f.0,
+            None => Frame4::identity().0,
+        };
+        if let Some(steps) = &body.z_steps {
+            return Frame4(z_steps::<A>(f, body, steps, q, sin_cos));
+        }
+        let mut f = f;
+        place::<A>(&mut f, &body.pre);
+        let axis = &body.motion.axis;
+        apply_motion::<A>(&mut f, body, q, |f| axis_of(f, axis), sin_cos);
+        place::<A>(&mut f, &body.post);
+        return Frame4(f);
+    }
     let local = local_frame::<A>(body, q, sin_cos);
     match parent {
         Some(f) => compose(f, &local),
@@ -379,6 +450,11 @@ mod tests {
                 c: 0.3_f64.cos(),
                 s: 0.3_f64.sin(),
             },
+            Placement::OffsetRotX {
+                t: [0.1, -0.25, 0.4],
+                c: 0.8_f64.cos(),
+                s: 0.8_f64.sin(),
+            },
             Placement::General(general),
         ];
         let axes = [
@@ -425,19 +501,23 @@ mod tests {
     fn check<A: Arith>() {
         let parent = Transform::from_xyz_rpy([1.0, 2.0, -0.5], [-0.7, 0.2, 2.9]);
         let q = [1.3, -0.45];
+        let generic_parent = Frame::splat(&parent);
+        let padded_parent = Frame4::<A::Col>::from_frame(&generic_parent);
         for body in bodies() {
             let sin_cos = crate::kernel::body_sin_cos::<f64, A>(&body, &q);
-            let generic = crate::kernel::pose_step::<f64, A>(
-                Some(&Frame::splat(&parent)),
-                &body,
-                &q,
-                sin_cos,
-            );
-            let parent = Frame4::<A::Col>::from_frame(&Frame::splat(&parent));
-            let padded = pose_step::<A>(Some(&parent), &body, &q, sin_cos);
-            let mut out = Frame::splat(&Transform::IDENTITY);
-            padded.store(&mut out);
-            assert_eq!(bits(&out), bits(&generic), "{body:?}");
+            for has_parent in [true, false] {
+                let generic = crate::kernel::pose_step::<f64, A>(
+                    has_parent.then_some(&generic_parent),
+                    &body,
+                    &q,
+                    sin_cos,
+                );
+                let padded =
+                    pose_step::<A>(has_parent.then_some(&padded_parent), &body, &q, sin_cos);
+                let mut out = Frame::splat(&Transform::IDENTITY);
+                padded.store(&mut out);
+                assert_eq!(bits(&out), bits(&generic), "{body:?}, parent {has_parent}");
+            }
         }
     }
 
