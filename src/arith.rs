@@ -25,6 +25,8 @@ pub(crate) trait Col: Copy {
     fn from3(v: &[f64; 3]) -> Self;
     /// The first three entries.
     fn store3(self, out: &mut [f64; 3]);
+    /// All four entries.
+    fn store(self, out: &mut [f64; 4]);
     fn splat(x: f64) -> Self;
     /// Every entry set to entry `i` (`i < 4`, a constant after inlining).
     fn broadcast(self, i: usize) -> Self;
@@ -91,6 +93,10 @@ impl<A: Arith> Col for Portable<A> {
     #[inline(always)]
     fn store3(self, out: &mut [f64; 3]) {
         out.copy_from_slice(&self.0[..3]);
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; 4]) {
+        *out = self.0;
     }
     #[inline(always)]
     fn splat(x: f64) -> Self {
@@ -162,6 +168,11 @@ impl Col for Avx {
             _mm_storeu_pd(out.as_mut_ptr(), _mm256_castpd256_pd128(self.0));
             _mm_store_sd(out.as_mut_ptr().add(2), _mm256_extractf128_pd::<1>(self.0));
         }
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; 4]) {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) }
     }
     #[inline(always)]
     fn splat(x: f64) -> Self {

@@ -1,7 +1,7 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
 use crate::chain::Chain;
-use crate::kernel::{Frame, Rates};
+use crate::kernel::Rates;
 use crate::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.
@@ -23,7 +23,8 @@ pub enum LimitPolicy {
 /// programming error and panics.
 #[derive(Clone, Debug)]
 pub struct Data {
-    pub(crate) world_from_body: Vec<Frame<f64>>,
+    /// Padded columns (see [`crate::padded`]).
+    pub(crate) world_from_body: Vec<crate::padded::Stored>,
     /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
     pub(crate) rates: Vec<Rates<f64>>,
     /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain
@@ -47,7 +48,7 @@ impl Data {
     pub fn new(chain: &Chain) -> Self {
         let n = chain.bodies.len();
         Data {
-            world_from_body: vec![Frame::splat(&Transform::IDENTITY); n],
+            world_from_body: vec![crate::padded::stored(&Transform::IDENTITY); n],
             rates: vec![Rates::zero(); n],
             sin: vec![0.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],
             cos: vec![1.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],

@@ -134,7 +134,7 @@ impl<'a> Poses<'a> {
         match l.body {
             None => l.offset.to_transform(),
             Some(b) => {
-                let body: Transform = self.data.world_from_body[b].into();
+                let body = padded::transform(&self.data.world_from_body[b]);
                 match l.offset {
                     Placement::Identity => body,
                     offset => body * offset.to_transform(),
@@ -160,7 +160,7 @@ impl<'a> Poses<'a> {
             .iter()
             .find(|b| b.joint == joint.index())?;
         let parent: Transform = match body.parent {
-            Some(p) => self.data.world_from_body[p].into(),
+            Some(p) => padded::transform(&self.data.world_from_body[p]),
             None => Transform::IDENTITY,
         };
         Some((
@@ -175,7 +175,10 @@ impl<'a> Poses<'a> {
         let b = l.body?;
         let r = match l.offset {
             Placement::Identity => [0.0; 3],
-            _ => sub3(self.world_from_link(link).p, self.data.world_from_body[b].p),
+            _ => sub3(
+                self.world_from_link(link).p,
+                padded::transform(&self.data.world_from_body[b]).p,
+            ),
         };
         Some((b, r))
     }
@@ -401,7 +404,8 @@ pub(crate) fn check_values(
             got: values.len(),
         });
     }
-    if values.iter().all(|x| x.is_finite()) {
+    // Branch-free; the entry at fault is looked for only on failure.
+    if values.iter().fold(true, |ok, x| ok & x.is_finite()) {
         return Ok(());
     }
     if let Some(index) = values.iter().position(|x| !x.is_finite()) {
@@ -602,7 +606,7 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
         // The previous body's frame stays in registers; only branches read a parent from memory.
         let parent = match body.parent {
             Some(p) if p + 1 == k => Some(f),
-            Some(p) => Some(Frame4::from_frame(&frames[p])),
+            Some(p) => Some(Frame4::load(&frames[p])),
             None => None,
         };
         f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
@@ -652,6 +656,13 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             first = first.min(body);
         }
     }
+    if first == usize::MAX {
+        return;
+    }
+    if chain.is_serial() {
+        poses_from::<A>(chain, data, q, first);
+        return;
+    }
     let changed = |t: &Term| match *t {
         Term::Var { index, .. } => q[index].to_bits() != data.last_q[index].to_bits(),
         Term::Const(_) => false,
@@ -668,7 +679,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             // The frame just computed stays in registers when it is the parent's.
             let parent = match body.parent {
                 Some(p) if p + 1 == k && previous_done => Some(f),
-                Some(p) => Some(Frame4::from_frame(&frames[p])),
+                Some(p) => Some(Frame4::load(&frames[p])),
                 None => None,
             };
             let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
@@ -676,6 +687,41 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             f.store(&mut frames[k]);
         }
         previous_done = dirty;
+    }
+}
+
+/// Poses of bodies `first..` of a serial chain (each body hangs from the one before), the
+/// bodies before `first` being up to date.
+#[inline(always)]
+fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
+    let bodies = &chain.bodies[first..];
+    // One body's trigonometry in scalar code; more, vectorised like a full evaluation.
+    let vectorised = bodies.len() > 2;
+    if vectorised {
+        let chunk = first / kernel::LANES;
+        let start = chunk * kernel::LANES;
+        kernel::all_sin_cos::<A>(
+            &chain.theta_gather[chunk..],
+            q,
+            &mut data.sin[start..],
+            &mut data.cos[start..],
+        );
+    }
+    let frames = &mut data.world_from_body;
+    let mut f = match first.checked_sub(1) {
+        Some(p) => Frame4::load(&frames[p]),
+        None => Frame4::identity(),
+    };
+    for (k, body) in bodies.iter().enumerate() {
+        let k = first + k;
+        let sin_cos = if vectorised {
+            (data.sin[k], data.cos[k])
+        } else {
+            kernel::body_sin_cos::<f64, A>(body, q)
+        };
+        let parent = body.parent.map(|_| f);
+        f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
+        f.store(&mut frames[k]);
     }
 }
 
@@ -696,7 +742,7 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
             Some(p) if p + 1 == k => Some(&previous),
             Some(p) => {
                 loaded = (
-                    Frame4::from_frame(&data.world_from_body[p]),
+                    Frame4::load(&data.world_from_body[p]),
                     Rates4::from_rates(&data.rates[p]),
                 );
                 Some(&loaded)

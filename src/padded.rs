@@ -10,7 +10,7 @@
 use crate::arith::{Arith, Col};
 use crate::chain::{Body, Placement, ZSteps};
 use crate::joint::{Axis, Term};
-use crate::kernel::{Frame, Rates, term_value};
+use crate::kernel::{Rates, term_value};
 use crate::transform::Transform;
 
 /// A column padded to four entries (the last one is zero), as stored.
@@ -23,6 +23,15 @@ pub(crate) type Stored = [C4; 4];
 pub(crate) fn stored(t: &Transform) -> Stored {
     let pad = |v: [f64; 3]| [v[0], v[1], v[2], 0.0];
     [pad(t.r[0]), pad(t.r[1]), pad(t.r[2]), pad(t.p)]
+}
+
+/// The transform held in padded columns.
+pub(crate) fn transform(s: &Stored) -> Transform {
+    let cut = |v: &C4| [v[0], v[1], v[2]];
+    Transform {
+        r: [cut(&s[0]), cut(&s[1]), cut(&s[2])],
+        p: cut(&s[3]),
+    }
 }
 
 /// A rigid frame in vector registers: columns `[r0, r1, r2, p]`.
@@ -42,22 +51,16 @@ impl<C: Col> Frame4<C> {
     }
 
     #[inline(always)]
-    pub(crate) fn from_frame(f: &Frame<f64>) -> Self {
-        Frame4([
-            C::from3(&f.r[0]),
-            C::from3(&f.r[1]),
-            C::from3(&f.r[2]),
-            C::from3(&f.p),
-        ])
+    pub(crate) fn load(s: &Stored) -> Self {
+        Frame4(s.each_ref().map(C::load))
     }
 
+    /// Stores the columns whole (four stores instead of twelve entries).
     #[inline(always)]
-    pub(crate) fn store(self, out: &mut Frame<f64>) {
-        let [r0, r1, r2, p] = self.0;
-        r0.store3(&mut out.r[0]);
-        r1.store3(&mut out.r[1]);
-        r2.store3(&mut out.r[2]);
-        p.store3(&mut out.p);
+    pub(crate) fn store(self, out: &mut Stored) {
+        for (c, o) in self.0.into_iter().zip(out.iter_mut()) {
+            c.store(o);
+        }
     }
 }
 
@@ -439,6 +442,7 @@ mod tests {
     use super::*;
     use crate::arith::{Fused, Separate};
     use crate::joint::Motion;
+    use crate::kernel::Frame;
 
     fn bodies() -> Vec<Body> {
         let general = Transform::from_xyz_rpy([0.1, -0.4, 0.25], [0.3, -1.1, 2.0]);
@@ -490,7 +494,7 @@ mod tests {
         out
     }
 
-    fn bits(f: &Frame<f64>) -> Vec<u64> {
+    fn bits(f: &Transform) -> Vec<u64> {
         f.r.iter()
             .flatten()
             .chain(&f.p)
@@ -502,7 +506,7 @@ mod tests {
         let parent = Transform::from_xyz_rpy([1.0, 2.0, -0.5], [-0.7, 0.2, 2.9]);
         let q = [1.3, -0.45];
         let generic_parent = Frame::splat(&parent);
-        let padded_parent = Frame4::<A::Col>::from_frame(&generic_parent);
+        let padded_parent = Frame4::<A::Col>::load(&stored(&parent));
         for body in bodies() {
             let sin_cos = crate::kernel::body_sin_cos::<f64, A>(&body, &q);
             for has_parent in [true, false] {
@@ -514,8 +518,10 @@ mod tests {
                 );
                 let padded =
                     pose_step::<A>(has_parent.then_some(&padded_parent), &body, &q, sin_cos);
-                let mut out = Frame::splat(&Transform::IDENTITY);
+                let mut out = stored(&Transform::IDENTITY);
                 padded.store(&mut out);
+                let out = transform(&out);
+                let generic = Transform::from(generic);
                 assert_eq!(bits(&out), bits(&generic), "{body:?}, parent {has_parent}");
             }
         }
