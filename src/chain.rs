@@ -602,6 +602,11 @@ pub struct Chain {
     pub(crate) bodies: Vec<Body>,
     /// θ of the bodies, [`LANES`](crate::kernel::LANES) at a time.
     pub(crate) theta_gather: Vec<ThetaGather>,
+    /// Each body's entry in the sines and cosines `theta_gather` yields (0 for a constant θ).
+    pub(crate) trig_slot: Vec<usize>,
+    /// `turning_before[k]`: the number of bodies before body `k` whose θ varies (`k` up to the
+    /// number of bodies).
+    pub(crate) turning_before: Vec<usize>,
     /// For each entry of `q`, the first body whose θ or d reads it (`usize::MAX` if none).
     pub(crate) first_body_of_variable: Vec<usize>,
     /// For each entry of `q`: (joint, component name for cylindrical joints).
@@ -1230,7 +1235,26 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             }
         }
     }
-    let theta_gather = bodies
+    // θ is gathered only for the bodies whose θ varies, in body order: a body's slot in `sin`/`cos`.
+    let turning: Vec<&Body> = bodies
+        .iter()
+        .filter(|b| matches!(b.motion.theta, Term::Var { .. }))
+        .collect();
+    let mut trig_slot = Vec::with_capacity(bodies.len());
+    let mut turning_before = Vec::with_capacity(bodies.len() + 1);
+    let mut count = 0;
+    for b in &bodies {
+        turning_before.push(count);
+        if matches!(b.motion.theta, Term::Var { .. }) {
+            trig_slot.push(count);
+            count += 1;
+        } else {
+            // Read but not used: a constant θ has its sine and cosine in the body.
+            trig_slot.push(0);
+        }
+    }
+    turning_before.push(count);
+    let theta_gather = turning
         .chunks(crate::kernel::LANES)
         .map(|chunk| {
             let mut g = ThetaGather {
@@ -1305,6 +1329,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         links,
         bodies,
         theta_gather,
+        trig_slot,
+        turning_before,
         first_body_of_variable,
         variables,
         limit_checks,

@@ -47,11 +47,13 @@ impl Data {
     #[must_use]
     pub fn new(chain: &Chain) -> Self {
         let n = chain.bodies.len();
+        // Whole chunks of lanes, and at least one entry for the slot constant-θ bodies read.
+        let trig = chain.theta_gather.len().max(1) * crate::kernel::LANES;
         Data {
             world_from_body: vec![crate::padded::stored(&Transform::IDENTITY); n],
             rates: vec![Rates::zero(); n],
-            sin: vec![0.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],
-            cos: vec![1.0; n.div_ceil(crate::kernel::LANES) * crate::kernel::LANES],
+            sin: vec![0.0; trig],
+            cos: vec![1.0; trig],
             path: Vec::with_capacity(n),
             dirty: vec![true; n],
             last_q: vec![0.0; chain.dof()],

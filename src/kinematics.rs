@@ -609,7 +609,8 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
             Some(p) => Some(Frame4::load(&frames[p])),
             None => None,
         };
-        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
+        let slot = chain.trig_slot[k];
+        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[slot], data.cos[slot]));
         f.store(&mut frames[k]);
     }
 }
@@ -618,7 +619,7 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
 fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
-    let chunks = body / kernel::LANES + 1;
+    let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[..chunks],
         q,
@@ -638,7 +639,8 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         // previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
         let parent = body.parent.map(|_| f);
-        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[k], data.cos[k]));
+        let slot = chain.trig_slot[k];
+        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[slot], data.cos[slot]));
         f.store(&mut frames[k]);
     }
 }
@@ -698,7 +700,7 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     // One body's trigonometry in scalar code; more, vectorised like a full evaluation.
     let vectorised = bodies.len() > 2;
     if vectorised {
-        let chunk = first / kernel::LANES;
+        let chunk = chain.turning_before[first] / kernel::LANES;
         let start = chunk * kernel::LANES;
         kernel::all_sin_cos::<A>(
             &chain.theta_gather[chunk..],
@@ -715,7 +717,8 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     for (k, body) in bodies.iter().enumerate() {
         let k = first + k;
         let sin_cos = if vectorised {
-            (data.sin[k], data.cos[k])
+            let slot = chain.trig_slot[k];
+            (data.sin[slot], data.cos[slot])
         } else {
             kernel::body_sin_cos::<f64, A>(body, q)
         };
@@ -755,7 +758,7 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
             q,
             q_dot,
             q_ddot,
-            (data.sin[k], data.cos[k]),
+            (data.sin[chain.trig_slot[k]], data.cos[chain.trig_slot[k]]),
         );
         previous.0.store(&mut data.world_from_body[k]);
         previous.1.store::<ACC>(&mut data.rates[k]);
