@@ -147,12 +147,12 @@ fn rows_for(path: &Path) -> Vec<Row> {
             path.with_file_name(reference["model"]["file"].as_str().unwrap()),
         )
         .unwrap();
-        let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
+        let joint_names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
         let kq: Vec<Vec<f64>> = qs
             .iter()
             .map(|q| {
                 chain
-                    .positions_by_name(names.iter().map(String::as_str), q)
+                    .positions_by_name(joint_names.iter().map(String::as_str), q)
                     .unwrap()
             })
             .collect();

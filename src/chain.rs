@@ -503,14 +503,40 @@ pub(crate) struct Body {
 /// kinds of `pre` and `post` resolved at load time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ZSteps {
-    /// `pre` translates along x by this (a [`Placement::ScrewX`]: one multiply–add per entry) ...
-    pub(crate) pre_x: Option<f64>,
-    /// ... or by this vector (three).
-    pub(crate) pre_t: Option<[f64; 3]>,
-    /// `pre` then rotates about x: `(cos α, sin α)`.
-    pub(crate) pre_rot: Option<(f64, f64)>,
-    /// `post` is [`Placement::ScrewX`] `(a, cos α, sin α)`.
-    pub(crate) post: Option<(f64, f64, f64)>,
+    pub(crate) pre: CheapPlacement,
+    pub(crate) post: CheapPlacement,
+}
+
+/// A placement that is a translation followed by a rotation about x (either may be absent),
+/// applied in place as separate steps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CheapPlacement {
+    /// A translation along x (one multiply–add per entry) ...
+    pub(crate) x: Option<f64>,
+    /// ... or along any vector (three).
+    pub(crate) t: Option<[f64; 3]>,
+    /// Then a rotation about x: `(cos α, sin α)`.
+    pub(crate) rot_x: Option<(f64, f64)>,
+}
+
+impl CheapPlacement {
+    fn new(p: &Placement) -> Option<CheapPlacement> {
+        let along_x = |t: [f64; 3]| t[1] == 0.0 && t[2] == 0.0;
+        let mut out = CheapPlacement {
+            x: None,
+            t: None,
+            rot_x: None,
+        };
+        match *p {
+            Placement::Identity => {}
+            Placement::Translation(t) if along_x(t) => out.x = Some(t[0]),
+            Placement::Translation(t) => out.t = Some(t),
+            Placement::ScrewX { a, c, s } => (out.x, out.rot_x) = (Some(a), Some((c, s))),
+            Placement::OffsetRotX { t, c, s } => (out.t, out.rot_x) = (Some(t), Some((c, s))),
+            Placement::General(_) => return None,
+        }
+        Some(out)
+    }
 }
 
 impl ZSteps {
@@ -518,27 +544,10 @@ impl ZSteps {
         if motion.axis != crate::joint::Axis::Z {
             return None;
         }
-        let mut steps = ZSteps {
-            pre_x: None,
-            pre_t: None,
-            pre_rot: None,
-            post: None,
-        };
-        match *pre {
-            Placement::Identity => {}
-            Placement::Translation(t) => steps.pre_t = Some(t),
-            Placement::ScrewX { a, c, s } => (steps.pre_x, steps.pre_rot) = (Some(a), Some((c, s))),
-            Placement::OffsetRotX { t, c, s } => {
-                (steps.pre_t, steps.pre_rot) = (Some(t), Some((c, s)))
-            }
-            Placement::General(_) => return None,
-        }
-        match *post {
-            Placement::Identity => {}
-            Placement::ScrewX { a, c, s } => steps.post = Some((a, c, s)),
-            _ => return None,
-        }
-        Some(steps)
+        Some(ZSteps {
+            pre: CheapPlacement::new(pre)?,
+            post: CheapPlacement::new(post)?,
+        })
     }
 }
 
@@ -1339,4 +1348,62 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         warnings: spec.warnings.clone(),
         source: spec.clone(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn placement_forms_are_recognised_exactly_and_round_trip() {
+        let (c, s) = (0.3_f64.cos(), 0.3_f64.sin());
+        let cases = [
+            (Transform::IDENTITY, "Identity"),
+            (
+                Transform::from_xyz_rpy([0.1, 0.2, 0.3], [0.0; 3]),
+                "Translation",
+            ),
+            (
+                Transform::from_xyz_rpy([0.4, 0.0, 0.0], [0.3, 0.0, 0.0]),
+                "ScrewX",
+            ),
+            (
+                Transform::from_xyz_rpy([0.0, -0.316, 0.0], [0.3, 0.0, 0.0]),
+                "OffsetRotX",
+            ),
+            (
+                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, 0.3]),
+                "General",
+            ),
+        ];
+        for (t, kind) in cases {
+            let p = Placement::from_transform(&t);
+            assert!(format!("{p:?}").starts_with(kind), "{p:?} for {kind}");
+            assert_eq!(p.to_transform(), t, "{kind}");
+        }
+        let p = Placement::OffsetRotX {
+            t: [1.0, 2.0, 3.0],
+            c,
+            s,
+        };
+        assert_eq!(Placement::from_transform(&p.to_transform()), p);
+    }
+
+    #[test]
+    fn arms_take_the_in_place_shape() {
+        // Standard DH rows, and the Panda's URDF origins (rpy = (±π/2, 0, 0)): every arm joint is
+        // evaluated in place without dispatch; only the fingers, after the hand's turned fixed
+        // frame, are composed.
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
+        let ur5 = Chain::from_file(root.join("ur5.yaml")).unwrap();
+        assert!(ur5.bodies.iter().all(|b| b.z_steps.is_some()));
+        let panda = Chain::from_file(root.join("panda.urdf")).unwrap();
+        let shapes: Vec<bool> = panda.bodies.iter().map(|b| b.z_steps.is_some()).collect();
+        assert_eq!(
+            shapes,
+            [true, true, true, true, true, true, true, false, false]
+        );
+        // Seven sines for seven turning joints: one vector of lanes.
+        assert_eq!(panda.theta_gather.len(), 1);
+    }
 }

@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -306,8 +306,9 @@ fn apply_motion<N: Num, A: Arith>(
     rotate_columns::<N, A>(&mut f.r, &m.axis, s, c);
 }
 
-/// The in-place order for the shape [`ZSteps`] describes: the same operations as the general
-/// in-place order (`place`, `apply_motion`) without matching on kinds.
+/// The in-place order for the shape [`ZSteps`] describes: the operations of the general in-place
+/// order (`place`, `apply_motion`) without matching on kinds, and a translation along x as one
+/// multiply–add per entry rather than three whose other two add exact zeros.
 #[inline(always)]
 fn z_steps<N: Num, A: Arith>(
     mut f: Frame<N>,
@@ -316,15 +317,7 @@ fn z_steps<N: Num, A: Arith>(
     q: &[N],
     sin_cos: (N, N),
 ) -> Frame<N> {
-    if let Some(a) = steps.pre_x {
-        f.p = axpy::<N, A>(N::splat(a), f.r[0], f.p);
-    }
-    if let Some(t) = steps.pre_t {
-        f.p = apply_const_add::<N, A>(&f.r, t, f.p);
-    }
-    if let Some((c, s)) = steps.pre_rot {
-        plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c));
-    }
+    cheap_place::<N, A>(&mut f, &steps.pre);
     let m = &body.motion;
     if !matches!(m.d, Term::Const(0.0)) {
         f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
@@ -336,11 +329,22 @@ fn z_steps<N: Num, A: Arith>(
     if !matches!(m.theta, Term::Const(0.0)) {
         plane::<N, A>(&mut f.r, 0, 1, s, c);
     }
-    if let Some((a, c, s)) = steps.post {
+    cheap_place::<N, A>(&mut f, &steps.post);
+    f
+}
+
+/// `f ← f · placement` for a [`CheapPlacement`] (the operations of `place` for its forms).
+#[inline(always)]
+fn cheap_place<N: Num, A: Arith>(f: &mut Frame<N>, p: &CheapPlacement) {
+    if let Some(a) = p.x {
         f.p = axpy::<N, A>(N::splat(a), f.r[0], f.p);
+    }
+    if let Some(t) = p.t {
+        f.p = apply_const_add::<N, A>(&f.r, t, f.p);
+    }
+    if let Some((c, s)) = p.rot_x {
         plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c));
     }
-    f
 }
 
 /// The axis `r · axis`.

@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::kernel::{Rates, term_value};
 use crate::transform::Transform;
@@ -178,15 +178,7 @@ fn z_steps<A: Arith>(
     sin_cos: (f64, f64),
 ) -> [A::Col; 4] {
     type C<A> = <A as Arith>::Col;
-    if let Some(a) = steps.pre_x {
-        f[3] = C::<A>::mul_add(C::<A>::splat(a), f[0], f[3]);
-    }
-    if let Some(t) = steps.pre_t {
-        f[3] = combine_const(&f, t, f[3]);
-    }
-    if let Some((c, s)) = steps.pre_rot {
-        plane(&mut f, 1, 2, s, c);
-    }
+    cheap_place::<A>(&mut f, &steps.pre);
     let m = &body.motion;
     if !matches!(m.d, Term::Const(0.0)) {
         let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
@@ -199,11 +191,22 @@ fn z_steps<A: Arith>(
     if !matches!(m.theta, Term::Const(0.0)) {
         plane(&mut f, 0, 1, s, c);
     }
-    if let Some((a, c, s)) = steps.post {
-        f[3] = C::<A>::mul_add(C::<A>::splat(a), f[0], f[3]);
-        plane(&mut f, 1, 2, s, c);
-    }
+    cheap_place::<A>(&mut f, &steps.post);
     f
+}
+
+/// `f ← f · placement` for a [`CheapPlacement`] (see `kernel::cheap_place`).
+#[inline(always)]
+fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
+    if let Some(a) = p.x {
+        f[3] = A::Col::mul_add(A::Col::splat(a), f[0], f[3]);
+    }
+    if let Some(t) = p.t {
+        f[3] = combine_const(f, t, f[3]);
+    }
+    if let Some((c, s)) = p.rot_x {
+        plane(f, 1, 2, s, c);
+    }
 }
 
 /// The body's frame relative to its parent body, `pre · M(θ, d) · post` (eq. 2.119 for `M`),
