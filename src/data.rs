@@ -65,6 +65,10 @@ impl Data {
 
     /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
     pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
+        if policy != self.limit_policy {
+            // The last evaluation's joint values were checked under the other policy.
+            self.poses_valid = false;
+        }
         self.limit_policy = policy;
     }
 

@@ -508,15 +508,52 @@ pub fn forward_kinematics_incremental<'a>(
     q: &[f64],
 ) -> Result<Poses<'a>, StateError> {
     data.assert_matches(chain);
-    check_q(chain, q, data.limit_policy)?;
     if data.poses_valid {
-        poses_incremental(chain, data, q);
+        let first = first_changed(chain, data, q)?;
+        if first != usize::MAX {
+            poses_incremental(chain, data, q, first);
+            data.last_q.copy_from_slice(q);
+        }
     } else {
+        check_q(chain, q, data.limit_policy)?;
         poses_all(chain, data, q);
+        data.last_q.copy_from_slice(q);
+        data.poses_valid = true;
     }
-    data.last_q.copy_from_slice(q);
-    data.poses_valid = true;
     Ok(Poses { chain, data })
+}
+
+/// The first body reading an entry of `q` that differs (bit for bit) from the last evaluation's,
+/// or `usize::MAX`. Only those entries are checked: the others were checked then, under the
+/// same limit policy (changing the policy invalidates the poses).
+///
+/// # Errors
+/// As [`check_q`].
+fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<usize, StateError> {
+    if q.len() != chain.dof() {
+        check_values(chain, q, "q")?;
+    }
+    let enforce = data.limit_policy == LimitPolicy::Enforce;
+    let mut first = usize::MAX;
+    let mut ok = true;
+    for (i, (x, last)) in q.iter().zip(&data.last_q).enumerate() {
+        if x.to_bits() != last.to_bits() {
+            first = first.min(chain.first_body_of_variable[i]);
+            ok &= x.is_finite();
+            if enforce {
+                ok &= chain
+                    .limit_checks
+                    .iter()
+                    .filter(|c| c.index == i)
+                    .all(|c| c.limits.contains(c.scale * x + c.offset));
+            }
+        }
+    }
+    if !ok {
+        // Names the entry at fault.
+        check_q(chain, q, data.limit_policy)?;
+    }
+    Ok(first)
 }
 
 /// Computes the pose of one link, evaluating only the joints between the base and that link.
@@ -646,21 +683,9 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
 }
 
 #[inline(always)]
-fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
-    // Bodies come parents first, so none before the first body reading a changed entry moves.
-    let mut first = usize::MAX;
-    for ((x, last), &body) in q
-        .iter()
-        .zip(&data.last_q)
-        .zip(&chain.first_body_of_variable)
-    {
-        if x.to_bits() != last.to_bits() {
-            first = first.min(body);
-        }
-    }
-    if first == usize::MAX {
-        return;
-    }
+fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
+    // Bodies come parents first, so none before `first` (the first body reading a changed
+    // entry) moves.
     if chain.is_serial() {
         poses_from::<A>(chain, data, q, first);
         return;
@@ -783,7 +808,7 @@ fn accelerations_generic<A: Arith>(
 
 fma_dispatch!(fn poses_all(chain: &Chain, data: &mut Data, q: &[f64]) => poses_all_generic);
 fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize) => poses_path_generic);
-fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64]) => poses_incremental_generic);
+fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
 fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
 fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
 

@@ -103,6 +103,36 @@ fn a_partial_evaluation_does_not_leave_stale_poses_for_incremental_use() {
 }
 
 #[test]
+fn incremental_updates_check_what_changed_and_respect_a_new_limit_policy() {
+    use kinechain::StateError;
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let mut data = Data::new(&chain);
+    let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+    forward_kinematics_incremental(&chain, &mut data, &q).unwrap();
+    // A changed entry that is not finite, or out of its limits, is reported by index and joint.
+    let mut bad = q;
+    bad[4] = f64::NAN;
+    let err = forward_kinematics_incremental(&chain, &mut data, &bad).unwrap_err();
+    assert!(
+        matches!(err, StateError::NonFinite { index: 4, .. }),
+        "{err}"
+    );
+    bad[4] = 100.0;
+    let err = forward_kinematics_incremental(&chain, &mut data, &bad).unwrap_err();
+    assert!(matches!(err, StateError::OutOfLimits { .. }), "{err}");
+    assert!(err.to_string().contains(chain.joints()[4].name()), "{err}");
+    // The wrong length is still an error.
+    let err = forward_kinematics_incremental(&chain, &mut data, &q[..5]).unwrap_err();
+    assert!(matches!(err, StateError::WrongLength { .. }), "{err}");
+    // Accepted while limits are ignored; the same q is checked again once they are enforced.
+    data.set_limit_policy(LimitPolicy::Ignore);
+    forward_kinematics_incremental(&chain, &mut data, &bad).unwrap();
+    data.set_limit_policy(LimitPolicy::Enforce);
+    let err = forward_kinematics_incremental(&chain, &mut data, &bad).unwrap_err();
+    assert!(matches!(err, StateError::OutOfLimits { .. }), "{err}");
+}
+
+#[test]
 fn every_level_gives_the_same_poses() {
     let mut rng = rng(13);
     for chain in chains() {
