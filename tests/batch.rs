@@ -92,3 +92,31 @@ fn batch_errors_name_the_configuration() {
     assert_eq!(e.index, 4500);
     assert!(matches!(e.source, StateError::NonFinite { index: 1, .. }));
 }
+
+#[test]
+fn large_parallel_batches_equal_the_single_threaded_batch() {
+    // Past the size where the pool is used (smaller batches run on the calling thread).
+    let chain = Chain::from_file(robots_dir().join("panda.urdf")).unwrap();
+    let mut rng = rng(5);
+    let qs: Vec<f64> = (0..3001).flat_map(|_| random_q(&chain, &mut rng)).collect();
+    let (mut one, mut all) = (BatchData::new(&chain), BatchData::new(&chain));
+    one.set_limit_policy(LimitPolicy::Ignore);
+    all.set_limit_policy(LimitPolicy::Ignore);
+    let a = forward_kinematics_batch(&chain, &mut one, &qs).unwrap();
+    let b = forward_kinematics_batch_par(&chain, &mut all, &qs).unwrap();
+    assert_eq!(a.len(), b.len());
+    let links: Vec<_> = chain
+        .links()
+        .iter()
+        .map(|l| chain.link_id(l.name()).unwrap())
+        .collect();
+    for i in (0..a.len()).step_by(7).chain([a.len() - 1]) {
+        for &l in &links {
+            assert_eq!(
+                a.world_from_link(i, l),
+                b.world_from_link(i, l),
+                "configuration {i}"
+            );
+        }
+    }
+}
