@@ -194,7 +194,10 @@ fn naive_baseline(c: &mut Criterion) {
 /// second (`thrpt`).
 fn batches(c: &mut Criterion) {
     use criterion::Throughput;
-    use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    use kinechain::batch::{
+        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
+        forward_kinematics_batch_to,
+    };
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let n = 4096;
     for (name, file) in robots() {
@@ -222,6 +225,25 @@ fn batches(c: &mut Criterion) {
                 )
             })
         });
+        // Only the end link's pose, per configuration.
+        let end = chain.end_link();
+        for (id, parallel) in [("end_link_1_thread", false), ("end_link_all_threads", true)] {
+            group.bench_function(id, |b| {
+                b.iter(|| {
+                    black_box(
+                        forward_kinematics_batch_to(
+                            &chain,
+                            &mut data,
+                            black_box(&qs),
+                            end,
+                            parallel,
+                        )
+                        .unwrap()
+                        .len(),
+                    )
+                })
+            });
+        }
         group.finish();
     }
 }

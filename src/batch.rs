@@ -14,6 +14,10 @@ use crate::kinematics::{all_valid, check_q};
 use crate::transform::Transform;
 use rayon::prelude::*;
 
+/// Below this many configurations, waking rayon's pool costs more than a second thread saves
+/// (measured on a 2-vCPU VM: at 1 024 configurations, about 10 µs of fork–join).
+const PARALLEL_FROM: usize = 2048;
+
 /// A configuration of a batch cannot be evaluated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("configuration {index}")]
@@ -34,6 +38,10 @@ pub struct BatchData {
     frames: Vec<Frame<Lanes>>,
     /// One chunk's joint values, transposed into lanes.
     q_lanes: Vec<Lanes>,
+    /// [`forward_kinematics_batch_to`]: the link's body frame of each chunk, and the bodies from
+    /// the base to it.
+    link_frames: Vec<Frame<Lanes>>,
+    path: Vec<usize>,
     len: usize,
     bodies: usize,
     dof: usize,
@@ -47,6 +55,8 @@ impl BatchData {
         BatchData {
             frames: Vec::new(),
             q_lanes: vec![Lanes::splat(0.0); chain.dof()],
+            link_frames: Vec::new(),
+            path: Vec::with_capacity(chain.bodies.len()),
             len: 0,
             bodies: chain.bodies.len(),
             dof: chain.dof(),
@@ -81,11 +91,14 @@ impl BatchData {
         if check && !all_valid(chain, qs, self.limit_policy) {
             self.first_error(chain, qs)?;
         }
-        let chunks = n.div_ceil(LANES);
+        self.len = n;
+        Ok(n.div_ceil(LANES))
+    }
+
+    /// Room for every body of `chunks` chunks.
+    fn size_frames(&mut self, chunks: usize) {
         let zero = Frame::splat(&Transform::IDENTITY);
         self.frames.resize(chunks * self.bodies, zero);
-        self.len = n;
-        Ok(chunks)
     }
 
     /// The error for the first configuration of `qs` that [`check_q`] rejects (`Ok` if none).
@@ -173,6 +186,7 @@ pub fn forward_kinematics_batch<'a>(
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
     let chunks = data.prepare(chain, qs, true)?;
+    data.size_frames(chunks);
     let bodies = chain.bodies.len().max(1);
     for (c, frames) in data
         .frames
@@ -200,15 +214,13 @@ pub fn forward_kinematics_batch_par<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    // Below this many configurations, waking the pool costs more than the second thread saves
-    // (measured on a 2-vCPU VM: even at 1 024 configurations, about 10 µs of fork–join).
-    const PARALLEL_FROM: usize = 2048;
     if qs.len() < PARALLEL_FROM * chain.dof() {
         return forward_kinematics_batch(chain, data, qs);
     }
     // Each task checks its own configurations before evaluating them (one pass over the batch
     // and one fork–join, not two); the first bad configuration is looked for only on failure.
     let chunks = data.prepare(chain, qs, false)?;
+    data.size_frames(chunks);
     let bodies = chain.bodies.len().max(1);
     let policy = data.limit_policy;
     let dof = chain.dof();
@@ -234,6 +246,140 @@ pub fn forward_kinematics_batch_par<'a>(
     Ok(BatchPoses { chain, data })
 }
 
+/// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
+/// (the last chunk repeats its last configuration in the unused lanes).
+#[inline(always)]
+fn transpose(chain: &Chain, q: &mut [Lanes], qs: &[f64], c: usize) {
+    let dof = chain.dof();
+    let n = qs.len() / dof;
+    let rows: [usize; LANES] = std::array::from_fn(|l| (c * LANES + l).min(n - 1));
+    for (j, qj) in q.iter_mut().enumerate() {
+        *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
+    }
+}
+
+/// One link's pose in every configuration of a batch.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchLinkPoses<'a> {
+    chain: &'a Chain,
+    data: &'a BatchData,
+    link: LinkId,
+}
+
+impl BatchLinkPoses<'_> {
+    /// Number of configurations.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.data.len
+    }
+
+    /// True for an empty batch.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.data.len == 0
+    }
+
+    /// The link's pose in configuration `index`, world frame.
+    ///
+    /// # Panics
+    /// If `index >= self.len()`.
+    #[must_use]
+    pub fn world_from_link(&self, index: usize) -> Transform {
+        assert!(
+            index < self.data.len,
+            "configuration {index} of {}",
+            self.data.len
+        );
+        let l = self.chain.link(self.link);
+        if l.body.is_none() {
+            return l.offset.to_transform();
+        }
+        let f = &self.data.link_frames[index / LANES];
+        let lane = index % LANES;
+        let body = Transform {
+            r: f.r.map(|c| c.map(|x| x.0[lane])),
+            p: f.p.map(|x| x.0[lane]),
+        };
+        match l.offset {
+            Placement::Identity => body,
+            offset => body * offset.to_transform(),
+        }
+    }
+}
+
+/// The pose of one link for each configuration of `qs` (row-major): only the joints between
+/// the base and that link are evaluated, and only that link's pose is kept (one frame per
+/// configuration written to memory instead of one per joint, which is what bounds a large
+/// batch of all poses). On the calling thread, or with `parallel` over rayon's global pool
+/// (batches under 2 048 configurations always run on the calling thread). The poses are the
+/// same, bit for bit, as [`forward_kinematics_batch`] gives for the link.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`].
+///
+/// # Panics
+/// If `data` was created for another chain, or `link` comes from another chain with more links.
+///
+/// # Examples
+/// ```
+/// use kinechain::{Chain, batch::{BatchData, forward_kinematics_batch_to}};
+/// let chain = Chain::from_file("robots/planar3.yaml")?;
+/// let mut data = BatchData::new(&chain);
+/// let tip = chain.link_id("link3")?;
+/// let qs = [0.0, 0.0, 0.0, 1.5707963267948966, 0.0, 0.0];
+/// let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip, false)?;
+/// approx::assert_relative_eq!(poses.world_from_link(1).translation().y, 9.0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn forward_kinematics_batch_to<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    link: LinkId,
+    parallel: bool,
+) -> Result<BatchLinkPoses<'a>, BatchError> {
+    let parallel = parallel && qs.len() >= PARALLEL_FROM * chain.dof();
+    let chunks = data.prepare(chain, qs, !parallel)?;
+    data.path.clear();
+    let mut k = chain.link(link).body;
+    while let Some(b) = k {
+        data.path.push(b);
+        k = chain.bodies[b].parent;
+    }
+    data.path.reverse();
+    let zero = Frame::splat(&Transform::IDENTITY);
+    data.link_frames.resize(chunks, zero);
+    let path = &data.path;
+    if parallel {
+        let policy = data.limit_policy;
+        let dof = chain.dof();
+        let all_ok = data.link_frames[..chunks]
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(16)
+            .map_init(
+                || vec![Lanes::splat(0.0); dof],
+                |q_lanes, (c, out)| {
+                    let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
+                    let ok = all_valid(chain, rows, policy);
+                    if ok {
+                        *out = chunk_path(chain, path, q_lanes, qs, c);
+                    }
+                    ok
+                },
+            )
+            .reduce(|| true, |a, b| a & b);
+        if !all_ok {
+            data.first_error(chain, qs)?;
+        }
+    } else {
+        for (c, out) in data.link_frames[..chunks].iter_mut().enumerate() {
+            *out = chunk_path(chain, path, &mut data.q_lanes, qs, c);
+        }
+    }
+    Ok(BatchLinkPoses { chain, data, link })
+}
+
 /// One chunk: configurations `8c .. 8c + 8` (the last chunk repeats its last configuration in
 /// the unused lanes).
 #[inline(always)]
@@ -244,13 +390,7 @@ fn chunk_poses_generic<A: Arith>(
     qs: &[f64],
     c: usize,
 ) {
-    let dof = chain.dof();
-    let n = qs.len() / dof;
-    let rows: [usize; LANES] = std::array::from_fn(|l| (c * LANES + l).min(n - 1));
-    // Transpose this chunk's configurations into lanes: q[j] holds entry j of the 8.
-    for (j, qj) in q.iter_mut().enumerate() {
-        *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
-    }
+    transpose(chain, q, qs, c);
     let q: &[Lanes] = q;
     // Trigonometry first, for all bodies, so that it does not compete with the composition for
     // registers; the frames are written to `frames` and then read back one at a time.
@@ -270,5 +410,29 @@ fn chunk_poses_generic<A: Arith>(
         frames[k] = f;
     }
 }
+
+/// One chunk, one body: the frames along `path` (base first, each body the parent of the next),
+/// kept in registers; only the last is returned.
+#[inline(always)]
+fn chunk_path_generic<A: Arith>(
+    chain: &Chain,
+    path: &[usize],
+    q: &mut [Lanes],
+    qs: &[f64],
+    c: usize,
+) -> Frame<Lanes> {
+    transpose(chain, q, qs, c);
+    let q: &[Lanes] = q;
+    let mut f = Frame::splat(&Transform::IDENTITY);
+    for &k in path {
+        let body = &chain.bodies[k];
+        let sin_cos = kernel::body_sin_cos::<Lanes, A>(body, q);
+        let parent = body.parent.map(|_| &f);
+        f = kernel::pose_step::<Lanes, A>(parent, body, q, sin_cos);
+    }
+    f
+}
+
+fma_dispatch!(fn chunk_path(chain: &Chain, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize) -> Frame<Lanes> => chunk_path_generic);
 
 fma_dispatch!(fn chunk_poses(chain: &Chain, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) => chunk_poses_generic);

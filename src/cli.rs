@@ -898,7 +898,10 @@ fn time_per_call(f: impl FnMut()) -> f64 {
 }
 
 fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<(), CliError> {
-    use crate::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    use crate::batch::{
+        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
+        forward_kinematics_batch_to,
+    };
     use crate::kinematics::forward_kinematics_incremental;
     use std::hint::black_box;
 
@@ -998,6 +1001,32 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                     );
                 }) / (64 * qs.len()) as f64,
             ));
+            for parallel in [false, true] {
+                let qs = if parallel { &big } else { &flat };
+                rows.push((
+                    if parallel {
+                        format!(
+                            "kinechain, batch, end link only, {} threads",
+                            rayon::current_num_threads()
+                        )
+                    } else {
+                        "kinechain, batch, end link only, 1 thread".to_string()
+                    },
+                    time_per_call(|| {
+                        black_box(
+                            forward_kinematics_batch_to(
+                                &chain,
+                                &mut batch,
+                                black_box(qs),
+                                end,
+                                parallel,
+                            )
+                            .ok()
+                            .map(|b| b.len()),
+                        );
+                    }) / (qs.len() / chain.dof().max(1)) as f64,
+                ));
+            }
             crate::force_isa(Some(crate::Isa::Baseline));
             rows.push((
                 "kinechain, baseline x86-64 path".into(),

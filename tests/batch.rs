@@ -3,7 +3,9 @@
 mod common;
 
 use common::*;
-use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+use kinechain::batch::{
+    BatchData, forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
+};
 use kinechain::{Chain, Data, LimitPolicy, StateError, forward_kinematics};
 
 #[test]
@@ -118,5 +120,56 @@ fn large_parallel_batches_equal_the_single_threaded_batch() {
                 "configuration {i}"
             );
         }
+    }
+}
+
+#[test]
+fn one_link_batches_equal_the_full_batch() {
+    let mut rng = rng(6);
+    for file in [
+        "panda.urdf",
+        "ur5.yaml",
+        "stanford.yaml",
+        "cylindrical.yaml",
+    ] {
+        let chain = Chain::from_file(robots_dir().join(file)).unwrap();
+        // Enough configurations for the parallel path, and a partial last chunk.
+        let qs: Vec<f64> = (0..2053).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let mut full = BatchData::new(&chain);
+        full.set_limit_policy(LimitPolicy::Ignore);
+        let all = forward_kinematics_batch(&chain, &mut full, &qs).unwrap();
+        let mut one = BatchData::new(&chain);
+        one.set_limit_policy(LimitPolicy::Ignore);
+        for link in chain.links() {
+            let id = chain.link_id(link.name()).unwrap();
+            for parallel in [false, true] {
+                let poses =
+                    forward_kinematics_batch_to(&chain, &mut one, &qs, id, parallel).unwrap();
+                assert_eq!(poses.len(), all.len());
+                for i in (0..all.len()).step_by(11).chain([all.len() - 1]) {
+                    assert_eq!(
+                        poses.world_from_link(i),
+                        all.world_from_link(i, id),
+                        "{file} {} configuration {i}",
+                        link.name()
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn one_link_batches_name_the_first_bad_configuration() {
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let tool = chain.link_id("tool").unwrap();
+    let mut batch = BatchData::new(&chain);
+    let mut qs = vec![0.0; 6 * 5000];
+    qs[6 * 4500 + 1] = f64::NAN;
+    qs[6 * 3001 + 4] = -10.0;
+    for parallel in [false, true] {
+        let e = forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, parallel).unwrap_err();
+        assert_eq!(e.index, 3001);
+        assert!(matches!(e.source, StateError::OutOfLimits { .. }));
     }
 }
