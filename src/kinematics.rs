@@ -636,10 +636,22 @@ pub fn forward_accelerations<'a>(
 
 #[inline(always)]
 fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
-    kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
+    poses_prefix::<A>(chain, data, q, chain.bodies.len());
+}
+
+/// Poses of bodies `0..n` (parents come first, so they are all there).
+#[inline(always)]
+fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) {
+    let chunks = chain.turning_before[n].div_ceil(kernel::LANES);
+    kernel::all_sin_cos::<A>(
+        &chain.theta_gather[..chunks],
+        q,
+        &mut data.sin,
+        &mut data.cos,
+    );
     let frames = &mut data.world_from_body;
     let mut f = Frame4::<A::Col>::identity();
-    for (k, body) in chain.bodies.iter().enumerate() {
+    for (k, body) in chain.bodies[..n].iter().enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
         let parent = match body.parent {
             Some(p) if p + 1 == k => Some(f),
@@ -654,6 +666,11 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
 
 #[inline(always)]
 fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
+    if chain.is_serial() {
+        // The path is the bodies up to this one.
+        poses_prefix::<A>(chain, data, q, body + 1);
+        return;
+    }
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
     let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
