@@ -141,20 +141,9 @@ impl BatchPoses<'_> {
             "configuration {index} of {}",
             self.data.len
         );
-        let l = self.chain.link(link);
-        let Some(b) = l.body else {
-            return l.offset.to_transform();
-        };
-        let f = &self.data.frames[(index / LANES) * self.data.bodies + b];
-        let lane = index % LANES;
-        let body = Transform {
-            r: f.r.map(|c| c.map(|x| x.0[lane])),
-            p: f.p.map(|x| x.0[lane]),
-        };
-        match l.offset {
-            Placement::Identity => body,
-            offset => body * offset.to_transform(),
-        }
+        lane_pose(self.chain, link, index, |b| {
+            &self.data.frames[(index / LANES) * self.data.bodies + b]
+        })
     }
 }
 
@@ -217,33 +206,72 @@ pub fn forward_kinematics_batch_par<'a>(
     if qs.len() < PARALLEL_FROM * chain.dof() {
         return forward_kinematics_batch(chain, data, qs);
     }
-    // Each task checks its own configurations before evaluating them (one pass over the batch
-    // and one fork–join, not two); the first bad configuration is looked for only on failure.
+    // The first bad configuration is looked for only on failure.
     let chunks = data.prepare(chain, qs, false)?;
     data.size_frames(chunks);
     let bodies = chain.bodies.len().max(1);
-    let policy = data.limit_policy;
-    let dof = chain.dof();
-    let all_ok = data.frames[..chunks * chain.bodies.len()]
-        .par_chunks_mut(bodies)
-        .enumerate()
-        .with_min_len(16)
-        .map_init(
-            || vec![Lanes::splat(0.0); dof],
-            |q_lanes, (c, frames)| {
-                let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
-                let ok = all_valid(chain, rows, policy);
-                if ok {
-                    chunk_poses(chain, frames, q_lanes, qs, c);
-                }
-                ok
-            },
-        )
-        .reduce(|| true, |a, b| a & b);
+    let all_ok = par_chunks_checked(
+        chain,
+        data.limit_policy,
+        qs,
+        data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
+        |q_lanes, c, frames| chunk_poses(chain, frames, q_lanes, qs, c),
+    );
     if !all_ok {
         data.first_error(chain, qs)?;
     }
     Ok(BatchPoses { chain, data })
+}
+
+/// The pose of `link` in configuration `index`, from `body_frames(b)`, the lanes holding the
+/// frame of the link's body `b`.
+fn lane_pose<'f>(
+    chain: &Chain,
+    link: LinkId,
+    index: usize,
+    body_frames: impl FnOnce(usize) -> &'f Frame<Lanes>,
+) -> Transform {
+    let l = chain.link(link);
+    let Some(b) = l.body else {
+        return l.offset.to_transform();
+    };
+    let f = body_frames(b);
+    let lane = index % LANES;
+    let body = Transform {
+        r: f.r.map(|c| c.map(|x| x.0[lane])),
+        p: f.p.map(|x| x.0[lane]),
+    };
+    match l.offset {
+        Placement::Identity => body,
+        offset => body * offset.to_transform(),
+    }
+}
+
+/// Runs `eval(q_lanes, c, out)` for each chunk `c` of `qs` and its output `out` on rayon's pool,
+/// each task first checking its own configurations (one pass over the batch and one fork–join,
+/// not two). False when some configuration is invalid; its chunk is then not evaluated.
+fn par_chunks_checked<T: Send>(
+    chain: &Chain,
+    policy: LimitPolicy,
+    qs: &[f64],
+    outs: impl IndexedParallelIterator<Item = T>,
+    eval: impl Fn(&mut [Lanes], usize, T) + Sync + Send,
+) -> bool {
+    let dof = chain.dof();
+    outs.enumerate()
+        .with_min_len(16)
+        .map_init(
+            || vec![Lanes::splat(0.0); dof],
+            |q_lanes, (c, out)| {
+                let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
+                let ok = all_valid(chain, rows, policy);
+                if ok {
+                    eval(q_lanes, c, out);
+                }
+                ok
+            },
+        )
+        .reduce(|| true, |a, b| a & b)
 }
 
 /// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
@@ -290,20 +318,9 @@ impl BatchLinkPoses<'_> {
             "configuration {index} of {}",
             self.data.len
         );
-        let l = self.chain.link(self.link);
-        if l.body.is_none() {
-            return l.offset.to_transform();
-        }
-        let f = &self.data.link_frames[index / LANES];
-        let lane = index % LANES;
-        let body = Transform {
-            r: f.r.map(|c| c.map(|x| x.0[lane])),
-            p: f.p.map(|x| x.0[lane]),
-        };
-        match l.offset {
-            Placement::Identity => body,
-            offset => body * offset.to_transform(),
-        }
+        lane_pose(self.chain, self.link, index, |_| {
+            &self.data.link_frames[index / LANES]
+        })
     }
 }
 
@@ -351,24 +368,13 @@ pub fn forward_kinematics_batch_to<'a>(
     data.link_frames.resize(chunks, zero);
     let path = &data.path;
     if parallel {
-        let policy = data.limit_policy;
-        let dof = chain.dof();
-        let all_ok = data.link_frames[..chunks]
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(16)
-            .map_init(
-                || vec![Lanes::splat(0.0); dof],
-                |q_lanes, (c, out)| {
-                    let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
-                    let ok = all_valid(chain, rows, policy);
-                    if ok {
-                        *out = chunk_path(chain, path, q_lanes, qs, c);
-                    }
-                    ok
-                },
-            )
-            .reduce(|| true, |a, b| a & b);
+        let all_ok = par_chunks_checked(
+            chain,
+            data.limit_policy,
+            qs,
+            data.link_frames[..chunks].par_iter_mut(),
+            |q_lanes, c, out| *out = chunk_path(chain, path, q_lanes, qs, c),
+        );
         if !all_ok {
             data.first_error(chain, qs)?;
         }
