@@ -136,12 +136,7 @@ impl BatchPoses<'_> {
     /// If `index >= self.len()` or `link` comes from another chain.
     #[must_use]
     pub fn world_from_link(&self, index: usize, link: LinkId) -> Transform {
-        assert!(
-            index < self.data.len,
-            "configuration {index} of {}",
-            self.data.len
-        );
-        lane_pose(self.chain, link, index, |b| {
+        lane_pose(self.chain, self.data.len, link, index, |b| {
             &self.data.frames[(index / LANES) * self.data.bodies + b]
         })
     }
@@ -223,14 +218,16 @@ pub fn forward_kinematics_batch_par<'a>(
     Ok(BatchPoses { chain, data })
 }
 
-/// The pose of `link` in configuration `index`, from `body_frames(b)`, the lanes holding the
-/// frame of the link's body `b`.
+/// The pose of `link` in configuration `index` of `len`, from `body_frames(b)`, the lanes holding
+/// the frame of the link's body `b`.
 fn lane_pose<'f>(
     chain: &Chain,
+    len: usize,
     link: LinkId,
     index: usize,
     body_frames: impl FnOnce(usize) -> &'f Frame<Lanes>,
 ) -> Transform {
+    assert!(index < len, "configuration {index} of {len}");
     let l = chain.link(link);
     let Some(b) = l.body else {
         return l.offset.to_transform();
@@ -313,12 +310,7 @@ impl BatchLinkPoses<'_> {
     /// If `index >= self.len()`.
     #[must_use]
     pub fn world_from_link(&self, index: usize) -> Transform {
-        assert!(
-            index < self.data.len,
-            "configuration {index} of {}",
-            self.data.len
-        );
-        lane_pose(self.chain, self.link, index, |_| {
+        lane_pose(self.chain, self.data.len, self.link, index, |_| {
             &self.data.link_frames[index / LANES]
         })
     }
