@@ -4,6 +4,8 @@
 //! `cargo bench --bench fk` (ids like `fk/pose/panda`); the run-time-against-error table is
 //! `cargo bench --bench table`.
 
+mod naive;
+
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use kinechain::measure::configurations;
 use kinechain::{
@@ -150,27 +152,7 @@ fn naive_baseline(c: &mut Criterion) {
             let q = black_box(&qs[i]);
             let mut t = Matrix4::<f64>::identity();
             for (k, &(a, alpha, d)) in rows.iter().enumerate() {
-                let (st, ct): (f64, f64) = q[k].sin_cos();
-                let (sa, ca): (f64, f64) = alpha.sin_cos();
-                // eq. (2.129)
-                let m = Matrix4::new(
-                    ct,
-                    -st,
-                    0.0,
-                    a,
-                    st * ca,
-                    ct * ca,
-                    -sa,
-                    -d * sa,
-                    st * sa,
-                    ct * sa,
-                    ca,
-                    d * ca,
-                    0.0,
-                    0.0,
-                    0.0,
-                    1.0,
-                );
+                let m = naive::dh_matrix(true, a, alpha, d, q[k]);
                 t *= m;
                 out[k + 1] = t;
             }

@@ -9,6 +9,7 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+mod naive;
 
 use common::*;
 use kinechain::batch::{BatchData, forward_kinematics_batch};
@@ -222,48 +223,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
                 } else {
                     (theta, q[k] + offsets[k])
                 };
-                let (st, ct) = th.sin_cos();
-                let (sa, ca) = alpha.sin_cos();
-                let a_i = if modified {
-                    // eq. (2.129)
-                    Matrix4::new(
-                        ct,
-                        -st,
-                        0.0,
-                        a,
-                        st * ca,
-                        ct * ca,
-                        -sa,
-                        -dd * sa,
-                        st * sa,
-                        ct * sa,
-                        ca,
-                        dd * ca,
-                        0.0,
-                        0.0,
-                        0.0,
-                        1.0,
-                    )
-                } else {
-                    Matrix4::new(
-                        ct,
-                        -st * ca,
-                        st * sa,
-                        a * ct,
-                        st,
-                        ct * ca,
-                        -ct * sa,
-                        a * st,
-                        0.0,
-                        sa,
-                        ca,
-                        dd,
-                        0.0,
-                        0.0,
-                        0.0,
-                        1.0,
-                    )
-                };
+                let a_i = naive::dh_matrix(modified, a, alpha, dd, th);
                 t *= a_i;
                 out.push(t);
             }
