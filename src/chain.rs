@@ -491,9 +491,6 @@ pub(crate) struct Body {
     /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::padded`].
     pub(crate) pre4: crate::padded::Stored,
     pub(crate) axis4: crate::padded::C4,
-    /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
-    /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
-    pub(crate) in_place: bool,
     /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
@@ -552,6 +549,12 @@ impl ZSteps {
 }
 
 impl Body {
+    /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
+    /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
+    pub(crate) fn in_place(&self) -> bool {
+        !matches!(self.pre, Placement::General(_))
+    }
+
     pub(crate) fn new(
         parent: Option<usize>,
         pre: Placement,
@@ -569,7 +572,6 @@ impl Body {
             joint,
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
-            in_place: !matches!(pre, Placement::General(_)),
             z_steps: ZSteps::new(&pre, &motion, &post),
             pre_frame,
             axis_in_parent,

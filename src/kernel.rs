@@ -405,7 +405,7 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
     q: &[N],
     sin_cos: (N, N),
 ) -> Frame<N> {
-    if body.in_place {
+    if body.in_place() {
         let mut f = match parent {
             Some(f) => *f,
             None => Frame::splat(&crate::transform::Transform::IDENTITY),

@@ -245,7 +245,7 @@ pub(crate) fn pose_step<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) -> Frame4<A::Col> {
-    if body.in_place {
+    if body.in_place() {
         let f = match parent {
             Some(f) => f.0,
             None => Frame4::identity().0,
