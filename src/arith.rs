@@ -13,6 +13,9 @@ use std::sync::atomic::{AtomicU8, Ordering};
 pub(crate) trait Arith: Copy {
     /// Four `f64` handled as one vector, with this policy's multiply–add.
     type Col: Col;
+    /// Whether [`Arith::mul_add`] rounds once (then the exact product error
+    /// `a * b − RN(a * b)` is one operation away).
+    const FUSED: bool;
     /// `a * b + c`.
     fn mul_add(a: f64, b: f64, c: f64) -> f64;
 }
@@ -48,6 +51,7 @@ pub(crate) struct Separate;
 
 impl Arith for Separate {
     type Col = Portable<Separate>;
+    const FUSED: bool = false;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
         a * b + c
@@ -64,6 +68,7 @@ impl Arith for Fused {
     type Col = Avx;
     #[cfg(not(target_arch = "x86_64"))]
     type Col = Portable<Fused>;
+    const FUSED: bool = true;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
         a.mul_add(b, c)
@@ -337,7 +342,12 @@ macro_rules! fma_dispatch {
                     $crate::arith::Isa::Baseline => {}
                 }
             }
-            $generic::<$crate::arith::Separate>($($arg),*)
+            // Not inlined, so that the dispatch stays a few instructions (no frame of its own).
+            #[inline(never)]
+            fn baseline($($arg: $ty),*) $(-> $ret)? {
+                $generic::<$crate::arith::Separate>($($arg),*)
+            }
+            baseline($($arg),*)
         }
     };
 }

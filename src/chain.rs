@@ -512,8 +512,38 @@ pub(crate) struct CheapPlacement {
     pub(crate) x: Option<f64>,
     /// ... or along any vector (three).
     pub(crate) t: Option<[f64; 3]>,
-    /// Then a rotation about x: `(cos α, sin α)`.
-    pub(crate) rot_x: Option<(f64, f64)>,
+    /// Then a rotation about x.
+    pub(crate) rot_x: Option<XTurn>,
+}
+
+/// A rotation about x by α, `(c, s) = (cos α, sin α)`. Most DH tables and URDF arms turn by
+/// quarter turns, where `sin α` is exactly ±1 (even for the double nearest π/2, whose cosine is
+/// 6.1·10⁻¹⁷, not 0): then each product `s · column` is the column or its negative, bit for
+/// bit, and the kernels skip it, which shortens the dependency chain from joint to joint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum XTurn {
+    Any {
+        c: f64,
+        s: f64,
+    },
+    /// `s = 1` (`negative: false`) or `s = −1`.
+    Quarter {
+        c: f64,
+        negative: bool,
+    },
+}
+
+impl XTurn {
+    fn new(c: f64, s: f64) -> XTurn {
+        if s.abs() == 1.0 {
+            XTurn::Quarter {
+                c,
+                negative: s < 0.0,
+            }
+        } else {
+            XTurn::Any { c, s }
+        }
+    }
 }
 
 impl CheapPlacement {
@@ -528,8 +558,10 @@ impl CheapPlacement {
             Placement::Identity => {}
             Placement::Translation(t) if along_x(t) => out.x = Some(t[0]),
             Placement::Translation(t) => out.t = Some(t),
-            Placement::ScrewX { a, c, s } => (out.x, out.rot_x) = (Some(a), Some((c, s))),
-            Placement::OffsetRotX { t, c, s } => (out.t, out.rot_x) = (Some(t), Some((c, s))),
+            Placement::ScrewX { a, c, s } => (out.x, out.rot_x) = (Some(a), Some(XTurn::new(c, s))),
+            Placement::OffsetRotX { t, c, s } => {
+                (out.t, out.rot_x) = (Some(t), Some(XTurn::new(c, s)));
+            }
             Placement::General(_) => return None,
         }
         Some(out)
@@ -599,6 +631,66 @@ pub(crate) struct LimitCheck {
     pub(crate) limits: Limits,
 }
 
+/// The limit checks by entry of `q`, as columns: entry `i` passes when it is finite and
+/// `lower[i] ≤ scale[i] · x + offset[i] ≤ upper[i]` (the arithmetic of [`LimitCheck`]), with
+/// `(1, 0, −∞, ∞)` for an entry without limits. A whole configuration is then checked in one
+/// branch-free pass that vectorises.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct DenseLimits {
+    scale: Vec<f64>,
+    offset: Vec<f64>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl DenseLimits {
+    /// The columns for `checks` over `dof` entries. Two checks of one entry with the same scale
+    /// and offset (a mimic joint copying its leader) become their intersection; with different
+    /// ones the result is `None`.
+    fn new(checks: &[LimitCheck], dof: usize) -> Option<DenseLimits> {
+        let mut out = DenseLimits {
+            scale: vec![1.0; dof],
+            offset: vec![0.0; dof],
+            lower: vec![f64::NEG_INFINITY; dof],
+            upper: vec![f64::INFINITY; dof],
+        };
+        let mut seen = vec![false; dof];
+        for c in checks {
+            let i = c.index;
+            if *seen.get(i)? && (out.scale[i] != c.scale || out.offset[i] != c.offset) {
+                return None;
+            }
+            seen[i] = true;
+            out.scale[i] = c.scale;
+            out.offset[i] = c.offset;
+            out.lower[i] = out.lower[i].max(c.limits.lower);
+            out.upper[i] = out.upper[i].min(c.limits.upper);
+        }
+        Some(out)
+    }
+
+    /// Whether entry `i` may take the value `x`.
+    #[inline(always)]
+    pub(crate) fn admits(&self, i: usize, x: f64) -> bool {
+        let value = self.scale[i] * x + self.offset[i];
+        x.is_finite() & (value >= self.lower[i]) & (value <= self.upper[i])
+    }
+
+    /// Whether every entry of `q` (of the chain's length) may take its value.
+    #[inline(always)]
+    pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
+        let n = q.len();
+        let (q, scale, offset) = (&q[..n], &self.scale[..n], &self.offset[..n]);
+        let (lower, upper) = (&self.lower[..n], &self.upper[..n]);
+        let mut ok = true;
+        for i in 0..n {
+            let value = scale[i] * q[i] + offset[i];
+            ok &= q[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
+        }
+        ok
+    }
+}
+
 /// An immutable, validated kinematic chain (or tree).
 ///
 /// Build one from a file with [`Chain::from_file`], from text with
@@ -623,7 +715,8 @@ pub struct Chain {
     /// For each entry of `q`: (joint, component name for cylindrical joints).
     variables: Vec<(usize, Option<&'static str>)>,
     pub(crate) limit_checks: Vec<LimitCheck>,
-    /// For each body, the largest entry index of `q` it reads + 1 (0 if none).
+    /// `limit_checks` by entry of `q`, when no entry has two different ones.
+    pub(crate) dense_limits: Option<DenseLimits>,
     link_index: HashMap<String, usize>,
     joint_index: HashMap<String, usize>,
     serial: bool,
@@ -1343,6 +1436,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         trig_slot,
         turning_before,
         first_body_of_variable,
+        dense_limits: DenseLimits::new(&limit_checks, variables.len()),
         variables,
         limit_checks,
         serial,
@@ -1407,5 +1501,78 @@ mod tests {
         );
         // Seven sines for seven turning joints: one vector of lanes.
         assert_eq!(panda.theta_gather.len(), 1);
+    }
+
+    #[test]
+    fn dense_limits_decide_as_the_checks_do() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
+        let mimic_opposite = r#"<robot name="g"><link name="palm"/><link name="l"/><link name="r"/>
+  <joint name="lf" type="prismatic"><parent link="palm"/><child link="l"/><axis xyz="0 1 0"/>
+    <limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
+  <joint name="rf" type="prismatic"><parent link="palm"/><child link="r"/><axis xyz="0 1 0"/>
+    <limit lower="-0.04" upper="0" effort="1" velocity="1"/>
+    <mimic joint="lf" multiplier="-1" offset="0.01"/></joint></robot>"#;
+        let mimic_same = mimic_opposite
+            .replace(r#"multiplier="-1" offset="0.01""#, "")
+            .replace(r#"lower="-0.04" upper="0""#, r#"lower="0.01" upper="0.05""#);
+        let chains = [
+            (Chain::from_file(root.join("panda.urdf")).unwrap(), true),
+            (
+                Chain::from_file(root.join("cylindrical.yaml")).unwrap(),
+                true,
+            ),
+            (Chain::from_file(root.join("ur5.yaml")).unwrap(), true),
+            // Two checks of one entry with different scales: no columns, the checks are used.
+            (Chain::from_urdf_str(mimic_opposite).unwrap(), false),
+            // The same scale: one column, the intersection [0.01, 0.04].
+            (Chain::from_urdf_str(&mimic_same).unwrap(), true),
+        ];
+        let slow = |chain: &Chain, q: &[f64]| {
+            q.iter().all(|x| x.is_finite())
+                && chain
+                    .limit_checks
+                    .iter()
+                    .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
+        };
+        let values = [
+            -7.0,
+            -3.0718,
+            -0.0698,
+            -0.04,
+            -0.0,
+            0.0,
+            0.005,
+            0.01,
+            0.03,
+            0.04,
+            0.0401,
+            1.0,
+            2.8973,
+            3.7525,
+            7.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for (chain, dense) in &chains {
+            assert_eq!(chain.dense_limits.is_some(), *dense, "{}", chain.name());
+            let Some(limits) = &chain.dense_limits else {
+                continue;
+            };
+            let base = crate::measure::configurations(chain, 1, 3).remove(0);
+            assert_eq!(limits.admit_all(&base), slow(chain, &base));
+            for i in 0..chain.dof() {
+                for &x in &values {
+                    let mut q = base.clone();
+                    q[i] = x;
+                    let want = slow(chain, &q);
+                    assert_eq!(limits.admit_all(&q), want, "{} q[{i}] = {x}", chain.name());
+                    assert_eq!(limits.admits(i, x), want, "{} q[{i}] = {x}", chain.name());
+                }
+            }
+        }
+        let same = &chains[4].0;
+        let limits = same.dense_limits.as_ref().unwrap();
+        assert!(!limits.admits(0, 0.005) && limits.admits(0, 0.03) && !limits.admits(0, 0.045));
     }
 }

@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, XTurn, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -342,8 +342,22 @@ fn cheap_place<N: Num, A: Arith>(f: &mut Frame<N>, p: &CheapPlacement) {
     if let Some(t) = p.t {
         f.p = apply_const_add::<N, A>(&f.r, t, f.p);
     }
-    if let Some((c, s)) = p.rot_x {
-        plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c));
+    match p.rot_x {
+        None => {}
+        Some(XTurn::Any { c, s }) => plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c)),
+        Some(XTurn::Quarter { c, negative }) => {
+            // `plane` with s = ±1, the products s · column written as what they are.
+            let (c, r1, r2) = (N::splat(c), f.r[1], f.r[2]);
+            for k in 0..3 {
+                let (s_r2, s_r1) = if negative {
+                    (-r2[k], -r1[k])
+                } else {
+                    (r2[k], r1[k])
+                };
+                f.r[1][k] = N::mul_add::<A>(c, r1[k], s_r2);
+                f.r[2][k] = N::mul_add::<A>(c, r2[k], -s_r1);
+            }
+        }
     }
 }
 

@@ -428,13 +428,18 @@ pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool 
     if !qs.iter().fold(true, |ok, x| ok & x.is_finite()) {
         return false;
     }
-    policy == LimitPolicy::Ignore
-        || qs.chunks_exact(chain.dof()).all(|q| {
-            chain
-                .limit_checks
-                .iter()
-                .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
-        })
+    if policy == LimitPolicy::Ignore {
+        return true;
+    }
+    if let Some(limits) = &chain.dense_limits {
+        return qs.chunks_exact(chain.dof()).all(|q| limits.admit_all(q));
+    }
+    qs.chunks_exact(chain.dof()).all(|q| {
+        chain
+            .limit_checks
+            .iter()
+            .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
+    })
 }
 
 /// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
@@ -442,6 +447,14 @@ pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool 
 /// # Errors
 /// [`StateError`] naming the first entry at fault.
 pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), StateError> {
+    // One branch-free pass when the checks fit one per entry; the entry at fault is looked for
+    // only on failure.
+    if let (Some(limits), LimitPolicy::Enforce, true) =
+        (&chain.dense_limits, policy, q.len() == chain.dof())
+        && limits.admit_all(q)
+    {
+        return Ok(());
+    }
     check_values(chain, q, "q")?;
     if policy == LimitPolicy::Enforce {
         for c in &chain.limit_checks {
@@ -541,11 +554,14 @@ fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<usize, StateEr
             first = first.min(chain.first_body_of_variable[i]);
             ok &= x.is_finite();
             if enforce {
-                ok &= chain
-                    .limit_checks
-                    .iter()
-                    .filter(|c| c.index == i)
-                    .all(|c| c.limits.contains(c.scale * x + c.offset));
+                ok &= match &chain.dense_limits {
+                    Some(limits) => limits.admits(i, *x),
+                    None => chain
+                        .limit_checks
+                        .iter()
+                        .filter(|c| c.index == i)
+                        .all(|c| c.limits.contains(c.scale * x + c.offset)),
+                };
             }
         }
     }

@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, XTurn, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::kernel::{Rates, term_value};
 use crate::transform::Transform;
@@ -204,8 +204,20 @@ fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
     if let Some(t) = p.t {
         f[3] = combine_const(f, t, f[3]);
     }
-    if let Some((c, s)) = p.rot_x {
-        plane(f, 1, 2, s, c);
+    match p.rot_x {
+        None => {}
+        Some(XTurn::Any { c, s }) => plane(f, 1, 2, s, c),
+        Some(XTurn::Quarter { c, negative }) => {
+            // `plane` with s = ±1 (see `kernel::cheap_place`).
+            let (c, c1, c2) = (A::Col::splat(c), f[1], f[2]);
+            let (s_c2, s_c1) = if negative {
+                (c2.neg(), c1.neg())
+            } else {
+                (c2, c1)
+            };
+            f[1] = A::Col::mul_add(c, c1, s_c2);
+            f[2] = A::Col::mul_add(c, c2, s_c1.neg());
+        }
     }
 }
 
@@ -462,6 +474,17 @@ mod tests {
                 c: 0.8_f64.cos(),
                 s: 0.8_f64.sin(),
             },
+            // Quarter turns, as DH tables give them: sin α = ±1 exactly, cos α ≈ 6.1e-17.
+            Placement::ScrewX {
+                a: 0.2,
+                c: std::f64::consts::FRAC_PI_2.cos(),
+                s: std::f64::consts::FRAC_PI_2.sin(),
+            },
+            Placement::OffsetRotX {
+                t: [0.0, 0.3, -0.1],
+                c: (-std::f64::consts::FRAC_PI_2).cos(),
+                s: (-std::f64::consts::FRAC_PI_2).sin(),
+            },
             Placement::General(general),
         ];
         let axes = [
@@ -527,6 +550,50 @@ mod tests {
                 let generic = Transform::from(generic);
                 assert_eq!(bits(&out), bits(&generic), "{body:?}, parent {has_parent}");
             }
+        }
+    }
+
+    /// The quarter-turn form of a rotation about x gives the bits of the plane rotation it
+    /// replaces, signed zeros included (the identity frame has them).
+    fn check_quarter_turns<A: Arith>() {
+        let frames = [
+            Transform::from_xyz_rpy([1.0, 2.0, -0.5], [-0.7, 0.2, 2.9]),
+            Transform::IDENTITY,
+            Transform::from_xyz_rpy([0.0, -0.0, 0.0], [0.0, std::f64::consts::PI, 0.0]),
+        ];
+        for frame in &frames {
+            for alpha in [std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2] {
+                let (s, c) = alpha.sin_cos();
+                let turn = CheapPlacement {
+                    x: None,
+                    t: None,
+                    rot_x: Some(XTurn::Quarter {
+                        c,
+                        negative: s < 0.0,
+                    }),
+                };
+                let mut quarter = Frame4::<A::Col>::load(&stored(frame)).0;
+                cheap_place::<A>(&mut quarter, &turn);
+                let mut general = Frame4::<A::Col>::load(&stored(frame)).0;
+                plane(&mut general, 1, 2, s, c);
+                let (mut a, mut b) = (stored(frame), stored(frame));
+                Frame4(quarter).store(&mut a);
+                Frame4(general).store(&mut b);
+                assert_eq!(
+                    bits(&transform(&a)),
+                    bits(&transform(&b)),
+                    "alpha {alpha}, {frame:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn quarter_turns_are_the_plane_rotation_bit_for_bit() {
+        assert_eq!(std::f64::consts::FRAC_PI_2.sin(), 1.0);
+        check_quarter_turns::<Separate>();
+        if crate::arith::isa() != crate::arith::Isa::Baseline {
+            check_quarter_turns::<Fused>();
         }
     }
 

@@ -1,13 +1,14 @@
 //! `sin` and `cos` of one argument together, within 1 ulp, branch-free so that a loop over
 //! lanes vectorises.
 //!
-//! The argument is reduced by `k = round(x · 2/π)` and `r = x − k π/2`, with π/2 split into three
-//! 33-bit parts so that every product `k · part` is exact for `|k| < 2²⁰`; the remainder is kept
-//! as a double-double `(r, r_tail)`. `sin r` and `cos r` come from minimax polynomials on
-//! `[−π/4, π/4]` (the classic fdlibm coefficients, accurate to 2⁻⁵⁸) with a first-order
-//! correction for `r_tail`; the quadrant `k mod 4` swaps and negates them. Arguments with
-//! `|x| ≥ 2¹⁹ π/2` (about 8.2·10⁵ rad) are left to the standard library, whose reduction covers
-//! the whole `f64` range.
+//! The argument is reduced by `k = round(x · 2/π)` and `r = x − k π/2`, the remainder kept as a
+//! double-double `(r, tail)`. With a fused multiply–add, π/2 is the sum of three doubles and
+//! `x − k·π/2_hi` is one exact operation, so `r` is ready four operations after `x`; without, π/2
+//! is split into 33-bit parts so that every product `k · part` is exact for `|k| < 2²⁰`. `sin r`
+//! and `cos r` come from minimax polynomials on `[−π/4, π/4]` (the classic fdlibm coefficients,
+//! accurate to 2⁻⁵⁸) with a first-order correction for `tail`; the quadrant `k mod 4` swaps and
+//! negates them. Arguments with `|x| ≥ 2¹⁹ π/2` (about 8.2·10⁵ rad) are left to the standard
+//! library, whose reduction covers the whole `f64` range.
 
 use crate::arith::Arith;
 
@@ -17,6 +18,10 @@ const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
 const PIO2_2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
 const PIO2_3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
 const PIO2_3_TAIL: f64 = f64::from_bits(0x397B_839A_2520_49C1);
+/// π/2 as the sum of three doubles (with a fused multiply–add the products need no spare bits).
+const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5444_2D18);
+const PIO2_MID: f64 = f64::from_bits(0x3C91_A626_3314_5C07);
+const PIO2_LO: f64 = f64::from_bits(0xB91F_1976_B7ED_8FBC);
 /// Largest |x| reduced here; beyond it `k` could exceed 2²⁰ and the products would round.
 pub(crate) const REDUCTION_LIMIT: f64 = 524_288.0 * std::f64::consts::FRAC_PI_2;
 /// 1.5 · 2⁵²: adding it rounds a double of magnitude < 2⁵¹ to an integer in the low mantissa bits.
@@ -54,42 +59,34 @@ pub(crate) fn sin_cos_reduced<A: Arith>(x: f64) -> (f64, f64) {
     let kb = A::mul_add(x, FRAC_2_PI, ROUNDER);
     let quadrant = kb.to_bits();
     let k = kb - ROUNDER;
-    // r = x − k π/2 as a double-double. The first two products are exact (|k| < 2²⁰, 33-bit
-    // parts) and x − k·PIO2_1 is exact by Sterbenz' lemma (for k ≠ 0 the two are within a factor
-    // of two; for k = 0 it is x).
-    let a = x - k * PIO2_1;
-    let b = k * PIO2_2;
-    let r_hi = a - b;
-    // Two-sum error of a − b, then the third part and the tail.
-    let bb = a - r_hi;
-    let err = (a - (r_hi + bb)) + (bb - b);
-    let r_lo = err - (k * PIO2_3 + k * PIO2_3_TAIL);
-    let r = r_hi + r_lo;
-    let tail = (r_hi - r) + r_lo;
+    // r + tail = x − k π/2, with |tail| far below |r|.
+    let (r, tail) = if A::FUSED {
+        reduce_fused::<A>(x, k)
+    } else {
+        reduce_split(x, k)
+    };
 
     let z = r * r;
     let v = z * r;
-    // sin(r + tail) ≈ sin r + tail cos r ≈ r + tail + v (S1 + z P(z)) − tail z/2.
-    let ps = A::mul_add(
-        z,
-        A::mul_add(z, A::mul_add(z, A::mul_add(z, S6, S5), S4), S3),
-        S2,
-    );
-    let sin_r = r - (((z * (0.5 * tail - v * ps)) - tail) - v * S1);
-    // cos(r + tail) ≈ cos r − tail sin r ≈ (1 − z/2) + z² Q(z) − r tail, with 1 − z/2 split to
-    // keep its rounding error.
-    let pc = z * A::mul_add(
-        z,
-        A::mul_add(
-            z,
-            A::mul_add(z, A::mul_add(z, A::mul_add(z, C6, C5), C4), C3),
-            C2,
-        ),
-        C1,
-    );
+    let z2 = z * z;
     let hz = 0.5 * z;
+    // sin(r + tail) ≈ sin r + tail cos r ≈ r + v (S1 + z P(z)) + tail (1 − z/2), P by Estrin's
+    // scheme (shorter dependency chain than Horner's; its rounding is scaled by r⁵).
+    let ps = A::mul_add(
+        z2,
+        A::mul_add(z2, S6, A::mul_add(z, S5, S4)),
+        A::mul_add(z, S3, S2),
+    );
+    let sin_r = r + A::mul_add(v, A::mul_add(z, ps, S1), A::mul_add(-hz, tail, tail));
+    // cos(r + tail) ≈ cos r − tail sin r ≈ (1 − z/2) + z² Q(z) − r tail, with the rounding
+    // error of 1 − z/2 kept.
+    let pc = A::mul_add(
+        z2,
+        A::mul_add(z2, A::mul_add(z, C6, C5), A::mul_add(z, C4, C3)),
+        A::mul_add(z, C2, C1),
+    );
     let w = 1.0 - hz;
-    let cos_r = w + (((1.0 - w) - hz) + (z * pc - r * tail));
+    let cos_r = w + A::mul_add(z2, pc, ((1.0 - w) - hz) - r * tail);
 
     // Quadrant: k mod 4 = 1 → (cos, −sin), 2 → (−sin, −cos), 3 → (−cos, sin).
     let swap = quadrant & 1 != 0;
@@ -100,6 +97,37 @@ pub(crate) fn sin_cos_reduced<A: Arith>(x: f64) -> (f64, f64) {
         f64::from_bits(s.to_bits() ^ sin_sign),
         f64::from_bits(c.to_bits() ^ cos_sign),
     )
+}
+
+/// `x − k π/2` as `(r, tail)` with one rounding per fused multiply–add: `x − k·PIO2_HI` is
+/// exact (for `k ≠ 0`, `|x| ≥ π/4`, so `x` and the product are multiples of 2⁻⁵³ and their
+/// difference is below 1), and the rest is a two-sum plus the exact error of `k · PIO2_MID`.
+/// The remainder `r` is ready after four operations; the tail is needed only at the end.
+#[inline(always)]
+fn reduce_fused<A: Arith>(x: f64, k: f64) -> (f64, f64) {
+    let a = A::mul_add(-k, PIO2_HI, x);
+    let t = k * PIO2_MID;
+    let t_err = A::mul_add(k, PIO2_MID, -t);
+    let r = a - t;
+    let tt = a - r;
+    let err = (a - (r + tt)) + (tt - t);
+    (r, err - A::mul_add(k, PIO2_LO, t_err))
+}
+
+/// `x − k π/2` as `(r, tail)` without a fused multiply–add: π/2 in 33-bit parts so that every
+/// product is exact, and `x − k·PIO2_1` is exact by Sterbenz' lemma (for `k ≠ 0` the two are
+/// within a factor of two; for `k = 0` it is `x`).
+#[inline(always)]
+fn reduce_split(x: f64, k: f64) -> (f64, f64) {
+    let a = x - k * PIO2_1;
+    let b = k * PIO2_2;
+    let r_hi = a - b;
+    // Two-sum error of a − b, then the third part and the tail.
+    let bb = a - r_hi;
+    let err = (a - (r_hi + bb)) + (bb - b);
+    let r_lo = err - (k * PIO2_3 + k * PIO2_3_TAIL);
+    let r = r_hi + r_lo;
+    (r, (r_hi - r) + r_lo)
 }
 
 #[cfg(test)]
