@@ -641,6 +641,9 @@ pub(crate) struct DenseLimits {
     offset: Vec<f64>,
     lower: Vec<f64>,
     upper: Vec<f64>,
+    /// The four columns repeated [`DenseLimits::BLOCK`] times, to check that many consecutive
+    /// configurations as one flat slice.
+    tiled: [Vec<f64>; 4],
 }
 
 impl DenseLimits {
@@ -653,6 +656,7 @@ impl DenseLimits {
             offset: vec![0.0; dof],
             lower: vec![f64::NEG_INFINITY; dof],
             upper: vec![f64::INFINITY; dof],
+            tiled: Default::default(),
         };
         let mut seen = vec![false; dof];
         for c in checks {
@@ -666,7 +670,33 @@ impl DenseLimits {
             out.lower[i] = out.lower[i].max(c.limits.lower);
             out.upper[i] = out.upper[i].min(c.limits.upper);
         }
+        let tile = |v: &Vec<f64>| v.repeat(Self::BLOCK);
+        out.tiled = [
+            tile(&out.scale),
+            tile(&out.offset),
+            tile(&out.lower),
+            tile(&out.upper),
+        ];
         Some(out)
+    }
+
+    /// Configurations per block of [`DenseLimits::admit_block`].
+    pub(crate) const BLOCK: usize = 8;
+
+    /// Whether every entry of `block`, [`DenseLimits::BLOCK`] whole configurations one after
+    /// the other, may take its value: one pass over flat columns, without a per-configuration
+    /// loop.
+    #[inline(always)]
+    pub(crate) fn admit_block(&self, block: &[f64]) -> bool {
+        let [scale, offset, lower, upper] = &self.tiled;
+        let n = scale.len();
+        let (block, offset, lower, upper) = (&block[..n], &offset[..n], &lower[..n], &upper[..n]);
+        let mut ok = true;
+        for i in 0..n {
+            let value = scale[i] * block[i] + offset[i];
+            ok &= block[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
+        }
+        ok
     }
 
     /// Whether entry `i` may take the value `x`.

@@ -70,6 +70,19 @@ fn batch_errors_name_the_configuration() {
     let e = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err();
     assert_eq!(e.index, 3);
     assert!(matches!(e.source, StateError::OutOfLimits { .. }));
+    // Whatever position a bad configuration has (whole blocks of eight are checked together,
+    // the rest one by one), it is found and named.
+    for bad in 0..19 {
+        let mut qs = vec![0.0; 6 * 19];
+        qs[6 * bad + 5] = f64::NEG_INFINITY;
+        let e = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err();
+        assert_eq!(e.index, bad);
+        assert!(matches!(e.source, StateError::NonFinite { index: 5, .. }));
+        qs[6 * bad + 5] = -10.0;
+        let e = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap_err();
+        assert_eq!(e.index, bad);
+        assert!(matches!(e.source, StateError::OutOfLimits { .. }));
+    }
     let e = forward_kinematics_batch(&chain, &mut batch, &qs[..13]).unwrap_err();
     assert!(matches!(e.source, StateError::WrongLength { .. }));
     assert!(
