@@ -425,8 +425,12 @@ fn chunk_path_generic<A: Arith>(
     for &k in path {
         let body = &chain.bodies[k];
         let sin_cos = kernel::body_sin_cos::<Lanes, A>(body, q);
-        let parent = body.parent.map(|_| &f);
-        f = kernel::pose_step::<Lanes, A>(parent, body, q, sin_cos);
+        // Two calls rather than one with `body.parent.map(|_| &f)`: the frame is then never
+        // reached through a pointer that may be null, and stays in registers.
+        f = match body.parent {
+            Some(_) => kernel::pose_step::<Lanes, A>(Some(&f), body, q, sin_cos),
+            None => kernel::pose_step::<Lanes, A>(None, body, q, sin_cos),
+        };
     }
     f
 }

@@ -683,13 +683,14 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) {
     let mut f = Frame4::<A::Col>::identity();
     for (k, body) in chain.bodies[..n].iter().enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
-        let parent = match body.parent {
-            Some(p) if p + 1 == k => Some(f),
-            Some(p) => Some(Frame4::load(&frames[p])),
-            None => None,
-        };
+        // (One call per case, so that the frame is never reached through an optional pointer.)
         let slot = chain.trig_slot[k];
-        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[slot], data.cos[slot]));
+        let sin_cos = (data.sin[slot], data.cos[slot]);
+        f = match body.parent {
+            Some(p) if p + 1 == k => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
+            None => padded::pose_step::<A>(None, body, q, sin_cos),
+        };
         f.store(&mut frames[k]);
     }
 }
@@ -722,9 +723,12 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         // The path starts at a body hanging from the world; each next body's parent is the
         // previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
-        let parent = body.parent.map(|_| f);
         let slot = chain.trig_slot[k];
-        f = padded::pose_step::<A>(parent.as_ref(), body, q, (data.sin[slot], data.cos[slot]));
+        let sin_cos = (data.sin[slot], data.cos[slot]);
+        f = match body.parent {
+            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            None => padded::pose_step::<A>(None, body, q, sin_cos),
+        };
         f.store(&mut frames[k]);
     }
 }
@@ -751,13 +755,16 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
         data.dirty[k] = dirty;
         if dirty {
             // The frame just computed stays in registers when it is the parent's.
-            let parent = match body.parent {
-                Some(p) if p + 1 == k && previous_done => Some(f),
-                Some(p) => Some(Frame4::load(&frames[p])),
-                None => None,
-            };
             let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
-            f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
+            f = match body.parent {
+                Some(p) if p + 1 == k && previous_done => {
+                    padded::pose_step::<A>(Some(&f), body, q, sin_cos)
+                }
+                Some(p) => {
+                    padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos)
+                }
+                None => padded::pose_step::<A>(None, body, q, sin_cos),
+            };
             f.store(&mut frames[k]);
         }
         previous_done = dirty;
@@ -794,8 +801,10 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
         } else {
             kernel::body_sin_cos::<f64, A>(body, q)
         };
-        let parent = body.parent.map(|_| f);
-        f = padded::pose_step::<A>(parent.as_ref(), body, q, sin_cos);
+        f = match body.parent {
+            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            None => padded::pose_step::<A>(None, body, q, sin_cos),
+        };
         f.store(&mut frames[k]);
     }
 }
@@ -812,26 +821,21 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
     for (k, body) in chain.bodies.iter().enumerate() {
         // The previous body's state stays in registers; only branches read a parent from memory.
-        let loaded;
-        let parent = match body.parent {
-            Some(p) if p + 1 == k => Some(&previous),
+        // (One call per case, as in `poses_prefix`.)
+        let sin_cos = (data.sin[chain.trig_slot[k]], data.cos[chain.trig_slot[k]]);
+        previous = match body.parent {
+            Some(p) if p + 1 == k => {
+                padded::rates_step::<A, ACC>(Some(&previous), body, q, q_dot, q_ddot, sin_cos)
+            }
             Some(p) => {
-                loaded = (
+                let loaded = (
                     Frame4::load(&data.world_from_body[p]),
                     Rates4::from_rates(&data.rates[p]),
                 );
-                Some(&loaded)
+                padded::rates_step::<A, ACC>(Some(&loaded), body, q, q_dot, q_ddot, sin_cos)
             }
-            None => None,
+            None => padded::rates_step::<A, ACC>(None, body, q, q_dot, q_ddot, sin_cos),
         };
-        previous = padded::rates_step::<A, ACC>(
-            parent,
-            body,
-            q,
-            q_dot,
-            q_ddot,
-            (data.sin[chain.trig_slot[k]], data.cos[chain.trig_slot[k]]),
-        );
         previous.0.store(&mut data.world_from_body[k]);
         previous.1.store::<ACC>(&mut data.rates[k]);
     }
