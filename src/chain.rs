@@ -826,11 +826,23 @@ impl Chain {
             })
     }
 
-    /// The last link of the chain: the link of the deepest frame along the last branch (for a
-    /// serial chain, the tip).
+    /// The link farthest from the base, counted in joints (fixed ones included); of equally far
+    /// ones, the last in file order. For a serial chain, the tip, whatever frames the file
+    /// declares after it (a URDF's `base` frame fixed to `base_link`, say).
     #[must_use]
     pub fn end_link(&self) -> LinkId {
-        LinkId(self.links.len().saturating_sub(1))
+        // Links come parents first, so each depth is known before its children's.
+        let mut depth = vec![0_usize; self.links.len()];
+        let mut end = 0;
+        for (l, link) in self.links.iter().enumerate() {
+            if let Some(j) = link.parent_joint {
+                depth[l] = depth[self.joints[j.0].parent.0] + 1;
+            }
+            if depth[l] >= depth[end] {
+                end = l;
+            }
+        }
+        LinkId(end)
     }
 
     /// For each entry of `q`, the joint it drives and, for a cylindrical joint, `theta` or `d`.
@@ -1604,5 +1616,20 @@ mod tests {
         let same = &chains[4].0;
         let limits = same.dense_limits.as_ref().unwrap();
         assert!(!limits.admits(0, 0.005) && limits.admits(0, 0.03) && !limits.admits(0, 0.045));
+    }
+
+    #[test]
+    fn the_end_link_is_the_tip_whatever_the_file_declares_after_it() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        for (file, tip) in [
+            // Declares `base` (fixed to `base_link`) after the arm: the last link in order.
+            ("tests/data/reference/urdf/ur5.urdf", "tool0"),
+            ("robots/panda.urdf", "panda_rightfinger"),
+            ("robots/ur5.yaml", "tool0"),
+            ("robots/planar3.yaml", "link3"),
+        ] {
+            let chain = Chain::from_file(root.join(file)).unwrap();
+            assert_eq!(chain.link(chain.end_link()).name(), tip, "{file}");
+        }
     }
 }
