@@ -365,14 +365,14 @@ pub fn forward_kinematics_batch_to<'a>(
             data.limit_policy,
             qs,
             data.link_frames[..chunks].par_iter_mut(),
-            |q_lanes, c, out| *out = chunk_path(chain, path, q_lanes, qs, c),
+            |q_lanes, c, out| chunk_path(chain, path, q_lanes, qs, c, out),
         );
         if !all_ok {
             data.first_error(chain, qs)?;
         }
     } else {
         for (c, out) in data.link_frames[..chunks].iter_mut().enumerate() {
-            *out = chunk_path(chain, path, &mut data.q_lanes, qs, c);
+            chunk_path(chain, path, &mut data.q_lanes, qs, c, out);
         }
     }
     Ok(BatchLinkPoses { chain, data, link })
@@ -410,7 +410,7 @@ fn chunk_poses_generic<A: Arith>(
 }
 
 /// One chunk, one body: the frames along `path` (base first, each body the parent of the next),
-/// kept in registers; only the last is returned.
+/// kept in registers; only the last is written, to `out`.
 #[inline(always)]
 fn chunk_path_generic<A: Arith>(
     chain: &Chain,
@@ -418,7 +418,8 @@ fn chunk_path_generic<A: Arith>(
     q: &mut [Lanes],
     qs: &[f64],
     c: usize,
-) -> Frame<Lanes> {
+    out: &mut Frame<Lanes>,
+) {
     transpose(chain, q, qs, c);
     let q: &[Lanes] = q;
     let mut f = Frame::splat(&Transform::IDENTITY);
@@ -432,9 +433,9 @@ fn chunk_path_generic<A: Arith>(
             None => kernel::pose_step::<Lanes, A>(None, body, q, sin_cos),
         };
     }
-    f
+    *out = f;
 }
 
-fma_dispatch!(fn chunk_path(chain: &Chain, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize) -> Frame<Lanes> => chunk_path_generic);
+fma_dispatch!(fn chunk_path(chain: &Chain, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize, out: &mut Frame<Lanes>) => chunk_path_generic);
 
 fma_dispatch!(fn chunk_poses(chain: &Chain, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) => chunk_poses_generic);
