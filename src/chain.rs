@@ -689,14 +689,7 @@ impl DenseLimits {
     #[inline(always)]
     pub(crate) fn admit_block(&self, block: &[f64]) -> bool {
         let [scale, offset, lower, upper] = &self.tiled;
-        let n = scale.len();
-        let (block, offset, lower, upper) = (&block[..n], &offset[..n], &lower[..n], &upper[..n]);
-        let mut ok = true;
-        for i in 0..n {
-            let value = scale[i] * block[i] + offset[i];
-            ok &= block[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
-        }
-        ok
+        admit(block, scale, offset, lower, upper)
     }
 
     /// Whether entry `i` may take the value `x`.
@@ -709,16 +702,22 @@ impl DenseLimits {
     /// Whether every entry of `q` (of the chain's length) may take its value.
     #[inline(always)]
     pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
-        let n = q.len();
-        let (q, scale, offset) = (&q[..n], &self.scale[..n], &self.offset[..n]);
-        let (lower, upper) = (&self.lower[..n], &self.upper[..n]);
-        let mut ok = true;
-        for i in 0..n {
-            let value = scale[i] * q[i] + offset[i];
-            ok &= q[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
-        }
-        ok
+        admit(q, &self.scale, &self.offset, &self.lower, &self.upper)
     }
+}
+
+/// Whether every `x[i]` is finite with `lower[i] ≤ scale[i] · x[i] + offset[i] ≤ upper[i]`, in a
+/// loop that vectorises (no early exit, no closure).
+#[inline(always)]
+fn admit(x: &[f64], scale: &[f64], offset: &[f64], lower: &[f64], upper: &[f64]) -> bool {
+    let n = x.len();
+    let (scale, offset, lower, upper) = (&scale[..n], &offset[..n], &lower[..n], &upper[..n]);
+    let mut ok = true;
+    for i in 0..n {
+        let value = scale[i] * x[i] + offset[i];
+        ok &= x[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
+    }
+    ok
 }
 
 /// An immutable, validated kinematic chain (or tree).
