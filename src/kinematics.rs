@@ -404,8 +404,10 @@ pub(crate) fn check_values(
             got: values.len(),
         });
     }
-    // Branch-free; the entry at fault is looked for only on failure.
-    if values.iter().fold(true, |ok, x| ok & x.is_finite()) {
+    // Branch-free, two operations per entry: `x · 0` is ±0 for a finite `x` and NaN for ±∞ or
+    // NaN, so the sum is 0 exactly when every entry is finite. The entry at fault is looked for
+    // only on failure.
+    if values.iter().fold(0.0, |sum, x| sum + x * 0.0) == 0.0 {
         return Ok(());
     }
     if let Some(index) = values.iter().position(|x| !x.is_finite()) {
