@@ -66,6 +66,18 @@ fn non_finite_entries_name_the_joint_and_coordinate() {
     )
     .unwrap_err();
     assert!(matches!(&e, StateError::NonFinite { what: "q_dot", joint, .. } if joint == "j4"));
+    // Every position and kind of non-finite value, in rates (alone in an otherwise valid call).
+    for index in 0..6 {
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut rates = [0.5, -1e300, 1e-310, 0.0, -0.0, 2.0];
+            rates[index] = bad;
+            let e = forward_velocities(&chain, &mut data, &[0.0; 6], &rates).unwrap_err();
+            assert!(
+                matches!(e, StateError::NonFinite { what: "q_dot", index: i, .. } if i == index),
+                "{e:?}"
+            );
+        }
+    }
 
     let cyl = robot("cylindrical.yaml");
     let mut data = Data::new(&cyl);
