@@ -631,19 +631,28 @@ pub(crate) struct LimitCheck {
     pub(crate) limits: Limits,
 }
 
+impl LimitCheck {
+    /// The joint coordinate this check limits when `q[self.index]` is `x`.
+    pub(crate) fn value(&self, x: f64) -> f64 {
+        self.scale * x + self.offset
+    }
+
+    /// Whether `q` (a whole configuration) passes this check (finiteness is checked apart).
+    pub(crate) fn admits(&self, q: &[f64]) -> bool {
+        self.limits.contains(self.value(q[self.index]))
+    }
+}
+
 /// The limit checks by entry of `q`, as columns: entry `i` passes when it is finite and
 /// `lower[i] ≤ scale[i] · x + offset[i] ≤ upper[i]` (the arithmetic of [`LimitCheck`]), with
 /// `(1, 0, −∞, ∞)` for an entry without limits. A whole configuration is then checked in one
 /// branch-free pass that vectorises.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DenseLimits {
-    scale: Vec<f64>,
-    offset: Vec<f64>,
-    lower: Vec<f64>,
-    upper: Vec<f64>,
-    /// The four columns repeated [`DenseLimits::BLOCK`] times, to check that many consecutive
-    /// configurations as one flat slice.
-    tiled: [Vec<f64>; 4],
+    /// `[scale, offset, lower, upper]`, each one entry per entry of `q`, repeated
+    /// [`DenseLimits::BLOCK`] times so that as many consecutive configurations are checked as
+    /// one flat slice (the first `dof` entries are the columns of one configuration).
+    columns: [Vec<f64>; 4],
 }
 
 impl DenseLimits {
@@ -651,33 +660,25 @@ impl DenseLimits {
     /// and offset (a mimic joint copying its leader) become their intersection; with different
     /// ones the result is `None`.
     fn new(checks: &[LimitCheck], dof: usize) -> Option<DenseLimits> {
-        let mut out = DenseLimits {
-            scale: vec![1.0; dof],
-            offset: vec![0.0; dof],
-            lower: vec![f64::NEG_INFINITY; dof],
-            upper: vec![f64::INFINITY; dof],
-            tiled: Default::default(),
-        };
+        let mut scale = vec![1.0; dof];
+        let mut offset = vec![0.0; dof];
+        let mut lower = vec![f64::NEG_INFINITY; dof];
+        let mut upper = vec![f64::INFINITY; dof];
         let mut seen = vec![false; dof];
         for c in checks {
             let i = c.index;
-            if *seen.get(i)? && (out.scale[i] != c.scale || out.offset[i] != c.offset) {
+            if *seen.get(i)? && (scale[i] != c.scale || offset[i] != c.offset) {
                 return None;
             }
             seen[i] = true;
-            out.scale[i] = c.scale;
-            out.offset[i] = c.offset;
-            out.lower[i] = out.lower[i].max(c.limits.lower);
-            out.upper[i] = out.upper[i].min(c.limits.upper);
+            scale[i] = c.scale;
+            offset[i] = c.offset;
+            lower[i] = lower[i].max(c.limits.lower);
+            upper[i] = upper[i].min(c.limits.upper);
         }
-        let tile = |v: &Vec<f64>| v.repeat(Self::BLOCK);
-        out.tiled = [
-            tile(&out.scale),
-            tile(&out.offset),
-            tile(&out.lower),
-            tile(&out.upper),
-        ];
-        Some(out)
+        Some(DenseLimits {
+            columns: [scale, offset, lower, upper].map(|v| v.repeat(Self::BLOCK)),
+        })
     }
 
     /// Configurations per block of [`DenseLimits::admit_block`].
@@ -688,21 +689,22 @@ impl DenseLimits {
     /// loop.
     #[inline(always)]
     pub(crate) fn admit_block(&self, block: &[f64]) -> bool {
-        let [scale, offset, lower, upper] = &self.tiled;
+        let [scale, offset, lower, upper] = &self.columns;
         admit(block, scale, offset, lower, upper)
     }
 
     /// Whether entry `i` may take the value `x`.
     #[inline(always)]
     pub(crate) fn admits(&self, i: usize, x: f64) -> bool {
-        let value = self.scale[i] * x + self.offset[i];
-        x.is_finite() & (value >= self.lower[i]) & (value <= self.upper[i])
+        let [scale, offset, lower, upper] = &self.columns;
+        let value = scale[i] * x + offset[i];
+        x.is_finite() & (value >= lower[i]) & (value <= upper[i])
     }
 
     /// Whether every entry of `q` (of the chain's length) may take its value.
     #[inline(always)]
     pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
-        admit(q, &self.scale, &self.offset, &self.lower, &self.upper)
+        self.admit_block(q)
     }
 }
 
@@ -1569,11 +1571,7 @@ mod tests {
             (Chain::from_urdf_str(&mimic_same).unwrap(), true),
         ];
         let slow = |chain: &Chain, q: &[f64]| {
-            q.iter().all(|x| x.is_finite())
-                && chain
-                    .limit_checks
-                    .iter()
-                    .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
+            q.iter().all(|x| x.is_finite()) && chain.limit_checks.iter().all(|c| c.admits(q))
         };
         let values = [
             -7.0,

@@ -448,12 +448,9 @@ fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -
             }
             finite
                 && (policy == LimitPolicy::Ignore
-                    || qs.chunks_exact(dof).all(|q| {
-                        chain
-                            .limit_checks
-                            .iter()
-                            .all(|c| c.limits.contains(c.scale * q[c.index] + c.offset))
-                    }))
+                    || qs
+                        .chunks_exact(dof)
+                        .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
         }
     }
 }
@@ -474,7 +471,7 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
     check_values(chain, q, "q")?;
     if policy == LimitPolicy::Enforce {
         for c in &chain.limit_checks {
-            let value = c.scale * q[c.index] + c.offset;
+            let value = c.value(q[c.index]);
             if !c.limits.contains(value) {
                 return Err(StateError::OutOfLimits {
                     joint: chain.joints()[c.joint].name().to_string(),
@@ -568,17 +565,18 @@ fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<usize, StateEr
     for (i, (x, last)) in q.iter().zip(&data.last_q).enumerate() {
         if x.to_bits() != last.to_bits() {
             first = first.min(chain.first_body_of_variable[i]);
-            ok &= x.is_finite();
-            if enforce {
-                ok &= match &chain.dense_limits {
-                    Some(limits) => limits.admits(i, *x),
-                    None => chain
-                        .limit_checks
-                        .iter()
-                        .filter(|c| c.index == i)
-                        .all(|c| c.limits.contains(c.scale * x + c.offset)),
-                };
-            }
+            ok &= match (enforce, &chain.dense_limits) {
+                (true, Some(limits)) => limits.admits(i, *x),
+                (true, None) => {
+                    x.is_finite()
+                        && chain
+                            .limit_checks
+                            .iter()
+                            .filter(|c| c.index == i)
+                            .all(|c| c.limits.contains(c.value(*x)))
+                }
+                (false, _) => x.is_finite(),
+            };
         }
     }
     if !ok {
