@@ -349,13 +349,7 @@ pub fn forward_kinematics_batch_to<'a>(
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
     let parallel = parallel && qs.len() >= PARALLEL_FROM * chain.dof();
     let chunks = data.prepare(chain, qs, !parallel)?;
-    data.path.clear();
-    let mut k = chain.link(link).body;
-    while let Some(b) = k {
-        data.path.push(b);
-        k = chain.bodies[b].parent;
-    }
-    data.path.reverse();
+    chain.body_path(chain.link(link).body, &mut data.path);
     let zero = Frame::splat(&Transform::IDENTITY);
     data.link_frames.resize(chunks, zero);
     let path = &data.path;

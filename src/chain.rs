@@ -851,6 +851,18 @@ impl Chain {
         self.variables.iter().map(|&(j, c)| (JointId(j), c))
     }
 
+    /// `path` ← the bodies from the base to `body` (base first; empty for `None`, a link fixed to
+    /// the world). Reuses `path`'s allocation.
+    pub(crate) fn body_path(&self, body: Option<usize>, path: &mut Vec<usize>) {
+        path.clear();
+        let mut k = body;
+        while let Some(b) = k {
+            path.push(b);
+            k = self.bodies[b].parent;
+        }
+        path.reverse();
+    }
+
     /// True when every moving joint hangs from the previous one (no branches).
     #[must_use]
     pub fn is_serial(&self) -> bool {

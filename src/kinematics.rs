@@ -711,15 +711,10 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         &mut data.sin,
         &mut data.cos,
     );
-    data.path.clear();
-    let mut k = Some(body);
-    while let Some(b) = k {
-        data.path.push(b);
-        k = chain.bodies[b].parent;
-    }
+    chain.body_path(Some(body), &mut data.path);
     let frames = &mut data.world_from_body;
     let mut f = Frame4::<A::Col>::identity();
-    for &k in data.path.iter().rev() {
+    for &k in &data.path {
         // The path starts at a body hanging from the world; each next body's parent is the
         // previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
