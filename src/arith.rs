@@ -7,12 +7,17 @@
 //! call, so that path never calls it). Results with FMA can differ from those without in the last
 //! bit; both are within the accuracy the tests assert.
 
+#[cfg(target_arch = "x86_64")]
+use crate::kernel::Z8;
+use crate::kernel::{LaneNum, Lanes};
 use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Multiply–add policy of a kernel instantiation.
 pub(crate) trait Arith: Copy {
     /// Four `f64` handled as one vector, with this policy's multiply–add.
     type Col: Col;
+    /// Eight `f64`, one per configuration of a batch chunk, as this instruction set holds them.
+    type Lanes: LaneNum;
     /// Whether [`Arith::mul_add`] rounds once (then the exact product error
     /// `a * b − RN(a * b)` is one operation away).
     const FUSED: bool;
@@ -51,6 +56,7 @@ pub(crate) struct Separate;
 
 impl Arith for Separate {
     type Col = Portable<Separate>;
+    type Lanes = Lanes;
     const FUSED: bool = false;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
@@ -68,6 +74,25 @@ impl Arith for Fused {
     type Col = Avx;
     #[cfg(not(target_arch = "x86_64"))]
     type Col = Portable<Fused>;
+    type Lanes = Lanes;
+    const FUSED: bool = true;
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+}
+
+/// [`Fused`] with the batch lanes in AVX-512 registers ([`Z8`]): only instantiated inside
+/// functions compiled with the `avx512f` target feature. Every operation is the one [`Fused`]
+/// performs, so results are the same bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fused512;
+
+#[cfg(target_arch = "x86_64")]
+impl Arith for Fused512 {
+    type Col = Avx;
+    type Lanes = Z8;
     const FUSED: bool = true;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
@@ -316,8 +341,9 @@ fn detect() -> Isa {
     Isa::Baseline
 }
 
-/// Defines `$vis fn $name(args) -> ret` that runs `$generic::<Fused>(args)` inside a function
-/// compiled for AVX-512 or AVX2 (with FMA), whichever [`isa`] selects, and
+/// Defines `$vis fn $name(args) -> ret` that runs `$generic::<Fused512>(args)` inside a function
+/// compiled for AVX-512 or `$generic::<Fused>(args)` in one compiled for AVX2 (both with FMA),
+/// whichever [`isa`] selects, and
 /// `$generic::<Separate>(args)` on baseline x86-64. `$generic` must be `#[inline(always)]` so that
 /// its body is compiled with the caller's target features.
 macro_rules! fma_dispatch {
@@ -328,7 +354,7 @@ macro_rules! fma_dispatch {
             {
                 #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
                 fn with_avx512($($arg: $ty),*) $(-> $ret)? {
-                    $generic::<$crate::arith::Fused>($($arg),*)
+                    $generic::<$crate::arith::Fused512>($($arg),*)
                 }
                 #[target_feature(enable = "avx2,fma")]
                 fn with_avx2($($arg: $ty),*) $(-> $ret)? {

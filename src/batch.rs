@@ -9,7 +9,7 @@ use crate::arith::{Arith, fma_dispatch};
 use crate::chain::{Chain, LinkId, Placement};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
-use crate::kernel::{self, Frame, LANES, Lanes, Num};
+use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
 use crate::kinematics::{all_valid, check_q};
 use crate::transform::Transform;
 use rayon::prelude::*;
@@ -274,13 +274,9 @@ fn par_chunks_checked<T: Send>(
 /// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
 /// (the last chunk repeats its last configuration in the unused lanes).
 #[inline(always)]
-fn transpose(chain: &Chain, q: &mut [Lanes], qs: &[f64], c: usize) {
-    let dof = chain.dof();
-    let n = qs.len() / dof;
-    let rows: [usize; LANES] = std::array::from_fn(|l| (c * LANES + l).min(n - 1));
-    for (j, qj) in q.iter_mut().enumerate() {
-        *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
-    }
+fn transpose<N: LaneNum>(chain: &Chain, q: &mut [Lanes], qs: &[f64], c: usize) {
+    let n = qs.len() / chain.dof();
+    N::transpose(q, qs, std::array::from_fn(|l| (c * LANES + l).min(n - 1)));
 }
 
 /// One link's pose in every configuration of a batch.
@@ -382,12 +378,13 @@ fn chunk_poses_generic<A: Arith>(
     qs: &[f64],
     c: usize,
 ) {
-    transpose(chain, q, qs, c);
-    let q: &[Lanes] = q;
+    transpose::<A::Lanes>(chain, q, qs, c);
+    let q = A::Lanes::cast(q);
+    let frames = A::Lanes::cast_frames(frames);
     // Trigonometry first, for all bodies, so that it does not compete with the composition for
     // registers; the frames are written to `frames` and then read back one at a time.
     for (k, body) in chain.bodies.iter().enumerate() {
-        let (s, c) = kernel::body_sin_cos::<Lanes, A>(body, q);
+        let (s, c) = kernel::body_sin_cos::<A::Lanes, A>(body, q);
         frames[k].r[0][0] = s;
         frames[k].r[0][1] = c;
     }
@@ -395,9 +392,9 @@ fn chunk_poses_generic<A: Arith>(
     for (k, body) in chain.bodies.iter().enumerate() {
         let sin_cos = (frames[k].r[0][0], frames[k].r[0][1]);
         f = match body.parent {
-            Some(p) if p + 1 == k => kernel::pose_step::<Lanes, A>(Some(&f), body, q, sin_cos),
-            Some(p) => kernel::pose_step::<Lanes, A>(Some(&frames[p]), body, q, sin_cos),
-            None => kernel::pose_step::<Lanes, A>(None, body, q, sin_cos),
+            Some(p) if p + 1 == k => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
+            Some(p) => kernel::pose_step::<A::Lanes, A>(Some(&frames[p]), body, q, sin_cos),
+            None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
         };
         frames[k] = f;
     }
@@ -414,20 +411,20 @@ fn chunk_path_generic<A: Arith>(
     c: usize,
     out: &mut Frame<Lanes>,
 ) {
-    transpose(chain, q, qs, c);
-    let q: &[Lanes] = q;
+    transpose::<A::Lanes>(chain, q, qs, c);
+    let q = A::Lanes::cast(q);
     let mut f = Frame::splat(&Transform::IDENTITY);
     for &k in path {
         let body = &chain.bodies[k];
-        let sin_cos = kernel::body_sin_cos::<Lanes, A>(body, q);
+        let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, q);
         // Two calls rather than one with `body.parent.map(|_| &f)`: the frame is then never
         // reached through a pointer that may be null, and stays in registers.
         f = match body.parent {
-            Some(_) => kernel::pose_step::<Lanes, A>(Some(&f), body, q, sin_cos),
-            None => kernel::pose_step::<Lanes, A>(None, body, q, sin_cos),
+            Some(_) => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
+            None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
         };
     }
-    *out = f;
+    A::Lanes::cast_frames(std::slice::from_mut(out))[0] = f;
 }
 
 fma_dispatch!(fn chunk_path(chain: &Chain, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize, out: &mut Frame<Lanes>) => chunk_path_generic);

@@ -125,8 +125,180 @@ impl Num for Lanes {
     }
 }
 
-/// A rigid frame: rotation columns and origin.
+/// The eight-lane number of a batch kernel, stored between kernels as [`Lanes`].
+pub(crate) trait LaneNum: Num {
+    /// `q` read as this type.
+    fn cast(q: &[Lanes]) -> &[Self];
+    /// `frames` read and written as this type.
+    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>];
+    /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: `q[j]` gets
+    /// entry `j` of rows `rows[0..8]`.
+    ///
+    /// # Panics
+    /// If a row is not within `qs`.
+    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]);
+}
+
+impl LaneNum for Lanes {
+    #[inline(always)]
+    fn cast(q: &[Lanes]) -> &[Self] {
+        q
+    }
+    #[inline(always)]
+    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
+        let dof = q.len();
+        for (j, qj) in q.iter_mut().enumerate() {
+            *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
+        }
+    }
+    #[inline(always)]
+    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>] {
+        frames
+    }
+}
+
+/// Eight `f64` in one AVX-512 register: [`Lanes`] for kernels compiled with `avx512f`, where an
+/// array of eight would be assembled and spilled through memory (a frame is twelve of them, and
+/// fits the 32 registers). Only the lane type of [`crate::arith::Fused512`].
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(crate) struct Z8(std::arch::x86_64::__m512d);
+
+// `Z8` and `Lanes` are read through each other's pointers: same size and alignment, and every
+// bit pattern is valid for both.
+#[cfg(target_arch = "x86_64")]
+const _: () =
+    assert!(size_of::<Z8>() == size_of::<Lanes>() && align_of::<Z8>() == align_of::<Lanes>());
+
+// SAFETY (every `unsafe` block of the `Z8` impls): `Z8` is the lane type of `Fused512` only, which
+// runs only inside the `fma_dispatch!` functions compiled with `avx512f` (selected when `isa()`
+// reports it); the casts are between types of equal size and alignment (checked above), and
+// `Frame` is `repr(C)`, so `Frame<Z8>` and `Frame<Lanes>` have the same layout.
+#[cfg(target_arch = "x86_64")]
+impl LaneNum for Z8 {
+    #[inline(always)]
+    fn cast(q: &[Lanes]) -> &[Self] {
+        unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), q.len()) }
+    }
+    #[inline(always)]
+    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>] {
+        unsafe { std::slice::from_raw_parts_mut(frames.as_mut_ptr().cast(), frames.len()) }
+    }
+    /// One gather per joint, each written as a whole vector (entries stored one by one and read
+    /// back as a vector would stall the load, and the compiler's vectorised form of the lane
+    /// loop scatters, which is slow on AMD cores).
+    #[inline(always)]
+    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
+        use std::arch::x86_64::{_mm512_add_epi64, _mm512_i64gather_pd, _mm512_set1_epi64};
+        let dof = q.len();
+        let in_bounds = rows.iter().all(|&r| {
+            r.checked_mul(dof)
+                .and_then(|o| o.checked_add(dof))
+                .is_some_and(|e| e <= qs.len())
+        });
+        assert!(
+            in_bounds && qs.len() <= i64::MAX as usize,
+            "rows {rows:?} of {} entries",
+            qs.len()
+        );
+        let starts: [i64; LANES] = rows.map(|r| (r * dof) as i64);
+        // SAFETY: see the `Z8` impls; every address read, `qs[rows[l] * dof + j]` with
+        // `j < dof`, is within `qs` (checked above); `Lanes` and `Z8` have the same layout.
+        unsafe {
+            let mut offsets =
+                std::mem::transmute::<[i64; LANES], std::arch::x86_64::__m512i>(starts);
+            let one = _mm512_set1_epi64(1);
+            for qj in Z8::cast_mut(q) {
+                *qj = Z8(_mm512_i64gather_pd::<8>(offsets, qs.as_ptr()));
+                offsets = _mm512_add_epi64(offsets, one);
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Z8 {
+    #[inline(always)]
+    fn cast_mut(q: &mut [Lanes]) -> &mut [Self] {
+        // SAFETY: see the `Z8` impls.
+        unsafe { std::slice::from_raw_parts_mut(q.as_mut_ptr().cast(), q.len()) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Z8 {
+    #[inline(always)]
+    fn lanes(self) -> Lanes {
+        // SAFETY: as above (same size, every bit pattern valid).
+        unsafe { std::mem::transmute::<Z8, Lanes>(self) }
+    }
+    #[inline(always)]
+    fn from_lanes(x: Lanes) -> Self {
+        // SAFETY: as above.
+        unsafe { std::mem::transmute::<Lanes, Z8>(x) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+macro_rules! z8_op {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for Z8 {
+            type Output = Z8;
+            #[inline(always)]
+            fn $method(self, rhs: Z8) -> Z8 {
+                // SAFETY: see the `Z8` impls.
+                Z8(unsafe { std::arch::x86_64::$intrinsic(self.0, rhs.0) })
+            }
+        }
+    };
+}
+#[cfg(target_arch = "x86_64")]
+z8_op!(Add, add, _mm512_add_pd);
+#[cfg(target_arch = "x86_64")]
+z8_op!(Sub, sub, _mm512_sub_pd);
+#[cfg(target_arch = "x86_64")]
+z8_op!(Mul, mul, _mm512_mul_pd);
+
+#[cfg(target_arch = "x86_64")]
+impl Neg for Z8 {
+    type Output = Z8;
+    #[inline(always)]
+    fn neg(self) -> Z8 {
+        use std::arch::x86_64::{_mm512_set1_pd, _mm512_xor_pd};
+        // SAFETY: see the `Z8` impls.
+        Z8(unsafe { _mm512_xor_pd(self.0, _mm512_set1_pd(-0.0)) })
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Num for Z8 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        // SAFETY: see the `Z8` impls.
+        Z8(unsafe { std::arch::x86_64::_mm512_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+        if A::FUSED {
+            // SAFETY: see the `Z8` impls.
+            Z8(unsafe { std::arch::x86_64::_mm512_fmadd_pd(a.0, b.0, c.0) })
+        } else {
+            a * b + c
+        }
+    }
+    #[inline(always)]
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+        // The lane loop of `Lanes`, which the compiler vectorises to the same width.
+        let (s, c) = Lanes::sin_cos::<A>(x.lanes());
+        (Z8::from_lanes(s), Z8::from_lanes(c))
+    }
+}
+
+/// A rigid frame: rotation columns and origin. `repr(C)`, so that frames of [`Lanes`] can be
+/// read as frames of another [`LaneNum`] of the same layout.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub(crate) struct Frame<N> {
     pub(crate) r: [[N; 3]; 3],
     pub(crate) p: [N; 3],
@@ -283,20 +455,29 @@ pub(crate) fn body_sin_cos<N: Num, A: Arith>(body: &Body, q: &[N]) -> (N, N) {
 }
 
 /// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the axis, rotate by θ about it (the two
-/// commute). `z` gives the axis in the frame `f` is expressed in (called only for a sliding
-/// joint); `sin_cos` is `(sin θ, cos θ)` when θ varies.
+/// commute). The axis in the frame `f` is expressed in (needed only for a sliding joint) is
+/// `z_const` if given, else the joint axis carried by `f`'s columns; `sin_cos` is
+/// `(sin θ, cos θ)` when θ varies.
 #[inline(always)]
 fn apply_motion<N: Num, A: Arith>(
     f: &mut Frame<N>,
     body: &Body,
     q: &[N],
-    z: impl FnOnce(&Frame<N>) -> V3<N>,
+    z_const: Option<[f64; 3]>,
     sin_cos: (N, N),
 ) {
     let m = &body.motion;
     match m.d {
         Term::Const(0.0) => {}
-        d => f.p = axpy::<N, A>(term_value::<N, A>(&d, q), z(f), f.p),
+        d => {
+            // Not a closure: one that is not inlined is a call inside the batch kernels, and
+            // every vector register is caller-saved.
+            let z = match z_const {
+                Some(z) => z.map(N::splat),
+                None => axis_of::<N, A>(&f.r, &m.axis),
+            };
+            f.p = axpy::<N, A>(term_value::<N, A>(&d, q), z, f.p);
+        }
     }
     let (s, c) = match m.theta {
         Term::Const(0.0) => return,
@@ -381,8 +562,7 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 #[inline(always)]
 pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
     let mut m = Frame::splat(&body.pre_frame);
-    let z = |_: &Frame<N>| body.axis_in_parent.map(N::splat);
-    apply_motion::<N, A>(&mut m, body, q, z, sin_cos);
+    apply_motion::<N, A>(&mut m, body, q, Some(body.axis_in_parent), sin_cos);
     place::<N, A>(&mut m, &body.post);
     m
 }
@@ -428,8 +608,7 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
             return z_steps::<N, A>(f, body, steps, q, sin_cos);
         }
         place::<N, A>(&mut f, &body.pre);
-        let axis = &body.motion.axis;
-        apply_motion::<N, A>(&mut f, body, q, |f| axis_of::<N, A>(&f.r, axis), sin_cos);
+        apply_motion::<N, A>(&mut f, body, q, None, sin_cos);
         place::<N, A>(&mut f, &body.post);
         return f;
     }
