@@ -405,6 +405,12 @@ impl Link {
     }
 }
 
+/// The columns `(i, j)` a rotation about axis `k` (0, 1, 2 for x, y, z) turns, in cyclic order:
+/// `col_i' = c col_i + s col_j`, `col_j' = c col_j − s col_i`.
+pub(crate) const fn rotation_plane(k: usize) -> (usize, usize) {
+    ((k + 1) % 3, (k + 2) % 3)
+}
+
 /// A constant rigid placement, with the forms the kernels treat specially.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Placement {
@@ -417,10 +423,12 @@ pub(crate) enum Placement {
         c: f64,
         s: f64,
     },
-    /// `T(t) Rx(α)` with `(c, s) = (cos α, sin α)`: a translation, then a rotation about the new
-    /// x axis (the URDF origin of many arms, `rpy = (α, 0, 0)`).
-    OffsetRotX {
+    /// `T(t) R_k(α)` with `(c, s) = (cos α, sin α)`: a translation, then a rotation about the new
+    /// axis `k` (0, 1, 2 for x, y, z): the URDF origin of many arms, whose `rpy` turns about one
+    /// axis.
+    OffsetRot {
         t: [f64; 3],
+        axis: usize,
         c: f64,
         s: f64,
     },
@@ -437,20 +445,19 @@ impl Placement {
             Placement::Identity
         } else if identity_rotation {
             Placement::Translation(t.p)
-        } else if r[0] == [1.0, 0.0, 0.0]
-            && r[1][0] == 0.0
-            && r[2][0] == 0.0
-            && r[1][1] == r[2][2]
-            && r[1][2] == -r[2][1]
-        {
-            let (c, s) = (r[1][1], r[1][2]);
-            if t.p[1] == 0.0 && t.p[2] == 0.0 {
-                Placement::ScrewX { a: t.p[0], c, s }
-            } else {
-                Placement::OffsetRotX { t: t.p, c, s }
-            }
         } else {
-            Placement::General(*t)
+            // A rotation about one axis, recognised by rebuilding it.
+            (0..3)
+                .map(|axis| {
+                    let (i, j) = rotation_plane(axis);
+                    let (c, s, t) = (r[i][i], r[i][j], t.p);
+                    match (axis, t) {
+                        (0, [a, 0.0, 0.0]) => Placement::ScrewX { a, c, s },
+                        _ => Placement::OffsetRot { t, axis, c, s },
+                    }
+                })
+                .find(|p| p.to_transform() == *t)
+                .unwrap_or(Placement::General(*t))
         }
     }
 
@@ -465,10 +472,12 @@ impl Placement {
                 r: [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]],
                 p: [a, 0.0, 0.0],
             },
-            Placement::OffsetRotX { t, c, s } => Transform {
-                r: [[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]],
-                p: t,
-            },
+            Placement::OffsetRot { t, axis, c, s } => {
+                let (i, j) = rotation_plane(axis);
+                let mut r = Transform::IDENTITY.r;
+                (r[i][i], r[i][j], r[j][i], r[j][j]) = (c, s, -s, c);
+                Transform { r, p: t }
+            }
             Placement::General(t) => t,
         }
     }
@@ -559,9 +568,10 @@ impl CheapPlacement {
             Placement::Translation(t) if along_x(t) => out.x = Some(t[0]),
             Placement::Translation(t) => out.t = Some(t),
             Placement::ScrewX { a, c, s } => (out.x, out.rot_x) = (Some(a), Some(XTurn::new(c, s))),
-            Placement::OffsetRotX { t, c, s } => {
+            Placement::OffsetRot { t, axis: 0, c, s } => {
                 (out.t, out.rot_x) = (Some(t), Some(XTurn::new(c, s)));
             }
+            Placement::OffsetRot { .. } => return None,
             Placement::General(_) => return None,
         }
         Some(out)
@@ -1520,10 +1530,22 @@ mod tests {
             ),
             (
                 Transform::from_xyz_rpy([0.0, -0.316, 0.0], [0.3, 0.0, 0.0]),
-                "OffsetRotX",
+                "OffsetRot { t: [0.0, -0.316, 0.0], axis: 0",
             ),
             (
-                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, 0.3]),
+                Transform::from_xyz_rpy([0.0, 0.13585, 0.0], [0.0, 1.57079632679, 0.0]),
+                "OffsetRot { t: [0.0, 0.13585, 0.0], axis: 1",
+            ),
+            (
+                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, -0.3]),
+                "OffsetRot { t: [0.0, 0.0, 0.1], axis: 2",
+            ),
+            (
+                Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.2, 0.3]),
+                "General",
+            ),
+            (
+                Transform::from_xyz_rpy([0.0; 3], [-1.57079632679, 0.0, -1.57079632679]),
                 "General",
             ),
         ];
@@ -1532,19 +1554,22 @@ mod tests {
             assert!(format!("{p:?}").starts_with(kind), "{p:?} for {kind}");
             assert_eq!(p.to_transform(), t, "{kind}");
         }
-        let p = Placement::OffsetRotX {
-            t: [1.0, 2.0, 3.0],
-            c,
-            s,
-        };
-        assert_eq!(Placement::from_transform(&p.to_transform()), p);
+        for axis in 0..3 {
+            let p = Placement::OffsetRot {
+                t: [1.0, 2.0, 3.0],
+                axis,
+                c,
+                s,
+            };
+            assert_eq!(Placement::from_transform(&p.to_transform()), p);
+        }
     }
 
     #[test]
     fn arms_take_the_in_place_shape() {
         // Standard DH rows, and the Panda's URDF origins (rpy = (±π/2, 0, 0)): every arm joint is
-        // evaluated in place without dispatch; only the fingers, after the hand's turned fixed
-        // frame, are composed.
+        // evaluated in place without dispatch; the fingers, after the hand's fixed frame turned
+        // about z, in place with dispatch on kinds.
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
         let ur5 = Chain::from_file(root.join("ur5.yaml")).unwrap();
         assert!(ur5.bodies.iter().all(|b| b.z_steps.is_some()));
@@ -1554,6 +1579,14 @@ mod tests {
             shapes,
             [true, true, true, true, true, true, true, false, false]
         );
+        assert!(panda.bodies.iter().all(Body::in_place));
+        // The UR5's URDF origins turn about y (rpy = (0, 1.57079632679, 0)): in place too.
+        // TIAGo's turn about two axes at once: composed.
+        let reference = root.join("../tests/data/reference/urdf");
+        let ur5 = Chain::from_file(reference.join("ur5.urdf")).unwrap();
+        assert!(ur5.bodies.iter().all(Body::in_place));
+        let tiago = Chain::from_file(reference.join("tiago_no_hand.urdf")).unwrap();
+        assert!(!tiago.bodies.iter().all(Body::in_place));
         // Seven sines for seven turning joints: one vector of lanes.
         assert_eq!(panda.theta_gather.len(), 1);
     }

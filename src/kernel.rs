@@ -413,9 +413,16 @@ fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
             f.p = axpy::<N, A>(N::splat(*a), f.r[0], f.p);
             rotate_columns::<N, A>(&mut f.r, &Axis::X, N::splat(*s), N::splat(*c));
         }
-        Placement::OffsetRotX { t, c, s } => {
+        Placement::OffsetRot { t, axis, c, s } => {
             f.p = apply_const_add::<N, A>(&f.r, *t, f.p);
-            rotate_columns::<N, A>(&mut f.r, &Axis::X, N::splat(*s), N::splat(*c));
+            let (s, c) = (N::splat(*s), N::splat(*c));
+            // Constant column indices in each arm: a frame indexed by a value known only at run
+            // time would be kept in memory rather than in registers.
+            match axis {
+                0 => plane::<N, A>(&mut f.r, 1, 2, s, c),
+                1 => plane::<N, A>(&mut f.r, 2, 0, s, c),
+                _ => plane::<N, A>(&mut f.r, 0, 1, s, c),
+            }
         }
         Placement::General(t) => {
             let zero = [N::splat(0.0); 3];

@@ -125,9 +125,14 @@ fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
             f[3] = A::Col::mul_add(A::Col::splat(*a), f[0], f[3]);
             rotate_columns::<A>(f, &Axis::X, *s, *c);
         }
-        Placement::OffsetRotX { t, c, s } => {
+        Placement::OffsetRot { t, axis, c, s } => {
             f[3] = combine_const(f, *t, f[3]);
-            rotate_columns::<A>(f, &Axis::X, *s, *c);
+            // Constant indices in each arm (see `kernel::place`).
+            match axis {
+                0 => plane(f, 1, 2, *s, *c),
+                1 => plane(f, 2, 0, *s, *c),
+                _ => plane(f, 0, 1, *s, *c),
+            }
         }
         Placement::General(t) => {
             let zero = A::Col::splat(0.0);
@@ -141,13 +146,14 @@ fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
     }
 }
 
-/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`), `z` giving the axis in `f`'s frame.
+/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`); the axis in `f`'s frame is
+/// `z_const` if given, else the joint axis carried by `f`'s columns.
 #[inline(always)]
 fn apply_motion<A: Arith>(
     f: &mut [A::Col; 4],
     body: &Body,
     q: &[f64],
-    z: impl FnOnce(&[A::Col; 4]) -> A::Col,
+    z_const: Option<A::Col>,
     sin_cos: (f64, f64),
 ) {
     let m = &body.motion;
@@ -155,7 +161,12 @@ fn apply_motion<A: Arith>(
         Term::Const(0.0) => {}
         d => {
             let d = A::Col::splat(term_value::<f64, A>(&d, q));
-            f[3] = A::Col::mul_add(d, z(f), f[3]);
+            // Not a closure (see `kernel::apply_motion`).
+            let z = match z_const {
+                Some(z) => z,
+                None => axis_of(f, &m.axis),
+            };
+            f[3] = A::Col::mul_add(d, z, f[3]);
         }
     }
     match m.theta {
@@ -227,7 +238,7 @@ fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
 pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
     let mut f: [A::Col; 4] = std::array::from_fn(|j| A::Col::load(&body.pre4[j]));
     let axis = A::Col::load(&body.axis4);
-    apply_motion::<A>(&mut f, body, q, |_| axis, sin_cos);
+    apply_motion::<A>(&mut f, body, q, Some(axis), sin_cos);
     place::<A>(&mut f, &body.post);
     Frame4(f)
 }
@@ -267,8 +278,7 @@ pub(crate) fn pose_step<A: Arith>(
         }
         let mut f = f;
         place::<A>(&mut f, &body.pre);
-        let axis = &body.motion.axis;
-        apply_motion::<A>(&mut f, body, q, |f| axis_of(f, axis), sin_cos);
+        apply_motion::<A>(&mut f, body, q, None, sin_cos);
         place::<A>(&mut f, &body.post);
         return Frame4(f);
     }
@@ -469,10 +479,23 @@ mod tests {
                 c: 0.3_f64.cos(),
                 s: 0.3_f64.sin(),
             },
-            Placement::OffsetRotX {
+            Placement::OffsetRot {
                 t: [0.1, -0.25, 0.4],
+                axis: 0,
                 c: 0.8_f64.cos(),
                 s: 0.8_f64.sin(),
+            },
+            Placement::OffsetRot {
+                t: [0.0, 0.0, 0.4],
+                axis: 1,
+                c: (-0.6_f64).cos(),
+                s: (-0.6_f64).sin(),
+            },
+            Placement::OffsetRot {
+                t: [0.0, 0.3, 0.0],
+                axis: 2,
+                c: std::f64::consts::FRAC_PI_2.cos(),
+                s: std::f64::consts::FRAC_PI_2.sin(),
             },
             // Quarter turns, as DH tables give them: sin α = ±1 exactly, cos α ≈ 6.1e-17.
             Placement::ScrewX {
@@ -480,8 +503,9 @@ mod tests {
                 c: std::f64::consts::FRAC_PI_2.cos(),
                 s: std::f64::consts::FRAC_PI_2.sin(),
             },
-            Placement::OffsetRotX {
+            Placement::OffsetRot {
                 t: [0.0, 0.3, -0.1],
+                axis: 0,
                 c: (-std::f64::consts::FRAC_PI_2).cos(),
                 s: (-std::f64::consts::FRAC_PI_2).sin(),
             },
