@@ -6,7 +6,7 @@
 //! configuration, to the last bit on the same instruction set.
 
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Chain, LinkId, Placement};
+use crate::chain::{Chain, DenseLimits, LinkId, Placement};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
@@ -70,7 +70,8 @@ impl BatchData {
     }
 
     /// Sizes the buffers for `qs`; checks the configurations unless `check` is false (the
-    /// parallel path checks each chunk in its own task, then calls [`BatchData::first_error`]).
+    /// kernels check their lanes, or the parallel path checks each chunk in its own task; both
+    /// then call [`BatchData::first_error`] on failure).
     fn prepare(&mut self, chain: &Chain, qs: &[f64], check: bool) -> Result<usize, BatchError> {
         assert!(
             self.bodies == chain.bodies.len() && self.dof == chain.dof(),
@@ -148,7 +149,8 @@ impl BatchPoses<'_> {
 /// # Errors
 /// [`BatchError`] naming the first configuration that has a non-finite entry or (under
 /// [`LimitPolicy::Enforce`]) a value outside a joint's limits, or a `qs` whose length is not a
-/// multiple of the chain's dof. Nothing is evaluated then.
+/// multiple of the chain's dof. No result is returned then (the kernels check the entries as
+/// they transpose them, so the batch may have been evaluated, without effect).
 ///
 /// # Panics
 /// If `data` was created for another chain.
@@ -169,16 +171,21 @@ pub fn forward_kinematics_batch<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    let chunks = data.prepare(chain, qs, true)?;
+    let check = LaneCheck::of(chain, data.limit_policy);
+    let chunks = data.prepare(chain, qs, check.is_none())?;
     data.size_frames(chunks);
     let bodies = chain.bodies.len().max(1);
+    let mut all_ok = true;
     for (c, frames) in data
         .frames
         .chunks_exact_mut(bodies)
         .take(chunks)
         .enumerate()
     {
-        chunk_poses(chain, frames, &mut data.q_lanes, qs, c);
+        all_ok &= chunk_poses(chain, check, frames, &mut data.q_lanes, qs, c);
+    }
+    if !all_ok {
+        data.first_error(chain, qs)?;
     }
     Ok(BatchPoses { chain, data })
 }
@@ -188,8 +195,7 @@ pub fn forward_kinematics_batch<'a>(
 /// `rayon::ThreadPoolBuilder`). Results are identical to the single-threaded call.
 ///
 /// # Errors
-/// As [`forward_kinematics_batch`] (the same configuration is named). Chunks of valid
-/// configurations may have been evaluated by the other threads meanwhile; no result is returned.
+/// As [`forward_kinematics_batch`] (the same configuration is named); no result is returned.
 ///
 /// # Panics
 /// If `data` was created for another chain.
@@ -210,7 +216,7 @@ pub fn forward_kinematics_batch_par<'a>(
         data.limit_policy,
         qs,
         data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
-        |q_lanes, c, frames| chunk_poses(chain, frames, q_lanes, qs, c),
+        |check, q_lanes, c, frames| chunk_poses(chain, check, frames, q_lanes, qs, c),
     );
     if !all_ok {
         data.first_error(chain, qs)?;
@@ -244,31 +250,76 @@ fn lane_pose<'f>(
     }
 }
 
-/// Runs `eval(q_lanes, c, out)` for each chunk `c` of `qs` and its output `out` on rayon's pool,
-/// each task first checking its own configurations (one pass over the batch and one fork–join,
-/// not two). False when some configuration is invalid; its chunk is then not evaluated.
+/// Runs `eval(check, q_lanes, c, out)` for each chunk `c` of `qs` and its output `out` on
+/// rayon's pool (one pass over the batch and one fork–join). Each chunk is checked by the kernel
+/// on its lanes, or, when the limits do not allow that, by its task before evaluation. False
+/// when some configuration is invalid.
 fn par_chunks_checked<T: Send>(
     chain: &Chain,
     policy: LimitPolicy,
     qs: &[f64],
     outs: impl IndexedParallelIterator<Item = T>,
-    eval: impl Fn(&mut [Lanes], usize, T) + Sync + Send,
+    eval: impl Fn(Option<LaneCheck<'_>>, &mut [Lanes], usize, T) -> bool + Sync + Send,
 ) -> bool {
     let dof = chain.dof();
+    let check = LaneCheck::of(chain, policy);
     outs.enumerate()
         .with_min_len(16)
         .map_init(
             || vec![Lanes::splat(0.0); dof],
             |q_lanes, (c, out)| {
-                let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
-                let ok = all_valid(chain, rows, policy);
-                if ok {
-                    eval(q_lanes, c, out);
+                if check.is_none() {
+                    let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
+                    if !all_valid(chain, rows, policy) {
+                        return false;
+                    }
                 }
-                ok
+                eval(check, q_lanes, c, out)
             },
         )
         .reduce(|| true, |a, b| a & b)
+}
+
+/// What a chunk kernel checks on its lanes after transposing them: every entry finite, and
+/// within the chain's limit columns under [`LimitPolicy::Enforce`] (the decisions of
+/// [`check_q`], made on eight configurations per vector).
+#[derive(Clone, Copy, Debug)]
+enum LaneCheck<'a> {
+    Finite,
+    Limits(&'a DenseLimits),
+}
+
+impl<'a> LaneCheck<'a> {
+    /// `None` when the limits do not fit one check per entry ([`Chain::dense_limits`]): the
+    /// configurations are then checked before evaluation.
+    fn of(chain: &'a Chain, policy: LimitPolicy) -> Option<LaneCheck<'a>> {
+        match (policy, &chain.dense_limits) {
+            (LimitPolicy::Ignore, _) => Some(LaneCheck::Finite),
+            (LimitPolicy::Enforce, Some(limits)) => Some(LaneCheck::Limits(limits)),
+            (LimitPolicy::Enforce, None) => None,
+        }
+    }
+
+    /// Whether every lane of every entry of `q` passes.
+    #[inline(always)]
+    fn admits<N: LaneNum>(check: Option<Self>, q: &[N]) -> bool {
+        let mut ok = true;
+        match check {
+            None => {}
+            Some(LaneCheck::Finite) => {
+                for &x in q {
+                    ok &= N::admitted(x, 1.0, 0.0, f64::NEG_INFINITY, f64::INFINITY);
+                }
+            }
+            Some(LaneCheck::Limits(limits)) => {
+                for (j, &x) in q.iter().enumerate() {
+                    let (scale, offset, lower, upper) = limits.entry(j);
+                    ok &= N::admitted(x, scale, offset, lower, upper);
+                }
+            }
+        }
+        ok
+    }
 }
 
 /// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
@@ -344,7 +395,8 @@ pub fn forward_kinematics_batch_to<'a>(
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
     let parallel = parallel && qs.len() >= PARALLEL_FROM * chain.dof();
-    let chunks = data.prepare(chain, qs, !parallel)?;
+    let check = LaneCheck::of(chain, data.limit_policy);
+    let chunks = data.prepare(chain, qs, !parallel && check.is_none())?;
     chain.body_path(chain.link(link).body, &mut data.path);
     let zero = Frame::splat(&Transform::IDENTITY);
     data.link_frames.resize(chunks, zero);
@@ -355,31 +407,37 @@ pub fn forward_kinematics_batch_to<'a>(
             data.limit_policy,
             qs,
             data.link_frames[..chunks].par_iter_mut(),
-            |q_lanes, c, out| chunk_path(chain, path, q_lanes, qs, c, out),
+            |check, q_lanes, c, out| chunk_path(chain, check, path, q_lanes, qs, c, out),
         );
         if !all_ok {
             data.first_error(chain, qs)?;
         }
     } else {
+        let mut all_ok = true;
         for (c, out) in data.link_frames[..chunks].iter_mut().enumerate() {
-            chunk_path(chain, path, &mut data.q_lanes, qs, c, out);
+            all_ok &= chunk_path(chain, check, path, &mut data.q_lanes, qs, c, out);
+        }
+        if !all_ok {
+            data.first_error(chain, qs)?;
         }
     }
     Ok(BatchLinkPoses { chain, data, link })
 }
 
 /// One chunk: configurations `8c .. 8c + 8` (the last chunk repeats its last configuration in
-/// the unused lanes).
+/// the unused lanes). False if `check` rejects one (the frames are then meaningless).
 #[inline(always)]
 fn chunk_poses_generic<A: Arith>(
     chain: &Chain,
+    check: Option<LaneCheck<'_>>,
     frames: &mut [Frame<Lanes>],
     q: &mut [Lanes],
     qs: &[f64],
     c: usize,
-) {
+) -> bool {
     transpose::<A::Lanes>(chain, q, qs, c);
     let q = A::Lanes::cast(q);
+    let ok = LaneCheck::admits(check, q);
     let frames = A::Lanes::cast_frames(frames);
     // Trigonometry first, for all bodies, so that it does not compete with the composition for
     // registers; the frames are written to `frames` and then read back one at a time.
@@ -398,21 +456,25 @@ fn chunk_poses_generic<A: Arith>(
         };
         frames[k] = f;
     }
+    ok
 }
 
 /// One chunk, one body: the frames along `path` (base first, each body the parent of the next),
-/// kept in registers; only the last is written, to `out`.
+/// kept in registers; only the last is written, to `out`. False if `check` rejects a
+/// configuration.
 #[inline(always)]
 fn chunk_path_generic<A: Arith>(
     chain: &Chain,
+    check: Option<LaneCheck<'_>>,
     path: &[usize],
     q: &mut [Lanes],
     qs: &[f64],
     c: usize,
     out: &mut Frame<Lanes>,
-) {
+) -> bool {
     transpose::<A::Lanes>(chain, q, qs, c);
     let q = A::Lanes::cast(q);
+    let ok = LaneCheck::admits(check, q);
     let mut f = Frame::splat(&Transform::IDENTITY);
     for &k in path {
         let body = &chain.bodies[k];
@@ -425,8 +487,9 @@ fn chunk_path_generic<A: Arith>(
         };
     }
     A::Lanes::cast_frames(std::slice::from_mut(out))[0] = f;
+    ok
 }
 
-fma_dispatch!(fn chunk_path(chain: &Chain, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize, out: &mut Frame<Lanes>) => chunk_path_generic);
+fma_dispatch!(fn chunk_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize, out: &mut Frame<Lanes>) -> bool => chunk_path_generic);
 
-fma_dispatch!(fn chunk_poses(chain: &Chain, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) => chunk_poses_generic);
+fma_dispatch!(fn chunk_poses(chain: &Chain, check: Option<LaneCheck<'_>>, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) -> bool => chunk_poses_generic);

@@ -711,6 +711,13 @@ impl DenseLimits {
         x.is_finite() & (value >= lower[i]) & (value <= upper[i])
     }
 
+    /// `(scale, offset, lower, upper)` of entry `i`.
+    #[inline(always)]
+    pub(crate) fn entry(&self, i: usize) -> (f64, f64, f64, f64) {
+        let [scale, offset, lower, upper] = &self.columns;
+        (scale[i], offset[i], lower[i], upper[i])
+    }
+
     /// Whether every entry of `q` (of the chain's length) may take its value.
     #[inline(always)]
     pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
@@ -1516,6 +1523,8 @@ mod tests {
     use super::*;
 
     #[test]
+    // 1.57079632679: the rounded π/2 that URDF files write (not a quarter turn to the last bit).
+    #[allow(clippy::approx_constant)]
     fn placement_forms_are_recognised_exactly_and_round_trip() {
         let (c, s) = (0.3_f64.cos(), 0.3_f64.sin());
         let cases = [

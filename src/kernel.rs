@@ -131,6 +131,9 @@ pub(crate) trait LaneNum: Num {
     fn cast(q: &[Lanes]) -> &[Self];
     /// `frames` read and written as this type.
     fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>];
+    /// Whether every lane `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product
+    /// and the sum rounded separately (as [`crate::chain::DenseLimits::admits`] decides).
+    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
     /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: `q[j]` gets
     /// entry `j` of rows `rows[0..8]`.
     ///
@@ -143,6 +146,15 @@ impl LaneNum for Lanes {
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         q
+    }
+    #[inline(always)]
+    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
+        let mut ok = true;
+        for x in x.0 {
+            let value = scale * x + offset;
+            ok &= x.is_finite() & (value >= lower) & (value <= upper);
+        }
+        ok
     }
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
@@ -184,6 +196,22 @@ impl LaneNum for Z8 {
     #[inline(always)]
     fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>] {
         unsafe { std::slice::from_raw_parts_mut(frames.as_mut_ptr().cast(), frames.len()) }
+    }
+    #[inline(always)]
+    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
+        use std::arch::x86_64::{
+            _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm512_abs_pd, _mm512_add_pd, _mm512_cmp_pd_mask,
+            _mm512_mul_pd, _mm512_set1_pd,
+        };
+        // SAFETY: see the `Z8` impls.
+        unsafe {
+            let splat = _mm512_set1_pd;
+            let value = _mm512_add_pd(_mm512_mul_pd(splat(scale), x.0), splat(offset));
+            let finite = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(_mm512_abs_pd(x.0), splat(f64::INFINITY));
+            let low = _mm512_cmp_pd_mask::<_CMP_GE_OQ>(value, splat(lower));
+            let high = _mm512_cmp_pd_mask::<_CMP_LE_OQ>(value, splat(upper));
+            finite & low & high == u8::MAX
+        }
     }
     /// One gather per joint, each written as a whole vector (entries stored one by one and read
     /// back as a vector would stall the load, and the compiler's vectorised form of the lane
