@@ -706,9 +706,7 @@ impl DenseLimits {
     /// Whether entry `i` may take the value `x`.
     #[inline(always)]
     pub(crate) fn admits(&self, i: usize, x: f64) -> bool {
-        let [scale, offset, lower, upper] = &self.columns;
-        let value = scale[i] * x + offset[i];
-        x.is_finite() & (value >= lower[i]) & (value <= upper[i])
+        within(x, self.entry(i))
     }
 
     /// `(scale, offset, lower, upper)` of entry `i`.
@@ -725,18 +723,25 @@ impl DenseLimits {
     }
 }
 
-/// Whether every `x[i]` is finite with `lower[i] ≤ scale[i] · x[i] + offset[i] ≤ upper[i]`, in a
-/// loop that vectorises (no early exit, no closure).
+/// Whether every `x[i]` is [`within`] `(scale[i], offset[i], lower[i], upper[i])`, in a loop that
+/// vectorises (no early exit, no closure).
 #[inline(always)]
 fn admit(x: &[f64], scale: &[f64], offset: &[f64], lower: &[f64], upper: &[f64]) -> bool {
     let n = x.len();
     let (scale, offset, lower, upper) = (&scale[..n], &offset[..n], &lower[..n], &upper[..n]);
     let mut ok = true;
     for i in 0..n {
-        let value = scale[i] * x[i] + offset[i];
-        ok &= x[i].is_finite() & (value >= lower[i]) & (value <= upper[i]);
+        ok &= within(x[i], (scale[i], offset[i], lower[i], upper[i]));
     }
     ok
+}
+
+/// Whether `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product and the sum
+/// rounded separately: the decision of every limit check on a value.
+#[inline(always)]
+pub(crate) fn within(x: f64, (scale, offset, lower, upper): (f64, f64, f64, f64)) -> bool {
+    let value = scale * x + offset;
+    x.is_finite() & (value >= lower) & (value <= upper)
 }
 
 /// An immutable, validated kinematic chain (or tree).

@@ -131,8 +131,7 @@ pub(crate) trait LaneNum: Num {
     fn cast(q: &[Lanes]) -> &[Self];
     /// `frames` read and written as this type.
     fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>];
-    /// Whether every lane `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product
-    /// and the sum rounded separately (as [`crate::chain::DenseLimits::admits`] decides).
+    /// Whether every lane `x` is [`crate::chain::within`] `(scale, offset, lower, upper)`.
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
     /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: `q[j]` gets
     /// entry `j` of rows `rows[0..8]`.
@@ -151,8 +150,7 @@ impl LaneNum for Lanes {
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
         let mut ok = true;
         for x in x.0 {
-            let value = scale * x + offset;
-            ok &= x.is_finite() & (value >= lower) & (value <= upper);
+            ok &= crate::chain::within(x, (scale, offset, lower, upper));
         }
         ok
     }
