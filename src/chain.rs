@@ -659,9 +659,7 @@ impl LimitCheck {
 /// branch-free pass that vectorises.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DenseLimits {
-    /// `[scale, offset, lower, upper]`, each one entry per entry of `q`, repeated
-    /// [`DenseLimits::BLOCK`] times so that as many consecutive configurations are checked as
-    /// one flat slice (the first `dof` entries are the columns of one configuration).
+    /// `[scale, offset, lower, upper]`, each one entry per entry of `q`.
     columns: [Vec<f64>; 4],
 }
 
@@ -687,20 +685,8 @@ impl DenseLimits {
             upper[i] = upper[i].min(c.limits.upper);
         }
         Some(DenseLimits {
-            columns: [scale, offset, lower, upper].map(|v| v.repeat(Self::BLOCK)),
+            columns: [scale, offset, lower, upper],
         })
-    }
-
-    /// Configurations per block of [`DenseLimits::admit_block`].
-    pub(crate) const BLOCK: usize = 8;
-
-    /// Whether every entry of `block`, [`DenseLimits::BLOCK`] whole configurations one after
-    /// the other, may take its value: one pass over flat columns, without a per-configuration
-    /// loop.
-    #[inline(always)]
-    pub(crate) fn admit_block(&self, block: &[f64]) -> bool {
-        let [scale, offset, lower, upper] = &self.columns;
-        admit(block, scale, offset, lower, upper)
     }
 
     /// Whether entry `i` may take the value `x`.
@@ -719,7 +705,8 @@ impl DenseLimits {
     /// Whether every entry of `q` (of the chain's length) may take its value.
     #[inline(always)]
     pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
-        self.admit_block(q)
+        let [scale, offset, lower, upper] = &self.columns;
+        admit(q, scale, offset, lower, upper)
     }
 }
 

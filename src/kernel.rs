@@ -250,10 +250,6 @@ impl Z8 {
         // SAFETY: see the `Z8` impls.
         unsafe { std::slice::from_raw_parts_mut(q.as_mut_ptr().cast(), q.len()) }
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Z8 {
     #[inline(always)]
     fn lanes(self) -> Lanes {
         // SAFETY: as above (same size, every bit pattern valid).

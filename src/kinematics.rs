@@ -34,7 +34,7 @@
 //! (tangential, normal, Coriolis and local terms of eq. 2.75).
 
 use crate::arith::{Arith, Separate, fma_dispatch};
-use crate::chain::{Body, Chain, DenseLimits, LinkId, Placement};
+use crate::chain::{Body, Chain, LinkId, Placement};
 use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
 use crate::joint::{Motion, Term};
@@ -428,31 +428,15 @@ pub(crate) fn check_values(
 fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool {
     // Plain loops: an iterator adapter's closure is not always inlined into the target-feature
     // function, and would then run as baseline code.
-    let dof = chain.dof();
-    match (&chain.dense_limits, policy) {
-        (Some(limits), LimitPolicy::Enforce) => {
-            let mut ok = true;
-            let mut blocks = qs.chunks_exact(dof * DenseLimits::BLOCK);
-            for b in &mut blocks {
-                ok &= limits.admit_block(b);
-            }
-            for q in blocks.remainder().chunks_exact(dof) {
-                ok &= limits.admit_all(q);
-            }
-            ok
-        }
-        _ => {
-            let mut finite = true;
-            for x in qs {
-                finite &= x.is_finite();
-            }
-            finite
-                && (policy == LimitPolicy::Ignore
-                    || qs
-                        .chunks_exact(dof)
-                        .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
-        }
+    let mut finite = true;
+    for x in qs {
+        finite &= x.is_finite();
     }
+    finite
+        && (policy == LimitPolicy::Ignore
+            || qs
+                .chunks_exact(chain.dof())
+                .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
 }
 
 /// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
@@ -857,7 +841,8 @@ fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usi
 fma_dispatch!(
     /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
     /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for
-    /// a whole batch in passes that vectorise.
+    /// a batch whose limits the kernels cannot check on their lanes (no
+    /// [`Chain::dense_limits`](crate::Chain)), in a finiteness pass that vectorises.
     pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
 );
 fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
