@@ -11,6 +11,7 @@ use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
 use crate::kinematics::{all_valid, check_q};
+use crate::padded;
 use crate::transform::Transform;
 use rayon::prelude::*;
 
@@ -240,13 +241,16 @@ fn lane_pose<'f>(
     };
     let f = body_frames(b);
     let lane = index % LANES;
-    let body = Transform {
-        r: f.r.map(|c| c.map(|x| x.0[lane])),
-        p: f.p.map(|x| x.0[lane]),
-    };
+    let column = |c: &[Lanes; 3]| [c[0].0[lane], c[1].0[lane], c[2].0[lane], 0.0];
+    let body = [
+        column(&f.r[0]),
+        column(&f.r[1]),
+        column(&f.r[2]),
+        column(&f.p),
+    ];
     match l.offset {
-        Placement::Identity => body,
-        offset => body * offset.to_transform(),
+        Placement::Identity => padded::transform(&body),
+        offset => padded::link_pose(&body, &offset),
     }
 }
 

@@ -760,6 +760,9 @@ pub struct Chain {
     link_index: HashMap<String, usize>,
     joint_index: HashMap<String, usize>,
     serial: bool,
+    /// The number of leading bodies that form a serial chain (body `k` hangs from `k − 1`):
+    /// the part of any body's path that needs no index list.
+    pub(crate) serial_run: usize,
     reach: f64,
     warnings: Vec<String>,
     /// The description the chain was built from (for writing it out again).
@@ -1391,10 +1394,12 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         }
     }
 
-    let serial = bodies
+    let serial_run = bodies
         .iter()
         .enumerate()
-        .all(|(k, b)| b.parent == k.checked_sub(1));
+        .take_while(|(k, b)| b.parent == k.checked_sub(1))
+        .count();
+    let serial = serial_run == bodies.len();
     let mut first_body_of_variable = vec![usize::MAX; variables.len()];
     for (k, b) in bodies.iter().enumerate() {
         for t in [b.motion.theta, b.motion.d] {
@@ -1504,6 +1509,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         variables,
         limit_checks,
         serial,
+        serial_run,
         reach,
         warnings: spec.warnings.clone(),
         source: spec.clone(),

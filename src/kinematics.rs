@@ -134,10 +134,10 @@ impl<'a> Poses<'a> {
         match l.body {
             None => l.offset.to_transform(),
             Some(b) => {
-                let body = padded::transform(&self.data.world_from_body[b]);
+                let body = &self.data.world_from_body[b];
                 match l.offset {
-                    Placement::Identity => body,
-                    offset => body * offset.to_transform(),
+                    Placement::Identity => padded::transform(body),
+                    offset => padded::link_pose(body, &offset),
                 }
             }
         }
@@ -589,9 +589,9 @@ pub fn forward_kinematics_to(
     let Some(body) = l.body else {
         return Ok(l.offset.to_transform());
     };
-    poses_path(chain, data, q, body);
+    let pose = poses_path(chain, data, q, body, &l.offset);
     data.poses_valid = false;
-    Ok(Poses { chain, data }.world_from_link(link))
+    Ok(pose)
 }
 
 /// Computes poses, angular velocities and origin velocities of every link.
@@ -650,12 +650,13 @@ pub fn forward_accelerations<'a>(
 
 #[inline(always)]
 fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
-    poses_prefix::<A>(chain, data, q, chain.bodies.len());
+    let _ = poses_prefix::<A>(chain, data, q, chain.bodies.len());
 }
 
-/// Poses of bodies `0..n` (parents come first, so they are all there).
+/// Poses of bodies `0..n` (parents come first, so they are all there); returns the last one
+/// (the identity for `n = 0`).
 #[inline(always)]
-fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) {
+fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
     let chunks = chain.turning_before[n].div_ceil(kernel::LANES);
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[..chunks],
@@ -663,6 +664,12 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) {
         &mut data.sin,
         &mut data.cos,
     );
+    compose_prefix::<A>(chain, data, q, n)
+}
+
+/// [`poses_prefix`] once the trigonometry of bodies `0..n` is in `data`.
+#[inline(always)]
+fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
     let frames = &mut data.world_from_body;
     let mut f = Frame4::<A::Col>::identity();
     for (k, body) in chain.bodies[..n].iter().enumerate() {
@@ -677,15 +684,19 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) {
         };
         f.store(&mut frames[k]);
     }
+    f
 }
 
+/// The pose `world_from_body · offset` of a link on `body`, evaluating only the bodies on the
+/// path from the base to `body` (see [`padded::link_pose`]).
 #[inline(always)]
-fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
-    if chain.is_serial() {
-        // The path is the bodies up to this one.
-        poses_prefix::<A>(chain, data, q, body + 1);
-        return;
-    }
+fn poses_path_generic<A: Arith>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    body: usize,
+    offset: &Placement,
+) -> Transform {
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
     let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
@@ -695,12 +706,21 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         &mut data.sin,
         &mut data.cos,
     );
-    chain.body_path(Some(body), &mut data.path);
+    // The path is a run of the leading serial bodies (no index list), then the rest of the path
+    // (for a branch), listed from the body back towards the base.
+    data.path.clear();
+    let mut run = Some(body);
+    while let Some(b) = run.filter(|&b| b >= chain.serial_run) {
+        data.path.push(b);
+        run = chain.bodies[b].parent;
+    }
+    let mut f = match run {
+        Some(b) => compose_prefix::<A>(chain, data, q, b + 1),
+        None => Frame4::identity(),
+    };
     let frames = &mut data.world_from_body;
-    let mut f = Frame4::<A::Col>::identity();
-    for &k in &data.path {
-        // The path starts at a body hanging from the world; each next body's parent is the
-        // previous one, whose frame stays in registers.
+    for &k in data.path.iter().rev() {
+        // Each next body's parent is the previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
         let slot = chain.trig_slot[k];
         let sin_cos = (data.sin[slot], data.cos[slot]);
@@ -710,6 +730,8 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         };
         f.store(&mut frames[k]);
     }
+    padded::place::<A>(&mut f.0, offset);
+    f.to_transform()
 }
 
 #[inline(always)]
@@ -837,7 +859,7 @@ fn accelerations_generic<A: Arith>(
 }
 
 fma_dispatch!(fn poses_all(chain: &Chain, data: &mut Data, q: &[f64]) => poses_all_generic);
-fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize) => poses_path_generic);
+fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement) -> Transform => poses_path_generic);
 fma_dispatch!(
     /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
     /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for

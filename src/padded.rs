@@ -64,6 +64,33 @@ impl<C: Col> Frame4<C> {
     }
 }
 
+impl<C: Col> Frame4<C> {
+    /// The frame as a [`Transform`] (the padding dropped).
+    #[inline(always)]
+    pub(crate) fn to_transform(self) -> Transform {
+        let mut t = Transform::IDENTITY;
+        let [r0, r1, r2, p] = self.0;
+        r0.store3(&mut t.r[0]);
+        r1.store3(&mut t.r[1]);
+        r2.store3(&mut t.r[2]);
+        p.store3(&mut t.p);
+        t
+    }
+}
+
+/// The pose of a link: `body · offset`, the frame of the link's body followed by the link's
+/// constant offset (the fixed joints folded at load time), composed in registers as the kernels
+/// compose placements. Every way of reading a link pose (a full, incremental or one-link
+/// evaluation, a batch) goes through here, so they agree bit for bit.
+#[inline(always)]
+pub(crate) fn link_pose_generic<A: Arith>(body: &Stored, offset: &Placement) -> Transform {
+    let mut f = Frame4::<A::Col>::load(body);
+    place::<A>(&mut f.0, offset);
+    f.to_transform()
+}
+
+crate::arith::fma_dispatch!(pub(crate) fn link_pose(body: &Stored, offset: &Placement) -> Transform => link_pose_generic);
+
 /// `c₀ u₀ + c₁ u₁ + c₂ u₂ + base`, innermost term first (the order of
 /// `kernel::apply_const_add`); `u` holds each coefficient in every entry.
 #[inline(always)]
@@ -117,7 +144,7 @@ fn rotate_columns<A: Arith>(f: &mut [A::Col; 4], axis: &Axis, s: f64, c: f64) {
 
 /// `f ← f · placement`.
 #[inline(always)]
-fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
+pub(crate) fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
     match placement {
         Placement::Identity => {}
         Placement::Translation(t) => f[3] = combine_const(f, *t, f[3]),
