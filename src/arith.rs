@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 pub(crate) trait Arith: Copy {
     /// Four `f64` handled as one vector, with this policy's multiply–add.
     type Col: Col;
-    /// Eight `f64`, one per configuration of a batch chunk, as this instruction set holds them.
+    /// The `f64` of a batch chunk, one per configuration, as this instruction set holds them.
     type Lanes: LaneNum;
     /// Whether [`Arith::mul_add`] rounds once (then the exact product error
     /// `a * b − RN(a * b)` is one operation away).
@@ -74,6 +74,9 @@ impl Arith for Fused {
     type Col = Avx;
     #[cfg(not(target_arch = "x86_64"))]
     type Col = Portable<Fused>;
+    #[cfg(target_arch = "x86_64")]
+    type Lanes = crate::kernel::Y4;
+    #[cfg(not(target_arch = "x86_64"))]
     type Lanes = Lanes;
     const FUSED: bool = true;
     #[inline(always)]

@@ -440,25 +440,35 @@ fn chunk_poses_generic<A: Arith>(
     c: usize,
 ) -> bool {
     transpose::<A::Lanes>(chain, q, qs, c);
-    let q = A::Lanes::cast(q);
-    let ok = LaneCheck::admits(check, q);
-    let frames = A::Lanes::cast_frames(frames);
-    // Trigonometry first, for all bodies, so that it does not compete with the composition for
-    // registers; the frames are written to `frames` and then read back one at a time.
-    for (k, body) in chain.bodies.iter().enumerate() {
-        let (s, c) = kernel::body_sin_cos::<A::Lanes, A>(body, q);
-        frames[k].r[0][0] = s;
-        frames[k].r[0][1] = c;
-    }
-    let mut f = Frame::splat(&Transform::IDENTITY);
-    for (k, body) in chain.bodies.iter().enumerate() {
-        let sin_cos = (frames[k].r[0][0], frames[k].r[0][1]);
-        f = match body.parent {
-            Some(p) if p + 1 == k => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
-            Some(p) => kernel::pose_step::<A::Lanes, A>(Some(&frames[p]), body, q, sin_cos),
-            None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
-        };
-        frames[k] = f;
+    let dof = q.len();
+    let q_parts = A::Lanes::cast(q);
+    let mut ok = true;
+    for part in 0..A::Lanes::PARTS {
+        let q = &q_parts[part * dof..(part + 1) * dof];
+        ok &= LaneCheck::admits(check, q);
+        // Trigonometry first, for all bodies, so that it does not compete with the composition
+        // for registers; it is written to `frames` and then read back one body at a time.
+        for (k, body) in chain.bodies.iter().enumerate() {
+            let (s, c) = kernel::body_sin_cos::<A::Lanes, A>(body, q);
+            s.put(&mut frames[k].r[0][0], part);
+            c.put(&mut frames[k].r[0][1], part);
+        }
+        let mut f = Frame::splat(&Transform::IDENTITY);
+        for (k, body) in chain.bodies.iter().enumerate() {
+            let get = |x: &Lanes| A::Lanes::get(x, part);
+            let sin_cos = (get(&frames[k].r[0][0]), get(&frames[k].r[0][1]));
+            f = match body.parent {
+                Some(p) if p + 1 == k => {
+                    kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos)
+                }
+                Some(p) => {
+                    let parent = Frame::get(&frames[p], part);
+                    kernel::pose_step::<A::Lanes, A>(Some(&parent), body, q, sin_cos)
+                }
+                None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
+            };
+            f.put(&mut frames[k], part);
+        }
     }
     ok
 }
@@ -477,20 +487,25 @@ fn chunk_path_generic<A: Arith>(
     out: &mut Frame<Lanes>,
 ) -> bool {
     transpose::<A::Lanes>(chain, q, qs, c);
-    let q = A::Lanes::cast(q);
-    let ok = LaneCheck::admits(check, q);
-    let mut f = Frame::splat(&Transform::IDENTITY);
-    for &k in path {
-        let body = &chain.bodies[k];
-        let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, q);
-        // Two calls rather than one with `body.parent.map(|_| &f)`: the frame is then never
-        // reached through a pointer that may be null, and stays in registers.
-        f = match body.parent {
-            Some(_) => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
-            None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
-        };
+    let dof = q.len();
+    let q_parts = A::Lanes::cast(q);
+    let mut ok = true;
+    for part in 0..A::Lanes::PARTS {
+        let q = &q_parts[part * dof..(part + 1) * dof];
+        ok &= LaneCheck::admits(check, q);
+        let mut f = Frame::splat(&Transform::IDENTITY);
+        for &k in path {
+            let body = &chain.bodies[k];
+            let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, q);
+            // Two calls rather than one with `body.parent.map(|_| &f)`: the frame is then never
+            // reached through a pointer that may be null, and stays in registers.
+            f = match body.parent {
+                Some(_) => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
+                None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
+            };
+        }
+        f.put(out, part);
     }
-    A::Lanes::cast_frames(std::slice::from_mut(out))[0] = f;
     ok
 }
 

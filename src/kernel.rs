@@ -107,34 +107,58 @@ impl Num for Lanes {
     }
     #[inline(always)]
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
-        let mut big = false;
-        for i in 0..LANES {
-            (s[i], c[i]) = trig::sin_cos_reduced::<A>(x.0[i]);
-            big |= x.0[i].abs() >= trig::REDUCTION_LIMIT;
-        }
-        // Rare: arguments beyond the fast reduction (or NaN never reaches here: inputs are checked).
-        if big {
-            for i in 0..LANES {
-                if x.0[i].abs() >= trig::REDUCTION_LIMIT {
-                    (s[i], c[i]) = x.0[i].sin_cos();
-                }
-            }
-        }
+        let (s, c) = lanes_sin_cos::<A, LANES>(x.0);
         (Lanes(s), Lanes(c))
     }
 }
 
-/// The eight-lane number of a batch kernel, stored between kernels as [`Lanes`].
+/// `sin` and `cos` lane by lane (a loop the compiler vectorises to the lane width).
+#[inline(always)]
+fn lanes_sin_cos<A: Arith, const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
+    let (mut s, mut c) = ([0.0; W], [0.0; W]);
+    let mut big = false;
+    for i in 0..W {
+        (s[i], c[i]) = trig::sin_cos_reduced::<A>(x[i]);
+        big |= x[i].abs() >= trig::REDUCTION_LIMIT;
+    }
+    // Rare: arguments beyond the fast reduction (or NaN never reaches here: inputs are checked).
+    if big {
+        for i in 0..W {
+            if x[i].abs() >= trig::REDUCTION_LIMIT {
+                (s[i], c[i]) = x[i].sin_cos();
+            }
+        }
+    }
+    (s, c)
+}
+
+/// Whether every lane is [`crate::chain::within`] the limits.
+#[inline(always)]
+fn lanes_admitted<const W: usize>(x: [f64; W], limits: (f64, f64, f64, f64)) -> bool {
+    let mut ok = true;
+    for x in x {
+        ok &= crate::chain::within(x, limits);
+    }
+    ok
+}
+
+/// The lane number of a batch kernel: one [`Lanes`] as `PARTS` values of `LANES / PARTS`
+/// configurations each (a kernel evaluates the parts one after the other, so that a frame of
+/// this type fits the registers). Stored between kernels as [`Lanes`].
 pub(crate) trait LaneNum: Num {
-    /// `q` read as this type.
+    /// Number of values of this type in one [`Lanes`].
+    const PARTS: usize;
+    /// `q` (as [`LaneNum::transpose`] wrote it) read as `PARTS` runs of `q.len()` values, the
+    /// run of part 0 first.
     fn cast(q: &[Lanes]) -> &[Self];
-    /// `frames` read and written as this type.
-    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>];
+    /// Part `part` of `x`.
+    fn get(x: &Lanes, part: usize) -> Self;
+    /// Writes `self` as part `part` of `x`.
+    fn put(self, x: &mut Lanes, part: usize);
     /// Whether every lane `x` is [`crate::chain::within`] `(scale, offset, lower, upper)`.
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
-    /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: `q[j]` gets
-    /// entry `j` of rows `rows[0..8]`.
+    /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: entry `j` of
+    /// rows `rows[0..8]`, in the layout [`LaneNum::cast`] reads.
     ///
     /// # Panics
     /// If a row is not within `qs`.
@@ -142,17 +166,22 @@ pub(crate) trait LaneNum: Num {
 }
 
 impl LaneNum for Lanes {
+    const PARTS: usize = 1;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         q
     }
     #[inline(always)]
+    fn get(x: &Lanes, _: usize) -> Self {
+        *x
+    }
+    #[inline(always)]
+    fn put(self, x: &mut Lanes, _: usize) {
+        *x = self;
+    }
+    #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        let mut ok = true;
-        for x in x.0 {
-            ok &= crate::chain::within(x, (scale, offset, lower, upper));
-        }
-        ok
+        lanes_admitted(x.0, (scale, offset, lower, upper))
     }
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
@@ -161,9 +190,153 @@ impl LaneNum for Lanes {
             *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
         }
     }
+}
+
+impl<N: LaneNum> Frame<N> {
+    /// Part `part` of a stored frame.
     #[inline(always)]
-    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>] {
-        frames
+    pub(crate) fn get(f: &Frame<Lanes>, part: usize) -> Self {
+        Frame {
+            r: std::array::from_fn(|i| std::array::from_fn(|j| N::get(&f.r[i][j], part))),
+            p: std::array::from_fn(|j| N::get(&f.p[j], part)),
+        }
+    }
+    /// Writes `self` as part `part` of `f`.
+    #[inline(always)]
+    pub(crate) fn put(&self, f: &mut Frame<Lanes>, part: usize) {
+        for i in 0..3 {
+            for j in 0..3 {
+                self.r[i][j].put(&mut f.r[i][j], part);
+            }
+            self.p[i].put(&mut f.p[i], part);
+        }
+    }
+}
+
+/// Four `f64` in one AVX register: the lane type of [`crate::arith::Fused`] (AVX2), two per
+/// [`Lanes`]. A frame of eight-lane values would be 24 of the 16 registers, and spilled at
+/// every step; one of four fits.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(crate) struct Y4(std::arch::x86_64::__m256d);
+
+// `Y4` is read through pointers to `Lanes`: two fit one, each aligned to its size.
+#[cfg(target_arch = "x86_64")]
+const _: () = assert!(
+    2 * size_of::<Y4>() == size_of::<Lanes>()
+        && align_of::<Lanes>().is_multiple_of(align_of::<Y4>())
+);
+
+// SAFETY (every `unsafe` block of the `Y4` impls): `Y4` is the lane type of `Fused` only, which
+// runs inside the `fma_dispatch!` functions compiled with `avx2` and `fma` (selected when `isa()`
+// reports them); the pointer casts stay within a `Lanes` or a slice of them (checked sizes above),
+// and every bit pattern is a valid `f64`.
+#[cfg(target_arch = "x86_64")]
+impl LaneNum for Y4 {
+    const PARTS: usize = 2;
+    #[inline(always)]
+    fn cast(q: &[Lanes]) -> &[Self] {
+        unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), 2 * q.len()) }
+    }
+    #[inline(always)]
+    fn get(x: &Lanes, part: usize) -> Self {
+        let half = &x.0[4 * part..4 * part + 4];
+        Y4(unsafe { std::arch::x86_64::_mm256_loadu_pd(half.as_ptr()) })
+    }
+    #[inline(always)]
+    fn put(self, x: &mut Lanes, part: usize) {
+        let half = &mut x.0[4 * part..4 * part + 4];
+        unsafe { std::arch::x86_64::_mm256_storeu_pd(half.as_mut_ptr(), self.0) }
+    }
+    #[inline(always)]
+    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
+        lanes_admitted(x.array(), (scale, offset, lower, upper))
+    }
+    /// Part 0 (rows 0..4) of every entry, then part 1.
+    #[inline(always)]
+    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
+        let dof = q.len();
+        let out = Y4::cast_mut(q);
+        for part in 0..2 {
+            for j in 0..dof {
+                let x: [f64; 4] = std::array::from_fn(|l| qs[rows[4 * part + l] * dof + j]);
+                out[part * dof + j] = Y4::from_array(x);
+            }
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Y4 {
+    #[inline(always)]
+    fn cast_mut(q: &mut [Lanes]) -> &mut [Self] {
+        // SAFETY: see the `Y4` impls.
+        unsafe { std::slice::from_raw_parts_mut(q.as_mut_ptr().cast(), 2 * q.len()) }
+    }
+    #[inline(always)]
+    fn array(self) -> [f64; 4] {
+        // SAFETY: as above (same size, every bit pattern valid).
+        unsafe { std::mem::transmute::<Y4, [f64; 4]>(self) }
+    }
+    #[inline(always)]
+    fn from_array(x: [f64; 4]) -> Self {
+        // SAFETY: as above.
+        unsafe { std::mem::transmute::<[f64; 4], Y4>(x) }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+macro_rules! y4_op {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for Y4 {
+            type Output = Y4;
+            #[inline(always)]
+            fn $method(self, rhs: Y4) -> Y4 {
+                // SAFETY: see the `Y4` impls.
+                Y4(unsafe { std::arch::x86_64::$intrinsic(self.0, rhs.0) })
+            }
+        }
+    };
+}
+#[cfg(target_arch = "x86_64")]
+y4_op!(Add, add, _mm256_add_pd);
+#[cfg(target_arch = "x86_64")]
+y4_op!(Sub, sub, _mm256_sub_pd);
+#[cfg(target_arch = "x86_64")]
+y4_op!(Mul, mul, _mm256_mul_pd);
+
+#[cfg(target_arch = "x86_64")]
+impl Neg for Y4 {
+    type Output = Y4;
+    #[inline(always)]
+    fn neg(self) -> Y4 {
+        use std::arch::x86_64::{_mm256_set1_pd, _mm256_xor_pd};
+        // SAFETY: see the `Y4` impls.
+        Y4(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Num for Y4 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        // SAFETY: see the `Y4` impls.
+        Y4(unsafe { std::arch::x86_64::_mm256_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+        if A::FUSED {
+            // SAFETY: see the `Y4` impls.
+            Y4(unsafe { std::arch::x86_64::_mm256_fmadd_pd(a.0, b.0, c.0) })
+        } else {
+            a * b + c
+        }
+    }
+    #[inline(always)]
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+        let (s, c) = lanes_sin_cos::<A, 4>(x.array());
+        (Y4::from_array(s), Y4::from_array(c))
     }
 }
 
@@ -183,17 +356,21 @@ const _: () =
 
 // SAFETY (every `unsafe` block of the `Z8` impls): `Z8` is the lane type of `Fused512` only, which
 // runs only inside the `fma_dispatch!` functions compiled with `avx512f` (selected when `isa()`
-// reports it); the casts are between types of equal size and alignment (checked above), and
-// `Frame` is `repr(C)`, so `Frame<Z8>` and `Frame<Lanes>` have the same layout.
+// reports it); the casts are between types of equal size and alignment (checked above).
 #[cfg(target_arch = "x86_64")]
 impl LaneNum for Z8 {
+    const PARTS: usize = 1;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), q.len()) }
     }
     #[inline(always)]
-    fn cast_frames(frames: &mut [Frame<Lanes>]) -> &mut [Frame<Self>] {
-        unsafe { std::slice::from_raw_parts_mut(frames.as_mut_ptr().cast(), frames.len()) }
+    fn get(x: &Lanes, _: usize) -> Self {
+        Z8::from_lanes(*x)
+    }
+    #[inline(always)]
+    fn put(self, x: &mut Lanes, _: usize) {
+        *x = self.lanes();
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
@@ -344,8 +521,7 @@ impl Num for Z8 {
     }
 }
 
-/// A rigid frame: rotation columns and origin. `repr(C)`, so that frames of [`Lanes`] can be
-/// read as frames of another [`LaneNum`] of the same layout.
+/// A rigid frame: rotation columns and origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub(crate) struct Frame<N> {
