@@ -495,11 +495,9 @@ pub fn forward_kinematics<'a>(
     q: &[f64],
 ) -> Result<Poses<'a>, StateError> {
     data.assert_matches(chain);
-    let done = match (&chain.dense_limits, data.limit_policy) {
-        (Some(limits), LimitPolicy::Enforce) if q.len() == chain.dof() => {
-            poses_all_admitted(chain, data, q, limits)
-        }
-        _ => false,
+    let done = match kernel_check(chain, q, data.limit_policy) {
+        Some(limits) => poses_all_admitted(chain, data, q, limits),
+        None => false,
     };
     if !done {
         check_q(chain, q, data.limit_policy)?;
@@ -624,11 +622,9 @@ pub fn forward_kinematics_to(
         return Ok(l.offset.to_transform());
     };
     let mut pose = Transform::IDENTITY;
-    let done = match (&chain.dense_limits, data.limit_policy) {
-        (Some(limits), LimitPolicy::Enforce) if q.len() == chain.dof() => {
-            poses_path_admitted(chain, data, q, body, &l.offset, limits, &mut pose)
-        }
-        _ => false,
+    let done = match kernel_check(chain, q, data.limit_policy) {
+        Some(limits) => poses_path_admitted(chain, data, q, body, &l.offset, limits, &mut pose),
+        None => false,
     };
     if !done {
         check_q(chain, q, data.limit_policy)?;
@@ -697,18 +693,44 @@ fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
     let _ = poses_prefix::<A>(chain, data, q, chain.bodies.len());
 }
 
-/// [`poses_all_generic`] if every entry of `q` (of the chain's length) passes `limits` (what
-/// [`check_q`] decides under [`LimitPolicy::Enforce`]), checked in the same dispatched call:
-/// a separate baseline call costs about a tenth of a 7-joint evaluation. False, with nothing
-/// computed, otherwise.
+/// What the dispatched kernels can check of `q` themselves, deciding as [`check_q`] does under
+/// `policy`: finiteness only (`Some(None)`), or the limits one per entry (`Some(Some(_))`).
+/// `None` when they cannot (the wrong length, or limits that are not one per entry).
+#[inline(always)]
+fn kernel_check<'a>(
+    chain: &'a Chain,
+    q: &[f64],
+    policy: LimitPolicy,
+) -> Option<Option<&'a DenseLimits>> {
+    match (policy, &chain.dense_limits) {
+        _ if q.len() != chain.dof() => None,
+        (LimitPolicy::Ignore, _) => Some(None),
+        (LimitPolicy::Enforce, Some(limits)) => Some(Some(limits)),
+        (LimitPolicy::Enforce, None) => None,
+    }
+}
+
+/// Whether `q` (of the chain's length) passes the check [`kernel_check`] chose, in a loop that
+/// vectorises.
+#[inline(always)]
+fn admitted(q: &[f64], limits: Option<&DenseLimits>) -> bool {
+    match limits {
+        Some(limits) => limits.admit_all(q),
+        None => q.iter().fold(true, |ok, x| ok & x.is_finite()),
+    }
+}
+
+/// [`poses_all_generic`] if `q` passes the check [`kernel_check`] chose, checked in the same
+/// dispatched call (a separate baseline call costs about a tenth of a 7-joint evaluation).
+/// False, with nothing computed, otherwise.
 #[inline(always)]
 fn poses_all_admitted_generic<A: Arith>(
     chain: &Chain,
     data: &mut Data,
     q: &[f64],
-    limits: &DenseLimits,
+    limits: Option<&DenseLimits>,
 ) -> bool {
-    let admitted = limits.admit_all(q);
+    let admitted = admitted(q, limits);
     if admitted {
         poses_all_generic::<A>(chain, data, q);
     }
@@ -724,10 +746,10 @@ fn poses_path_admitted_generic<A: Arith>(
     q: &[f64],
     body: usize,
     offset: &Placement,
-    limits: &DenseLimits,
+    limits: Option<&DenseLimits>,
     pose: &mut Transform,
 ) -> bool {
-    let admitted = limits.admit_all(q);
+    let admitted = admitted(q, limits);
     if admitted {
         *pose = poses_path_generic::<A>(chain, data, q, body, offset);
     }
@@ -941,8 +963,8 @@ fn accelerations_generic<A: Arith>(
 
 fma_dispatch!(fn poses_all(chain: &Chain, data: &mut Data, q: &[f64]) => poses_all_generic);
 fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement) -> Transform => poses_path_generic);
-fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: &DenseLimits) -> bool => poses_all_admitted_generic);
-fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement, limits: &DenseLimits, pose: &mut Transform) -> bool => poses_path_admitted_generic);
+fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: Option<&DenseLimits>) -> bool => poses_all_admitted_generic);
+fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement, limits: Option<&DenseLimits>, pose: &mut Transform) -> bool => poses_path_admitted_generic);
 fma_dispatch!(
     /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
     /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for
