@@ -90,6 +90,37 @@ fn non_finite_entries_name_the_joint_and_coordinate() {
 }
 
 #[test]
+fn non_finite_positions_are_rejected_under_both_policies() {
+    // The pose kernels check the entries inside their own call; under either policy a
+    // non-finite entry anywhere gives the error naming it, and a valid call afterwards evaluates.
+    let chain = robot("puma560.yaml");
+    let tip = chain.end_link();
+    for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(policy);
+        let reference = forward_kinematics_to(&chain, &mut data, &[0.1; 6], tip).unwrap();
+        for index in 0..6 {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut q = [0.1; 6];
+                q[index] = bad;
+                let full = forward_kinematics(&chain, &mut data, &q)
+                    .map(|_| ())
+                    .unwrap_err();
+                let one = forward_kinematics_to(&chain, &mut data, &q, tip).unwrap_err();
+                for e in [full, one] {
+                    assert!(
+                        matches!(e, StateError::NonFinite { what: "q", index: i, .. } if i == index),
+                        "{policy:?} {e:?}"
+                    );
+                }
+            }
+        }
+        let p = forward_kinematics(&chain, &mut data, &[0.1; 6]).unwrap();
+        assert_eq!(p.world_from_link(tip), reference, "{policy:?}");
+    }
+}
+
+#[test]
 fn limits_are_enforced_by_default_and_can_be_ignored() {
     let chain = robot("puma560.yaml");
     let mut data = Data::new(&chain);
