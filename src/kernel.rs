@@ -132,16 +132,6 @@ fn lanes_sin_cos<A: Arith, const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) 
     (s, c)
 }
 
-/// Whether every lane is [`crate::chain::within`] the limits.
-#[inline(always)]
-fn lanes_admitted<const W: usize>(x: [f64; W], limits: (f64, f64, f64, f64)) -> bool {
-    let mut ok = true;
-    for x in x {
-        ok &= crate::chain::within(x, limits);
-    }
-    ok
-}
-
 /// The lane number of a batch kernel: one [`Lanes`] as `PARTS` values of `LANES / PARTS`
 /// configurations each (a kernel evaluates the parts one after the other, so that a frame of
 /// this type fits the registers). Stored between kernels as [`Lanes`].
@@ -181,7 +171,11 @@ impl LaneNum for Lanes {
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        lanes_admitted(x.0, (scale, offset, lower, upper))
+        let mut ok = true;
+        for x in x.0 {
+            ok &= crate::chain::within(x, (scale, offset, lower, upper));
+        }
+        ok
     }
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
@@ -251,7 +245,21 @@ impl LaneNum for Y4 {
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        lanes_admitted(x.array(), (scale, offset, lower, upper))
+        use std::arch::x86_64::{
+            _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
+            _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
+        };
+        // SAFETY: see the `Y4` impls.
+        unsafe {
+            let splat = _mm256_set1_pd;
+            // `within`, lane by lane: the product and the sum rounded separately.
+            let value = _mm256_add_pd(_mm256_mul_pd(splat(scale), x.0), splat(offset));
+            let abs = _mm256_andnot_pd(splat(-0.0), x.0);
+            let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, splat(f64::INFINITY));
+            let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, splat(lower));
+            let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, splat(upper));
+            _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
+        }
     }
     /// Part 0 (rows 0..4) of every entry, then part 1.
     #[inline(always)]
