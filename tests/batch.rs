@@ -6,54 +6,20 @@ use common::*;
 use kinechain::batch::{
     BatchData, forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
 };
-use kinechain::{Chain, Data, LimitPolicy, StateError, forward_kinematics};
+use kinechain::{Chain, LimitPolicy, StateError};
 
 #[test]
 fn batches_equal_single_evaluations_bit_for_bit() {
-    let mut rng = rng(21);
-    for file in [
-        "robots/panda.urdf",
-        "robots/snake50.yaml",
-        "robots/cylindrical.yaml",
-        "robots/stanford.yaml",
-        "tests/data/reference/urdf/tiago_no_hand.urdf",
-    ] {
-        let chain =
-            Chain::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
-        let mut single = Data::new(&chain);
-        single.set_limit_policy(LimitPolicy::Ignore);
-        let mut batch = BatchData::new(&chain);
-        batch.set_limit_policy(LimitPolicy::Ignore);
-        // 37 configurations: four full chunks of eight and a partial one.
-        let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
-        let expected: Vec<Vec<_>> = qs
-            .chunks(chain.dof())
-            .map(|q| {
-                let p = forward_kinematics(&chain, &mut single, q).unwrap();
-                (0..chain.links().len())
-                    .map(|l| p.world_from_link(chain.link_id(chain.links()[l].name()).unwrap()))
-                    .collect()
-            })
-            .collect();
-        for parallel in [false, true] {
-            let poses = if parallel {
-                forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap()
-            } else {
-                forward_kinematics_batch(&chain, &mut batch, &qs).unwrap()
-            };
-            assert_eq!(poses.len(), 37);
-            for (i, want) in expected.iter().enumerate() {
-                for (l, pose) in want.iter().enumerate() {
-                    let id = chain.link_id(chain.links()[l].name()).unwrap();
-                    assert_eq!(
-                        poses.world_from_link(i, id),
-                        *pose,
-                        "{file} configuration {i} link {l}"
-                    );
-                }
-            }
-        }
-    }
+    assert_batches_equal_single_evaluations(
+        &[
+            "robots/panda.urdf",
+            "robots/snake50.yaml",
+            "robots/cylindrical.yaml",
+            "robots/stanford.yaml",
+            "tests/data/reference/urdf/tiago_no_hand.urdf",
+        ],
+        21,
+    );
 }
 
 #[test]

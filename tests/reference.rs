@@ -85,32 +85,8 @@ fn rates_match_the_reference_for_every_model_sample_and_link() {
 /// errors grow at most ~n ulp and in practice ~√n; the worst measured is below 7.
 #[test]
 fn poses_are_within_8_ulp_of_the_50_digit_reference() {
-    const ULP: f64 = f64::EPSILON;
     for path in reference_files() {
-        let reference = read_json(&path);
-        let exact = read_json(&hp_path(&path));
-        let chain = reference_chain(&path, &reference);
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
-        let reach = scale_of(&exact, "pose");
-        let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
-        for sample in exact["samples"].as_array().unwrap() {
-            let q = joint_vector(&chain, &sample["q"]);
-            let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
-            for (name, link) in sample["links"].as_object().unwrap() {
-                let got = poses
-                    .world_from_link(chain.link_id(name).unwrap())
-                    .to_rows();
-                let want = matrix4(&link["pose"]);
-                for i in 0..3 {
-                    for j in 0..3 {
-                        rotation = rotation.max((got[i][j] - want[i][j]).abs());
-                    }
-                    position = position.max((got[i][3] - want[i][3]).abs());
-                }
-            }
-        }
-        let (position, rotation) = (position / (reach * ULP), rotation / ULP);
+        let (position, rotation) = pose_ulps(&path);
         eprintln!(
             "{}: position {position:.2} ulp of reach, rotation {rotation:.2} ulp",
             path.file_name().unwrap().to_string_lossy()

@@ -2,7 +2,7 @@
 //! (see its README), turned into chains and joint vectors.
 #![allow(dead_code)]
 
-use kinechain::{Chain, Transform};
+use kinechain::{Chain, Data, LimitPolicy, Transform, forward_kinematics};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -277,4 +277,80 @@ pub fn random_vec(n: usize, scale: f64, rng: &mut impl rand::Rng) -> Vec<f64> {
     (0..n)
         .map(|_| scale * (2.0 * rng.random::<f64>() - 1.0))
         .collect()
+}
+
+/// Largest errors of every link pose of every sample of the reference file `path` against its
+/// 50-digit twin, evaluated on the instruction set in use: position in ulps of the chain's reach
+/// and rotation entries in ulps (of 1).
+pub fn pose_ulps(path: &Path) -> (f64, f64) {
+    const ULP: f64 = f64::EPSILON;
+    let reference = read_json(path);
+    let exact = read_json(&hp_path(path));
+    let chain = reference_chain(path, &reference);
+    let mut data = Data::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let reach = scale_of(&exact, "pose");
+    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    for sample in exact["samples"].as_array().unwrap() {
+        let q = joint_vector(&chain, &sample["q"]);
+        let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+        for (name, link) in sample["links"].as_object().unwrap() {
+            let got = poses
+                .world_from_link(chain.link_id(name).unwrap())
+                .to_rows();
+            let want = matrix4(&link["pose"]);
+            for i in 0..3 {
+                for j in 0..3 {
+                    rotation = rotation.max((got[i][j] - want[i][j]).abs());
+                }
+                position = position.max((got[i][3] - want[i][3]).abs());
+            }
+        }
+    }
+    (position / (reach * ULP), rotation / ULP)
+}
+
+/// Asserts that batches (one thread and parallel) of 37 random configurations of each robot
+/// file give, configuration by configuration and bit for bit, what single evaluations give:
+/// four full chunks of eight and a partial one.
+pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
+    use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    let mut rng = rng(seed);
+    for file in files {
+        let chain = Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
+        let mut single = Data::new(&chain);
+        single.set_limit_policy(LimitPolicy::Ignore);
+        let mut batch = BatchData::new(&chain);
+        batch.set_limit_policy(LimitPolicy::Ignore);
+        let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let links: Vec<_> = chain
+            .links()
+            .iter()
+            .map(|l| chain.link_id(l.name()).unwrap())
+            .collect();
+        let expected: Vec<Vec<Transform>> = qs
+            .chunks(chain.dof())
+            .map(|q| {
+                let p = forward_kinematics(&chain, &mut single, q).unwrap();
+                links.iter().map(|&l| p.world_from_link(l)).collect()
+            })
+            .collect();
+        for parallel in [false, true] {
+            let poses = if parallel {
+                forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap()
+            } else {
+                forward_kinematics_batch(&chain, &mut batch, &qs).unwrap()
+            };
+            assert_eq!(poses.len(), 37);
+            for (i, want) in expected.iter().enumerate() {
+                for (&id, pose) in links.iter().zip(want) {
+                    assert_eq!(
+                        poses.world_from_link(i, id),
+                        *pose,
+                        "{file} configuration {i} link {id:?}"
+                    );
+                }
+            }
+        }
+    }
 }

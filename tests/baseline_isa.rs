@@ -1,0 +1,40 @@
+//! The baseline x86-64 kernels (no FMA, no AVX), which a CPU without AVX2 runs: forced for this
+//! whole test binary (the choice is process-wide, and each test file is its own process), and
+//! checked against the 50-digit references and against the batch kernels of the same path.
+
+mod common;
+
+use common::*;
+use kinechain::{Isa, force_isa, isa};
+
+fn use_baseline() {
+    force_isa(Some(Isa::Baseline));
+    assert_eq!(isa(), Isa::Baseline);
+}
+
+#[test]
+fn baseline_poses_are_within_8_ulp_of_the_50_digit_reference() {
+    use_baseline();
+    for path in reference_files() {
+        let (position, rotation) = pose_ulps(&path);
+        assert!(
+            position <= 8.0 && rotation <= 8.0,
+            "{}: position {position:.2} ulp of reach, rotation {rotation:.2} ulp",
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn baseline_batches_equal_baseline_single_evaluations_bit_for_bit() {
+    use_baseline();
+    assert_batches_equal_single_evaluations(
+        &[
+            "robots/panda.urdf",
+            "robots/snake50.yaml",
+            "robots/cylindrical.yaml",
+            "tests/data/reference/urdf/tiago_no_hand.urdf",
+        ],
+        22,
+    );
+}
