@@ -48,6 +48,9 @@ pub(crate) trait Col: Copy {
     fn yzx(self) -> Self;
     /// Entries `[2, 0, 1, 3]`.
     fn zxy(self) -> Self;
+    /// Whether every entry `x` is [`crate::chain::within`] the limits of the same entry of
+    /// `(scale, offset, lower, upper)`.
+    fn admitted(x: Self, limits: [Self; 4]) -> bool;
 }
 
 /// Two roundings: `a * b` then `+ c`.
@@ -116,6 +119,14 @@ impl<A: Arith> Portable<A> {
 
 impl<A: Arith> Col for Portable<A> {
     #[inline(always)]
+    fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
+        let mut ok = true;
+        for i in 0..4 {
+            ok &= crate::chain::within(x.0[i], (scale.0[i], offset.0[i], lower.0[i], upper.0[i]));
+        }
+        ok
+    }
+    #[inline(always)]
     fn load(v: &[f64; 4]) -> Self {
         Portable(*v, std::marker::PhantomData)
     }
@@ -182,6 +193,22 @@ pub(crate) struct Avx(std::arch::x86_64::__m256d);
 // stated sizes.
 #[cfg(target_arch = "x86_64")]
 impl Col for Avx {
+    #[inline(always)]
+    fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
+        use std::arch::x86_64::{
+            _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
+            _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
+        };
+        unsafe {
+            // `within`, entry by entry: the product and the sum rounded separately.
+            let value = _mm256_add_pd(_mm256_mul_pd(scale.0, x.0), offset.0);
+            let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), x.0);
+            let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, _mm256_set1_pd(f64::INFINITY));
+            let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, lower.0);
+            let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, upper.0);
+            _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
+        }
+    }
     #[inline(always)]
     fn load(v: &[f64; 4]) -> Self {
         use std::arch::x86_64::_mm256_loadu_pd;

@@ -668,10 +668,13 @@ impl DenseLimits {
     /// and offset (a mimic joint copying its leader) become their intersection; with different
     /// ones the result is `None`.
     fn new(checks: &[LimitCheck], dof: usize) -> Option<DenseLimits> {
-        let mut scale = vec![1.0; dof];
-        let mut offset = vec![0.0; dof];
-        let mut lower = vec![f64::NEG_INFINITY; dof];
-        let mut upper = vec![f64::INFINITY; dof];
+        // Padded to whole blocks of four with entries that admit any finite value (see
+        // `DenseLimits::block`).
+        let padded = dof.next_multiple_of(4);
+        let mut scale = vec![1.0; padded];
+        let mut offset = vec![0.0; padded];
+        let mut lower = vec![f64::NEG_INFINITY; padded];
+        let mut upper = vec![f64::INFINITY; padded];
         let mut seen = vec![false; dof];
         for c in checks {
             let i = c.index;
@@ -702,12 +705,32 @@ impl DenseLimits {
         (scale[i], offset[i], lower[i], upper[i])
     }
 
+    /// `(scale, offset, lower, upper)` of entries `4b..4b + 4`, as the rows of a vector check;
+    /// `None` past the chain's length.
+    #[inline(always)]
+    pub(crate) fn block(&self, b: usize) -> Option<[&[f64; 4]; 4]> {
+        let [scale, offset, lower, upper] = &self.columns;
+        Some([
+            block_of(scale, b)?,
+            block_of(offset, b)?,
+            block_of(lower, b)?,
+            block_of(upper, b)?,
+        ])
+    }
+
     /// Whether every entry of `q` (of the chain's length) may take its value.
     #[inline(always)]
     pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
         let [scale, offset, lower, upper] = &self.columns;
         admit(q, scale, offset, lower, upper)
     }
+}
+
+/// Entries `4b..4b + 4` of `column` (no closure: one is not always inlined into a
+/// target-feature function).
+#[inline(always)]
+fn block_of(column: &[f64], b: usize) -> Option<&[f64; 4]> {
+    column.as_chunks::<4>().0.get(b)
 }
 
 /// Whether every `x[i]` is [`within`] `(scale[i], offset[i], lower[i], upper[i])`, in a loop that

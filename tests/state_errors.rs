@@ -121,6 +121,51 @@ fn non_finite_positions_are_rejected_under_both_policies() {
 }
 
 #[test]
+fn in_kernel_checks_decide_as_check_q_does() {
+    // Every entry of the Puma (one block of four and a tail of two), at and just past its
+    // limits and non-finite: the pose and one-link paths accept exactly what `check_q` accepts
+    // and return its error.
+    let chain = robot("puma560.yaml");
+    let tool = chain.link_id("tool").unwrap();
+    let (mut accepted, mut rejected) = (0, 0);
+    for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(policy);
+        let moving = chain.joints().iter().filter(|j| !j.limits().is_empty());
+        for (i, joint) in moving.enumerate() {
+            let limits = joint.limits()[0].unwrap();
+            for x in [
+                limits.lower,
+                limits.upper,
+                limits.lower.next_down(),
+                limits.upper.next_up(),
+                f64::NAN,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ] {
+                let mut q = [0.1; 6];
+                q[i] = x;
+                // Compared as text: an error carrying a NaN is not equal to itself.
+                let text = |e: Option<StateError>| format!("{e:?}");
+                let want = kinechain::check_q(&chain, &q, policy).err();
+                match want {
+                    None => accepted += 1,
+                    Some(_) => rejected += 1,
+                }
+                let full = forward_kinematics(&chain, &mut data, &q).map(|_| ()).err();
+                let one = forward_kinematics_to(&chain, &mut data, &q, tool).err();
+                assert_eq!(text(full), text(want.clone()), "{policy:?} q[{i}] = {x}");
+                assert_eq!(text(one), text(want), "{policy:?} q[{i}] = {x}");
+            }
+        }
+    }
+    assert!(
+        accepted > 12 && rejected > 18,
+        "{accepted} accepted, {rejected} rejected"
+    );
+}
+
+#[test]
 fn limits_are_enforced_by_default_and_can_be_ignored() {
     let chain = robot("puma560.yaml");
     let mut data = Data::new(&chain);
