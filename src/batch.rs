@@ -446,17 +446,25 @@ fn chunk_poses_generic<A: Arith>(
     for part in 0..A::Lanes::PARTS {
         let q = &q_parts[part * dof..(part + 1) * dof];
         ok &= LaneCheck::admits(check, q);
-        // Trigonometry first, for all bodies, so that it does not compete with the composition
-        // for registers; it is written to `frames` and then read back one body at a time.
-        for (k, body) in chain.bodies.iter().enumerate() {
-            let (s, c) = kernel::body_sin_cos::<A::Lanes, A>(body, q);
-            s.put(&mut frames[k].r[0][0], part);
-            c.put(&mut frames[k].r[0][1], part);
+        // Eight lanes: trigonometry first, for all bodies, so that it does not compete with the
+        // composition for registers; it is written to `frames` and then read back one body at
+        // a time. Four lanes: interleaved with the composition.
+        let first = A::Lanes::PARTS == 1;
+        if first {
+            for (k, body) in chain.bodies.iter().enumerate() {
+                let (s, c) = kernel::body_sin_cos::<A::Lanes, A>(body, q);
+                s.put(&mut frames[k].r[0][0], part);
+                c.put(&mut frames[k].r[0][1], part);
+            }
         }
         let mut f = Frame::splat(&Transform::IDENTITY);
         for (k, body) in chain.bodies.iter().enumerate() {
             let get = |x: &Lanes| A::Lanes::get(x, part);
-            let sin_cos = (get(&frames[k].r[0][0]), get(&frames[k].r[0][1]));
+            let sin_cos = if first {
+                (get(&frames[k].r[0][0]), get(&frames[k].r[0][1]))
+            } else {
+                kernel::body_sin_cos::<A::Lanes, A>(body, q)
+            };
             f = match body.parent {
                 Some(p) if p + 1 == k => {
                     kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos)
