@@ -655,8 +655,9 @@ impl LimitCheck {
 
 /// The limit checks by entry of `q`, as columns: entry `i` passes when it is finite and
 /// `lower[i] ≤ scale[i] · x + offset[i] ≤ upper[i]` (the arithmetic of [`LimitCheck`]), with
-/// `(1, 0, −∞, ∞)` for an entry without limits. A whole configuration is then checked in one
-/// branch-free pass that vectorises.
+/// `(1, 0, −∞, ∞)` for an entry without limits (also the padding to whole blocks of four). A
+/// whole configuration is then checked in one branch-free pass, four entries per vector compare
+/// (`kinematics::admitted`).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DenseLimits {
     /// `[scale, offset, lower, upper]`, each one entry per entry of `q`.
@@ -717,13 +718,6 @@ impl DenseLimits {
             block_of(upper, b)?,
         ])
     }
-
-    /// Whether every entry of `q` (of the chain's length) may take its value.
-    #[inline(always)]
-    pub(crate) fn admit_all(&self, q: &[f64]) -> bool {
-        let [scale, offset, lower, upper] = &self.columns;
-        admit(q, scale, offset, lower, upper)
-    }
 }
 
 /// Entries `4b..4b + 4` of `column` (no closure: one is not always inlined into a
@@ -731,19 +725,6 @@ impl DenseLimits {
 #[inline(always)]
 fn block_of(column: &[f64], b: usize) -> Option<&[f64; 4]> {
     column.as_chunks::<4>().0.get(b)
-}
-
-/// Whether every `x[i]` is [`within`] `(scale[i], offset[i], lower[i], upper[i])`, in a loop that
-/// vectorises (no early exit, no closure).
-#[inline(always)]
-fn admit(x: &[f64], scale: &[f64], offset: &[f64], lower: &[f64], upper: &[f64]) -> bool {
-    let n = x.len();
-    let (scale, offset, lower, upper) = (&scale[..n], &offset[..n], &lower[..n], &upper[..n]);
-    let mut ok = true;
-    for i in 0..n {
-        ok &= within(x[i], (scale[i], offset[i], lower[i], upper[i]));
-    }
-    ok
 }
 
 /// Whether `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product and the sum
@@ -1674,13 +1655,21 @@ mod tests {
                 continue;
             };
             let base = crate::measure::configurations(chain, 1, 3).remove(0);
-            assert_eq!(limits.admit_all(&base), slow(chain, &base));
+            assert_eq!(
+                crate::kinematics::admitted::<crate::arith::Separate>(&base, Some(limits)),
+                slow(chain, &base)
+            );
             for i in 0..chain.dof() {
                 for &x in &values {
                     let mut q = base.clone();
                     q[i] = x;
                     let want = slow(chain, &q);
-                    assert_eq!(limits.admit_all(&q), want, "{} q[{i}] = {x}", chain.name());
+                    assert_eq!(
+                        crate::kinematics::admitted::<crate::arith::Separate>(&q, Some(limits)),
+                        want,
+                        "{} q[{i}] = {x}",
+                        chain.name()
+                    );
                     assert_eq!(limits.admits(i, x), want, "{} q[{i}] = {x}", chain.name());
                 }
             }

@@ -161,22 +161,13 @@ fn lane_checks_decide_as_check_q_does() {
     let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
     let tool = chain.link_id("tool").unwrap();
     let limits = chain.joints()[5].limits()[0].unwrap();
-    let values = [
-        0.0,
-        limits.lower,
-        limits.upper,
-        limits.lower.next_down(),
-        limits.upper.next_up(),
-        f64::NAN,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    ];
+    let values: Vec<f64> = [0.0].into_iter().chain(limit_probes(&limits)).collect();
     let mut batch = BatchData::new(&chain);
     let (mut accepted, mut rejected) = (0, 0);
     for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
         batch.set_limit_policy(policy);
         for bad in [0, 3, 7, 8, 13, 18] {
-            for x in values {
+            for &x in &values {
                 let mut qs = vec![0.1; 6 * 19];
                 qs[6 * bad + 5] = x;
                 let want = qs

@@ -3,6 +3,7 @@
 
 mod common;
 
+use common::limit_probes;
 use kinechain::input::{InputError, joint_vector_from_json, joint_vector_from_str};
 use kinechain::{
     Chain, Data, LimitPolicy, StateError, forward_accelerations, forward_kinematics,
@@ -134,15 +135,7 @@ fn in_kernel_checks_decide_as_check_q_does() {
         let moving = chain.joints().iter().filter(|j| !j.limits().is_empty());
         for (i, joint) in moving.enumerate() {
             let limits = joint.limits()[0].unwrap();
-            for x in [
-                limits.lower,
-                limits.upper,
-                limits.lower.next_down(),
-                limits.upper.next_up(),
-                f64::NAN,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-            ] {
+            for x in limit_probes(&limits) {
                 let mut q = [0.1; 6];
                 q[i] = x;
                 // Compared as text: an error carrying a NaN is not equal to itself.

@@ -354,3 +354,17 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
         }
     }
 }
+
+/// Values that probe a limit check on `limits`: both bounds, the doubles just outside them, and
+/// the non-finite values.
+pub fn limit_probes(limits: &kinechain::Limits) -> [f64; 7] {
+    [
+        limits.lower,
+        limits.upper,
+        limits.lower.next_down(),
+        limits.upper.next_up(),
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ]
+}
