@@ -328,10 +328,18 @@ impl<'a> LaneCheck<'a> {
 
 /// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
 /// (the last chunk repeats its last configuration in the unused lanes).
+/// Chunk `c` of `qs` transposed into `q`, then read as `N`: its parts (see [`LaneNum`]), each
+/// with one value per entry of a configuration.
 #[inline(always)]
-fn transpose<N: LaneNum>(chain: &Chain, q: &mut [Lanes], qs: &[f64], c: usize) {
+fn lane_parts<'q, N: LaneNum>(
+    chain: &Chain,
+    q: &'q mut [Lanes],
+    qs: &[f64],
+    c: usize,
+) -> std::iter::Enumerate<std::slice::ChunksExact<'q, N>> {
     let n = qs.len() / chain.dof();
     N::transpose(q, qs, std::array::from_fn(|l| (c * LANES + l).min(n - 1)));
+    N::cast(q).chunks_exact(q.len()).enumerate()
 }
 
 /// One link's pose in every configuration of a batch.
@@ -439,12 +447,8 @@ fn chunk_poses_generic<A: Arith>(
     qs: &[f64],
     c: usize,
 ) -> bool {
-    transpose::<A::Lanes>(chain, q, qs, c);
-    let dof = q.len();
-    let q_parts = A::Lanes::cast(q);
     let mut ok = true;
-    for part in 0..A::Lanes::PARTS {
-        let q = &q_parts[part * dof..(part + 1) * dof];
+    for (part, q) in lane_parts::<A::Lanes>(chain, q, qs, c) {
         ok &= LaneCheck::admits(check, q);
         // Eight lanes: trigonometry first, for all bodies, so that it does not compete with the
         // composition for registers; it is written to `frames` and then read back one body at
@@ -494,12 +498,8 @@ fn chunk_path_generic<A: Arith>(
     c: usize,
     out: &mut Frame<Lanes>,
 ) -> bool {
-    transpose::<A::Lanes>(chain, q, qs, c);
-    let dof = q.len();
-    let q_parts = A::Lanes::cast(q);
     let mut ok = true;
-    for part in 0..A::Lanes::PARTS {
-        let q = &q_parts[part * dof..(part + 1) * dof];
+    for (part, q) in lane_parts::<A::Lanes>(chain, q, qs, c) {
         ok &= LaneCheck::admits(check, q);
         let mut f = Frame::splat(&Transform::IDENTITY);
         for &k in path {
