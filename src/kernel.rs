@@ -261,15 +261,51 @@ impl LaneNum for Y4 {
             _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
         }
     }
-    /// Part 0 (rows 0..4) of every entry, then part 1.
+    /// Part 0 (rows 0..4) of every entry, then part 1: four entries of four rows at a time,
+    /// read as whole vectors (masked past the end of a row) and transposed in registers.
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
+        use std::arch::x86_64::{
+            __m256d, __m256i, _mm256_maskload_pd, _mm256_permute2f128_pd, _mm256_setr_epi64x,
+            _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+        };
         let dof = q.len();
+        let in_bounds = rows.iter().all(|&r| {
+            r.checked_mul(dof)
+                .and_then(|o| o.checked_add(dof))
+                .is_some_and(|e| e <= qs.len())
+        });
+        assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
         let out = Y4::cast_mut(q);
         for part in 0..2 {
-            for j in 0..dof {
-                let x: [f64; 4] = std::array::from_fn(|l| qs[rows[4 * part + l] * dof + j]);
-                out[part * dof + j] = Y4::from_array(x);
+            let starts: [usize; 4] = std::array::from_fn(|l| rows[4 * part + l] * dof);
+            for first in (0..dof).step_by(4) {
+                let n = (dof - first).min(4);
+                // Lane i of the mask (sign bit set) loads entry `first + i` when it exists.
+                let lane = |i: usize| -i64::from(i < n);
+                // SAFETY: see the `Y4` impls; each load reads entries `first..first + n` of a
+                // row (masked entries are not read), within `qs` as checked above.
+                unsafe {
+                    let mask: __m256i = _mm256_setr_epi64x(lane(0), lane(1), lane(2), lane(3));
+                    let a: [__m256d; 4] = std::array::from_fn(|l| {
+                        _mm256_maskload_pd(qs.as_ptr().add(starts[l] + first), mask)
+                    });
+                    // Rows interleaved in pairs, then 128-bit halves exchanged.
+                    let lo01 = _mm256_unpacklo_pd(a[0], a[1]);
+                    let hi01 = _mm256_unpackhi_pd(a[0], a[1]);
+                    let lo23 = _mm256_unpacklo_pd(a[2], a[3]);
+                    let hi23 = _mm256_unpackhi_pd(a[2], a[3]);
+                    let columns = [
+                        _mm256_permute2f128_pd::<0x20>(lo01, lo23),
+                        _mm256_permute2f128_pd::<0x20>(hi01, hi23),
+                        _mm256_permute2f128_pd::<0x31>(lo01, lo23),
+                        _mm256_permute2f128_pd::<0x31>(hi01, hi23),
+                    ];
+                    let o = &mut out[part * dof + first..part * dof + first + n];
+                    for (o, c) in o.iter_mut().zip(columns) {
+                        *o = Y4(c);
+                    }
+                }
             }
         }
     }
