@@ -132,6 +132,19 @@ fn lanes_sin_cos<A: Arith, const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) 
     (s, c)
 }
 
+/// Panics unless every row `rows[l]` of `dof` entries lies within `qs` (what the vector loads of
+/// a transposition rely on).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn assert_rows_within(qs: &[f64], rows: &[usize; LANES], dof: usize) {
+    let in_bounds = rows.iter().all(|&r| {
+        r.checked_mul(dof)
+            .and_then(|o| o.checked_add(dof))
+            .is_some_and(|e| e <= qs.len())
+    });
+    assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
+}
+
 /// The lane number of a batch kernel: one [`Lanes`] as `PARTS` values of `LANES / PARTS`
 /// configurations each (a kernel evaluates the parts one after the other, so that a frame of
 /// this type fits the registers). Stored between kernels as [`Lanes`].
@@ -270,12 +283,7 @@ impl LaneNum for Y4 {
             _mm256_unpackhi_pd, _mm256_unpacklo_pd,
         };
         let dof = q.len();
-        let in_bounds = rows.iter().all(|&r| {
-            r.checked_mul(dof)
-                .and_then(|o| o.checked_add(dof))
-                .is_some_and(|e| e <= qs.len())
-        });
-        assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
+        assert_rows_within(qs, &rows, dof);
         let out = Y4::cast_mut(q);
         for part in 0..2 {
             let starts: [usize; 4] = std::array::from_fn(|l| rows[4 * part + l] * dof);
@@ -317,70 +325,6 @@ impl Y4 {
     fn cast_mut(q: &mut [Lanes]) -> &mut [Self] {
         // SAFETY: see the `Y4` impls.
         unsafe { std::slice::from_raw_parts_mut(q.as_mut_ptr().cast(), 2 * q.len()) }
-    }
-    #[inline(always)]
-    fn array(self) -> [f64; 4] {
-        // SAFETY: as above (same size, every bit pattern valid).
-        unsafe { std::mem::transmute::<Y4, [f64; 4]>(self) }
-    }
-    #[inline(always)]
-    fn from_array(x: [f64; 4]) -> Self {
-        // SAFETY: as above.
-        unsafe { std::mem::transmute::<[f64; 4], Y4>(x) }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-macro_rules! y4_op {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for Y4 {
-            type Output = Y4;
-            #[inline(always)]
-            fn $method(self, rhs: Y4) -> Y4 {
-                // SAFETY: see the `Y4` impls.
-                Y4(unsafe { std::arch::x86_64::$intrinsic(self.0, rhs.0) })
-            }
-        }
-    };
-}
-#[cfg(target_arch = "x86_64")]
-y4_op!(Add, add, _mm256_add_pd);
-#[cfg(target_arch = "x86_64")]
-y4_op!(Sub, sub, _mm256_sub_pd);
-#[cfg(target_arch = "x86_64")]
-y4_op!(Mul, mul, _mm256_mul_pd);
-
-#[cfg(target_arch = "x86_64")]
-impl Neg for Y4 {
-    type Output = Y4;
-    #[inline(always)]
-    fn neg(self) -> Y4 {
-        use std::arch::x86_64::{_mm256_set1_pd, _mm256_xor_pd};
-        // SAFETY: see the `Y4` impls.
-        Y4(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Num for Y4 {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        // SAFETY: see the `Y4` impls.
-        Y4(unsafe { std::arch::x86_64::_mm256_set1_pd(x) })
-    }
-    #[inline(always)]
-    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        if A::FUSED {
-            // SAFETY: see the `Y4` impls.
-            Y4(unsafe { std::arch::x86_64::_mm256_fmadd_pd(a.0, b.0, c.0) })
-        } else {
-            a * b + c
-        }
-    }
-    #[inline(always)]
-    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        let (s, c) = lanes_sin_cos::<A, 4>(x.array());
-        (Y4::from_array(s), Y4::from_array(c))
     }
 }
 
@@ -444,12 +388,7 @@ impl LaneNum for Z8 {
             _mm512_unpacklo_pd,
         };
         let dof = q.len();
-        let in_bounds = rows.iter().all(|&r| {
-            r.checked_mul(dof)
-                .and_then(|o| o.checked_add(dof))
-                .is_some_and(|e| e <= qs.len())
-        });
-        assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
+        assert_rows_within(qs, &rows, dof);
         let starts = rows.map(|r| r * dof);
         let q = Z8::cast_mut(q);
         for (block, out) in q.chunks_mut(LANES).enumerate() {
@@ -510,60 +449,97 @@ impl Z8 {
     }
 }
 
+/// The arithmetic of a lane type held in one SIMD register of `$width` doubles: operators,
+/// splat and multiply–add by intrinsics, `sin`/`cos` by the lane loop of [`lanes_sin_cos`]
+/// (which the compiler vectorises to the same width).
 #[cfg(target_arch = "x86_64")]
-macro_rules! z8_op {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for Z8 {
-            type Output = Z8;
+macro_rules! simd_num {
+    ($ty:ident, $width:literal, $add:ident, $sub:ident, $mul:ident, $xor:ident, $set1:ident, $fmadd:ident) => {
+        impl Add for $ty {
+            type Output = $ty;
             #[inline(always)]
-            fn $method(self, rhs: Z8) -> Z8 {
-                // SAFETY: see the `Z8` impls.
-                Z8(unsafe { std::arch::x86_64::$intrinsic(self.0, rhs.0) })
+            fn add(self, rhs: $ty) -> $ty {
+                // SAFETY: see the type's `LaneNum` impl.
+                $ty(unsafe { std::arch::x86_64::$add(self.0, rhs.0) })
+            }
+        }
+        impl Sub for $ty {
+            type Output = $ty;
+            #[inline(always)]
+            fn sub(self, rhs: $ty) -> $ty {
+                // SAFETY: as above.
+                $ty(unsafe { std::arch::x86_64::$sub(self.0, rhs.0) })
+            }
+        }
+        impl Mul for $ty {
+            type Output = $ty;
+            #[inline(always)]
+            fn mul(self, rhs: $ty) -> $ty {
+                // SAFETY: as above.
+                $ty(unsafe { std::arch::x86_64::$mul(self.0, rhs.0) })
+            }
+        }
+        impl Neg for $ty {
+            type Output = $ty;
+            #[inline(always)]
+            fn neg(self) -> $ty {
+                // SAFETY: as above.
+                $ty(unsafe { std::arch::x86_64::$xor(self.0, std::arch::x86_64::$set1(-0.0)) })
+            }
+        }
+        impl Num for $ty {
+            #[inline(always)]
+            fn splat(x: f64) -> Self {
+                // SAFETY: as above.
+                $ty(unsafe { std::arch::x86_64::$set1(x) })
+            }
+            #[inline(always)]
+            fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+                if A::FUSED {
+                    // SAFETY: as above.
+                    $ty(unsafe { std::arch::x86_64::$fmadd(a.0, b.0, c.0) })
+                } else {
+                    a * b + c
+                }
+            }
+            #[inline(always)]
+            fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+                // SAFETY: as above (same size, every bit pattern valid).
+                let lanes = unsafe { std::mem::transmute::<$ty, [f64; $width]>(x) };
+                let (s, c) = lanes_sin_cos::<A, $width>(lanes);
+                // SAFETY: as above.
+                unsafe {
+                    (
+                        std::mem::transmute::<[f64; $width], $ty>(s),
+                        std::mem::transmute::<[f64; $width], $ty>(c),
+                    )
+                }
             }
         }
     };
 }
 #[cfg(target_arch = "x86_64")]
-z8_op!(Add, add, _mm512_add_pd);
+simd_num!(
+    Y4,
+    4,
+    _mm256_add_pd,
+    _mm256_sub_pd,
+    _mm256_mul_pd,
+    _mm256_xor_pd,
+    _mm256_set1_pd,
+    _mm256_fmadd_pd
+);
 #[cfg(target_arch = "x86_64")]
-z8_op!(Sub, sub, _mm512_sub_pd);
-#[cfg(target_arch = "x86_64")]
-z8_op!(Mul, mul, _mm512_mul_pd);
-
-#[cfg(target_arch = "x86_64")]
-impl Neg for Z8 {
-    type Output = Z8;
-    #[inline(always)]
-    fn neg(self) -> Z8 {
-        use std::arch::x86_64::{_mm512_set1_pd, _mm512_xor_pd};
-        // SAFETY: see the `Z8` impls.
-        Z8(unsafe { _mm512_xor_pd(self.0, _mm512_set1_pd(-0.0)) })
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Num for Z8 {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        // SAFETY: see the `Z8` impls.
-        Z8(unsafe { std::arch::x86_64::_mm512_set1_pd(x) })
-    }
-    #[inline(always)]
-    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        if A::FUSED {
-            // SAFETY: see the `Z8` impls.
-            Z8(unsafe { std::arch::x86_64::_mm512_fmadd_pd(a.0, b.0, c.0) })
-        } else {
-            a * b + c
-        }
-    }
-    #[inline(always)]
-    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        // The lane loop of `Lanes`, which the compiler vectorises to the same width.
-        let (s, c) = Lanes::sin_cos::<A>(x.lanes());
-        (Z8::from_lanes(s), Z8::from_lanes(c))
-    }
-}
+simd_num!(
+    Z8,
+    8,
+    _mm512_add_pd,
+    _mm512_sub_pd,
+    _mm512_mul_pd,
+    _mm512_xor_pd,
+    _mm512_set1_pd,
+    _mm512_fmadd_pd
+);
 
 /// A rigid frame: rotation columns and origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
