@@ -648,9 +648,17 @@ pub fn forward_velocities<'a>(
     q_dot: &[f64],
 ) -> Result<Velocities<'a>, StateError> {
     data.assert_matches(chain);
-    check_q(chain, q, data.limit_policy)?;
-    check_values(chain, q_dot, "q_dot")?;
-    velocities_all(chain, data, q, q_dot);
+    let done = match kernel_check(chain, q, data.limit_policy) {
+        Some(limits) if q_dot.len() == chain.dof() => {
+            velocities_admitted(chain, data, q, q_dot, limits)
+        }
+        _ => false,
+    };
+    if !done {
+        check_q(chain, q, data.limit_policy)?;
+        check_values(chain, q_dot, "q_dot")?;
+        velocities_all(chain, data, q, q_dot);
+    }
     data.last_q.copy_from_slice(q);
     data.poses_valid = true;
     Ok(Velocities {
@@ -674,10 +682,19 @@ pub fn forward_accelerations<'a>(
     q_ddot: &[f64],
 ) -> Result<Accelerations<'a>, StateError> {
     data.assert_matches(chain);
-    check_q(chain, q, data.limit_policy)?;
-    check_values(chain, q_dot, "q_dot")?;
-    check_values(chain, q_ddot, "q_ddot")?;
-    accelerations_all(chain, data, q, q_dot, q_ddot);
+    let dof = chain.dof();
+    let done = match kernel_check(chain, q, data.limit_policy) {
+        Some(limits) if q_dot.len() == dof && q_ddot.len() == dof => {
+            accelerations_admitted(chain, data, q, q_dot, q_ddot, limits)
+        }
+        _ => false,
+    };
+    if !done {
+        check_q(chain, q, data.limit_policy)?;
+        check_values(chain, q_dot, "q_dot")?;
+        check_values(chain, q_ddot, "q_ddot")?;
+        accelerations_all(chain, data, q, q_dot, q_ddot);
+    }
     data.last_q.copy_from_slice(q);
     data.poses_valid = true;
     Ok(Accelerations {
@@ -969,6 +986,50 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     }
 }
 
+/// [`rates_all_generic`] if `q` passes the check [`kernel_check`] chose and the rates (of the
+/// chain's length) are finite, checked in the same dispatched call as in
+/// [`poses_all_admitted_generic`]. False, with nothing computed, otherwise.
+#[inline(always)]
+fn rates_admitted_generic<A: Arith, const ACC: bool>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+    limits: Option<&DenseLimits>,
+) -> bool {
+    let admitted = admitted::<A>(q, limits)
+        & admitted::<A>(q_dot, None)
+        & (!ACC || admitted::<A>(q_ddot, None));
+    if admitted {
+        rates_all_generic::<A, ACC>(chain, data, q, q_dot, q_ddot);
+    }
+    admitted
+}
+
+#[inline(always)]
+fn velocities_admitted_generic<A: Arith>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    q_dot: &[f64],
+    limits: Option<&DenseLimits>,
+) -> bool {
+    rates_admitted_generic::<A, false>(chain, data, q, q_dot, &[], limits)
+}
+
+#[inline(always)]
+fn accelerations_admitted_generic<A: Arith>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+    limits: Option<&DenseLimits>,
+) -> bool {
+    rates_admitted_generic::<A, true>(chain, data, q, q_dot, q_ddot, limits)
+}
+
 #[inline(always)]
 fn velocities_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) {
     rates_all_generic::<A, false>(chain, data, q, q_dot, &[]);
@@ -997,6 +1058,8 @@ fma_dispatch!(
     pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
 );
 fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
+fma_dispatch!(fn velocities_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], limits: Option<&DenseLimits>) -> bool => velocities_admitted_generic);
+fma_dispatch!(fn accelerations_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64], limits: Option<&DenseLimits>) -> bool => accelerations_admitted_generic);
 fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
 fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
 

@@ -124,8 +124,8 @@ fn non_finite_positions_are_rejected_under_both_policies() {
 #[test]
 fn in_kernel_checks_decide_as_check_q_does() {
     // Every entry of the Puma (one block of four and a tail of two), at and just past its
-    // limits and non-finite: the pose and one-link paths accept exactly what `check_q` accepts
-    // and return its error.
+    // limits and non-finite: the pose, one-link and rate paths accept exactly what `check_q`
+    // accepts and return its error.
     let chain = robot("puma560.yaml");
     let tool = chain.link_id("tool").unwrap();
     let (mut accepted, mut rejected) = (0, 0);
@@ -145,10 +145,39 @@ fn in_kernel_checks_decide_as_check_q_does() {
                     None => accepted += 1,
                     Some(_) => rejected += 1,
                 }
-                let full = forward_kinematics(&chain, &mut data, &q).map(|_| ()).err();
-                let one = forward_kinematics_to(&chain, &mut data, &q, tool).err();
-                assert_eq!(text(full), text(want.clone()), "{policy:?} q[{i}] = {x}");
-                assert_eq!(text(one), text(want), "{policy:?} q[{i}] = {x}");
+                let rates = [0.2; 6];
+                let got = [
+                    forward_kinematics(&chain, &mut data, &q).map(|_| ()).err(),
+                    forward_kinematics_to(&chain, &mut data, &q, tool).err(),
+                    forward_velocities(&chain, &mut data, &q, &rates)
+                        .map(|_| ())
+                        .err(),
+                    forward_accelerations(&chain, &mut data, &q, &rates, &rates)
+                        .map(|_| ())
+                        .err(),
+                ];
+                for e in got {
+                    assert_eq!(text(e), text(want.clone()), "{policy:?} q[{i}] = {x}");
+                }
+                // Non-finite rates, with a valid q, name the rate.
+                if !x.is_finite() {
+                    let mut bad = rates;
+                    bad[i] = x;
+                    let e = forward_accelerations(&chain, &mut data, &[0.1; 6], &rates, &bad)
+                        .map(|_| ())
+                        .unwrap_err();
+                    assert!(
+                        matches!(e, StateError::NonFinite { what: "q_ddot", index, .. } if index == i),
+                        "{e:?}"
+                    );
+                    let e = forward_accelerations(&chain, &mut data, &[0.1; 6], &bad, &rates)
+                        .map(|_| ())
+                        .unwrap_err();
+                    assert!(
+                        matches!(e, StateError::NonFinite { what: "q_dot", index, .. } if index == i),
+                        "{e:?}"
+                    );
+                }
             }
         }
     }
