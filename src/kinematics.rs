@@ -650,7 +650,7 @@ pub fn forward_velocities<'a>(
     data.assert_matches(chain);
     let done = match kernel_check(chain, q, data.limit_policy) {
         Some(limits) if q_dot.len() == chain.dof() => {
-            velocities_admitted(chain, data, q, q_dot, limits)
+            rates_admitted(chain, data, q, q_dot, None, limits)
         }
         _ => false,
     };
@@ -685,7 +685,7 @@ pub fn forward_accelerations<'a>(
     let dof = chain.dof();
     let done = match kernel_check(chain, q, data.limit_policy) {
         Some(limits) if q_dot.len() == dof && q_ddot.len() == dof => {
-            accelerations_admitted(chain, data, q, q_dot, q_ddot, limits)
+            rates_admitted(chain, data, q, q_dot, Some(q_ddot), limits)
         }
         _ => false,
     };
@@ -1007,27 +1007,20 @@ fn rates_admitted_generic<A: Arith, const ACC: bool>(
     admitted
 }
 
+/// [`rates_admitted_generic`] with accelerations when `q_ddot` is given.
 #[inline(always)]
-fn velocities_admitted_generic<A: Arith>(
+fn rates_admitted_either_generic<A: Arith>(
     chain: &Chain,
     data: &mut Data,
     q: &[f64],
     q_dot: &[f64],
+    q_ddot: Option<&[f64]>,
     limits: Option<&DenseLimits>,
 ) -> bool {
-    rates_admitted_generic::<A, false>(chain, data, q, q_dot, &[], limits)
-}
-
-#[inline(always)]
-fn accelerations_admitted_generic<A: Arith>(
-    chain: &Chain,
-    data: &mut Data,
-    q: &[f64],
-    q_dot: &[f64],
-    q_ddot: &[f64],
-    limits: Option<&DenseLimits>,
-) -> bool {
-    rates_admitted_generic::<A, true>(chain, data, q, q_dot, q_ddot, limits)
+    match q_ddot {
+        Some(q_ddot) => rates_admitted_generic::<A, true>(chain, data, q, q_dot, q_ddot, limits),
+        None => rates_admitted_generic::<A, false>(chain, data, q, q_dot, &[], limits),
+    }
 }
 
 #[inline(always)]
@@ -1058,8 +1051,7 @@ fma_dispatch!(
     pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
 );
 fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
-fma_dispatch!(fn velocities_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], limits: Option<&DenseLimits>) -> bool => velocities_admitted_generic);
-fma_dispatch!(fn accelerations_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64], limits: Option<&DenseLimits>) -> bool => accelerations_admitted_generic);
+fma_dispatch!(fn rates_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: Option<&[f64]>, limits: Option<&DenseLimits>) -> bool => rates_admitted_either_generic);
 fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
 fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
 
