@@ -187,6 +187,30 @@ impl<A: Arith> Col for Portable<A> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx(std::arch::x86_64::__m256d);
 
+/// [`crate::chain::within`] for four values at once, each against the same entry of
+/// `(scale, offset, lower, upper)`: the product and the sum rounded separately, then three
+/// compares. Used by [`Avx`] and the AVX2 batch lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn within_all_256(
+    x: std::arch::x86_64::__m256d,
+    [scale, offset, lower, upper]: [std::arch::x86_64::__m256d; 4],
+) -> bool {
+    use std::arch::x86_64::{
+        _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
+        _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
+    };
+    // SAFETY: only called from code compiled with, or dispatched to after detecting, AVX.
+    unsafe {
+        let value = _mm256_add_pd(_mm256_mul_pd(scale, x), offset);
+        let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), x);
+        let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, _mm256_set1_pd(f64::INFINITY));
+        let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, lower);
+        let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, upper);
+        _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
+    }
+}
+
 // SAFETY (every `unsafe` block below): `Avx` is the column type of `Fused` only, and `Fused` runs
 // only where `isa()` has reported AVX2 and FMA (inside the `fma_dispatch!` functions, or in tests
 // guarded by that check); the pointer operations read and write through references of the
@@ -195,19 +219,7 @@ pub(crate) struct Avx(std::arch::x86_64::__m256d);
 impl Col for Avx {
     #[inline(always)]
     fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
-        use std::arch::x86_64::{
-            _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
-            _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
-        };
-        unsafe {
-            // `within`, entry by entry: the product and the sum rounded separately.
-            let value = _mm256_add_pd(_mm256_mul_pd(scale.0, x.0), offset.0);
-            let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), x.0);
-            let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, _mm256_set1_pd(f64::INFINITY));
-            let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, lower.0);
-            let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, upper.0);
-            _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
-        }
+        within_all_256(x.0, [scale.0, offset.0, lower.0, upper.0])
     }
     #[inline(always)]
     fn load(v: &[f64; 4]) -> Self {

@@ -326,10 +326,9 @@ impl<'a> LaneCheck<'a> {
     }
 }
 
-/// Transposes the configurations of chunk `c` into lanes: `q[j]` holds entry `j` of the eight
-/// (the last chunk repeats its last configuration in the unused lanes).
-/// Chunk `c` of `qs` transposed into `q`, then read as `N`: its parts (see [`LaneNum`]), each
-/// with one value per entry of a configuration.
+/// Chunk `c` of `qs` (configurations `8c..8c + 8`; the last chunk repeats its last
+/// configuration in the unused lanes) transposed into `q`, then read as `N`: its parts (see
+/// [`LaneNum`]), each with one value per entry of a configuration.
 #[inline(always)]
 fn lane_parts<'q, N: LaneNum>(
     chain: &Chain,

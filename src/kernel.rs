@@ -258,21 +258,13 @@ impl LaneNum for Y4 {
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        use std::arch::x86_64::{
-            _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
-            _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
-        };
-        // SAFETY: see the `Y4` impls.
-        unsafe {
-            let splat = _mm256_set1_pd;
-            // `within`, lane by lane: the product and the sum rounded separately.
-            let value = _mm256_add_pd(_mm256_mul_pd(splat(scale), x.0), splat(offset));
-            let abs = _mm256_andnot_pd(splat(-0.0), x.0);
-            let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, splat(f64::INFINITY));
-            let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, splat(lower));
-            let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, splat(upper));
-            _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
-        }
+        let limits = [
+            Y4::splat(scale).0,
+            Y4::splat(offset).0,
+            Y4::splat(lower).0,
+            Y4::splat(upper).0,
+        ];
+        crate::arith::within_all_256(x.0, limits)
     }
     /// Part 0 (rows 0..4) of every entry, then part 1: four entries of four rows at a time,
     /// read as whole vectors (masked past the end of a row) and transposed in registers.

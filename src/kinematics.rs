@@ -752,13 +752,27 @@ pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> boo
 #[inline(always)]
 fn admitted_block<A: Arith>(x: &[f64; 4], limits: Option<&DenseLimits>, b: usize) -> bool {
     use crate::arith::Col;
-    let limits = match limits.map(|l| l.block(b)) {
-        Some(Some([s, o, l, u])) => [s, o, l, u].map(A::Col::load),
-        // Past the columns: not decided here (`check_q` decides).
-        Some(None) => return false,
-        None => [1.0, 0.0, f64::NEG_INFINITY, f64::INFINITY].map(A::Col::splat),
+    type C<A> = <A as Arith>::Col;
+    // (No closures: one is not always inlined into a target-feature function.)
+    let limits = match limits {
+        Some(limits) => match limits.block(b) {
+            Some([s, o, l, u]) => [
+                C::<A>::load(s),
+                C::<A>::load(o),
+                C::<A>::load(l),
+                C::<A>::load(u),
+            ],
+            // Past the columns: not decided here (`check_q` decides).
+            None => return false,
+        },
+        None => [
+            C::<A>::splat(1.0),
+            C::<A>::splat(0.0),
+            C::<A>::splat(f64::NEG_INFINITY),
+            C::<A>::splat(f64::INFINITY),
+        ],
     };
-    A::Col::admitted(A::Col::load(x), limits)
+    C::<A>::admitted(C::<A>::load(x), limits)
 }
 
 /// [`poses_all_generic`] if `q` passes the check [`kernel_check`] chose, checked in the same
