@@ -4,8 +4,10 @@
 //! `cargo bench --bench table` prints a markdown table and writes it, with an SVG plot (log–log,
 //! time against error), to `docs/bench/`.
 //!
-//! Timing: the 22 reference configurations evaluated in a loop for at least 100 ms; the median of
-//! seven such runs, divided by the number of configurations.
+//! Timing: each method evaluates the 22 reference configurations in a loop lasting at least
+//! 100 ms; the methods of a robot run in alternation for seven rounds (`measure::Interleaved`),
+//! so that they share the machine's conditions. The time is the median over the rounds, divided
+//! by the number of configurations; "× k" is the median of the per-round ratios to `k`.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -13,25 +15,35 @@ mod naive;
 
 use common::*;
 use kinechain::batch::{BatchData, forward_kinematics_batch};
+use kinechain::measure::Interleaved;
 use kinechain::nalgebra::Matrix4;
 use kinechain::{Data, Isa, LimitPolicy, force_isa, forward_kinematics, isa};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::Path;
-
-/// Median over seven runs of the time of `f` per call, in ns; each run lasts at least 100 ms.
-fn time_per_call(f: impl FnMut()) -> f64 {
-    kinechain::measure::time_per_call(std::time::Duration::from_millis(100), 7, f)
-}
+use std::time::Duration;
 
 struct Row {
     method: String,
     robot: String,
     ns: f64,
+    /// How many times faster than `k` (URDF models) and than the naive product (DH models) in
+    /// the same rounds.
+    vs_k: Option<f64>,
+    vs_naive: Option<f64>,
     position: f64,
     reach: f64,
     rotation: f64,
+}
+
+/// One method of a robot: label, poses of every reference configuration, and one timed call
+/// (evaluating all configurations `repeat` times).
+struct Method<'a> {
+    label: &'static str,
+    poses: Vec<Vec<[[f64; 4]; 4]>>,
+    call: Box<dyn FnMut() + 'a>,
+    repeat: usize,
 }
 
 /// Largest position and rotation-entry errors of per-sample link poses against the 50-digit file.
@@ -63,11 +75,11 @@ fn rows_for(path: &Path) -> Vec<Row> {
             .to_string_lossy(),
         reference["robot"].as_str().unwrap()
     );
-    let chain = reference_chain(path, &reference);
+    let chain = &reference_chain(path, &reference);
     let samples = reference["samples"].as_array().unwrap();
     let qs: Vec<Vec<f64>> = samples
         .iter()
-        .map(|s| joint_vector(&chain, &s["q"]))
+        .map(|s| joint_vector(chain, &s["q"]))
         .collect();
     let names: Vec<String> = samples[0]["links"]
         .as_object()
@@ -77,54 +89,50 @@ fn rows_for(path: &Path) -> Vec<Row> {
         .collect();
     let ids: Vec<_> = names.iter().map(|n| chain.link_id(n).unwrap()).collect();
     let reach = scale_of(&exact, "pose");
-    let n = qs.len() as f64;
-    let mut rows = Vec::new();
-    let mut push = |method: &str, ns: f64, poses: Vec<Vec<[[f64; 4]; 4]>>| {
-        let (position, rotation) = errors(&exact, &names, &poses);
-        rows.push(Row {
-            method: method.to_string(),
-            robot: robot.clone(),
-            ns,
-            position,
-            reach,
-            rotation,
-        });
-    };
+    let qs = &qs;
+    let mut methods: Vec<Method<'_>> = Vec::new();
 
     // kinechain, one configuration per call, on the detected instruction set and on baseline x86-64.
-    let detected = isa();
     for (label, level) in [
-        ("kinechain", detected),
-        ("kinechain, baseline x86-64", Isa::Baseline),
+        ("kinechain", None),
+        ("kinechain, baseline x86-64", Some(Isa::Baseline)),
     ] {
-        force_isa(Some(level));
-        let mut data = Data::new(&chain);
+        force_isa(level);
+        let mut data = Data::new(chain);
         data.set_limit_policy(LimitPolicy::Ignore);
         let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
             .iter()
             .map(|q| {
-                let p = forward_kinematics(&chain, &mut data, q).unwrap();
+                let p = forward_kinematics(chain, &mut data, q).unwrap();
                 ids.iter()
                     .map(|&l| p.world_from_link(l).to_rows())
                     .collect()
             })
             .collect();
-        let ns = time_per_call(|| {
-            for q in &qs {
-                let p = forward_kinematics(&chain, &mut data, black_box(q)).unwrap();
-                black_box(p.world_from_link(ids[ids.len() - 1]));
+        force_isa(None);
+        let last = ids[ids.len() - 1];
+        let call = Box::new(move || {
+            force_isa(level);
+            for q in qs {
+                let p = forward_kinematics(chain, &mut data, black_box(q)).unwrap();
+                black_box(p.world_from_link(last));
             }
-        }) / n;
-        push(label, ns, poses);
+            force_isa(None);
+        });
+        methods.push(Method {
+            label,
+            poses,
+            call,
+            repeat: 1,
+        });
     }
-    force_isa(None);
 
     // kinechain, batches of 22 × 16 configurations.
     let flat: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
-    let mut batch = BatchData::new(&chain);
+    let mut batch = BatchData::new(chain);
     batch.set_limit_policy(LimitPolicy::Ignore);
     let poses = {
-        let p = forward_kinematics_batch(&chain, &mut batch, &flat).unwrap();
+        let p = forward_kinematics_batch(chain, &mut batch, &flat).unwrap();
         (0..qs.len())
             .map(|i| {
                 ids.iter()
@@ -133,14 +141,18 @@ fn rows_for(path: &Path) -> Vec<Row> {
             })
             .collect()
     };
-    let ns = time_per_call(|| {
-        black_box(
-            forward_kinematics_batch(&chain, &mut batch, black_box(&flat))
-                .unwrap()
-                .len(),
-        );
-    }) / (16.0 * n);
-    push("kinechain batch, 1 thread", ns, poses);
+    methods.push(Method {
+        label: "kinechain batch, 1 thread",
+        poses,
+        call: Box::new(move || {
+            black_box(
+                forward_kinematics_batch(chain, &mut batch, black_box(&flat))
+                    .unwrap()
+                    .len(),
+            );
+        }),
+        repeat: 16,
+    });
 
     // The k crate (URDF models).
     if reference["model"]["kind"] == "urdf" {
@@ -176,13 +188,17 @@ fn rows_for(path: &Path) -> Vec<Row> {
                     .collect()
             })
             .collect();
-        let ns = time_per_call(|| {
-            for q in &kq {
-                robot.set_joint_positions_unchecked(black_box(q));
-                black_box(robot.update_transforms());
-            }
-        }) / n;
-        push("k 0.32", ns, poses);
+        methods.push(Method {
+            label: "k 0.32",
+            poses,
+            call: Box::new(move || {
+                for q in &kq {
+                    robot.set_joint_positions_unchecked(black_box(q));
+                    black_box(robot.update_transforms());
+                }
+            }),
+            repeat: 1,
+        });
     }
 
     // The textbook method for DH models: products of 4×4 nalgebra matrices (eq. 2.129 or the
@@ -213,7 +229,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
             .iter()
             .map(|j| num(&j["offset"]))
             .collect();
-        let eval = |q: &[f64], out: &mut Vec<Matrix4<f64>>| {
+        let eval = move |q: &[f64], out: &mut Vec<Matrix4<f64>>| {
             out.clear();
             let mut t = base;
             out.push(t);
@@ -248,15 +264,51 @@ fn rows_for(path: &Path) -> Vec<Row> {
                     .collect()
             })
             .collect();
-        let ns = time_per_call(|| {
-            for q in &qs {
-                eval(black_box(q), &mut out);
-                black_box(&out);
-            }
-        }) / n;
-        push("naive nalgebra Matrix4", ns, poses);
+        methods.push(Method {
+            label: "naive nalgebra Matrix4",
+            poses,
+            call: Box::new(move || {
+                for q in qs {
+                    eval(black_box(q), &mut out);
+                    black_box(&out);
+                }
+            }),
+            repeat: 1,
+        });
     }
-    rows
+
+    let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.call as _).collect();
+    let timings = Interleaved::run(Duration::from_millis(100), 7, &mut calls);
+    let k = methods.iter().position(|m| m.label == "k 0.32");
+    let naive = methods
+        .iter()
+        .position(|m| m.label == "naive nalgebra Matrix4");
+    let n = qs.len();
+    let faster_than = |over: Option<usize>, i: usize| {
+        over.map(|o| timings.ratio(o, i) * methods[i].repeat as f64 / methods[o].repeat as f64)
+    };
+    methods
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let (position, rotation) = errors(&exact, &names, &m.poses);
+            Row {
+                method: m.label.to_string(),
+                robot: robot.clone(),
+                ns: timings.median(i) / (m.repeat * n) as f64,
+                vs_k: faster_than(k, i),
+                vs_naive: faster_than(naive, i),
+                position,
+                reach,
+                rotation,
+            }
+        })
+        .collect()
+}
+
+/// A speed-up for the table, "–" where there is none.
+fn times(x: Option<f64>) -> String {
+    x.map_or("–".to_string(), |x| format!("{x:.1}"))
 }
 
 fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
@@ -327,17 +379,19 @@ fn main() {
         })
         .unwrap_or_else(|| "unknown CPU".into());
     let mut table = format!(
-        "Machine: {cpu}, {} threads, kernels: {}.\n\n| method | robot | ns/config | max position error (m) | (ulp of reach) | max rotation error |\n|---|---|---:|---:|---:|---:|\n",
+        "Machine: {cpu}, {} threads, kernels: {}.\n\n| method | robot | ns/config | × k | × naive | max position error (m) | (ulp of reach) | max rotation error |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
         isa().name()
     );
     for r in &rows {
         writeln!(
             table,
-            "| {} | {} | {:.1} | {:.1e} | {:.2} | {:.1e} |",
+            "| {} | {} | {:.1} | {} | {} | {:.1e} | {:.2} | {:.1e} |",
             r.method,
             r.robot,
             r.ns,
+            times(r.vs_k),
+            times(r.vs_naive),
             r.position,
             r.position / (r.reach * f64::EPSILON),
             r.rotation

@@ -892,10 +892,9 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
     })
 }
 
-/// Median over five runs of the time per call of `f`, each run lasting at least 20 ms.
-fn time_per_call(f: impl FnMut()) -> f64 {
-    crate::measure::time_per_call(std::time::Duration::from_millis(20), 5, f)
-}
+/// One timed method of `kinechain bench`: its label, one call, and how many configurations a
+/// call evaluates.
+type Method<'a> = (String, Box<dyn FnMut() + 'a>, usize);
 
 fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<(), CliError> {
     use crate::batch::{
@@ -905,54 +904,70 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
     use crate::kinematics::forward_kinematics_incremental;
     use std::hint::black_box;
 
-    let chain = load(path)?;
-    let qs = crate::measure::configurations(&chain, n, 0x6b69_6e65);
+    let chain = &load(path)?;
+    let qs = &crate::measure::configurations(chain, n, 0x6b69_6e65);
     let qd: Vec<Vec<f64>> = qs
         .iter()
         .map(|q| q.iter().map(|x| 0.5 * x.sin()).collect())
         .collect();
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
     let all: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
     let end = chain.end_link();
     let links = chain.links().len();
+    // Every method has its own buffers, so that the methods can be timed in alternation.
+    let data = || {
+        let mut d = Data::new(chain);
+        d.set_limit_policy(LimitPolicy::Ignore);
+        d
+    };
+    let batch_data = || {
+        let mut b = BatchData::new(chain);
+        b.set_limit_policy(LimitPolicy::Ignore);
+        b
+    };
 
     // Errors of the single evaluation against the 256-bit evaluation of the same model.
     let mut position: f64 = 0.0;
     let mut rotation: f64 = 0.0;
-    for q in &qs {
-        let exact = crate::reference::link_poses(&chain, q);
-        let poses = forward_kinematics(&chain, &mut data, q)?;
+    let mut d = data();
+    for q in qs.iter() {
+        let exact = crate::reference::link_poses(chain, q);
+        let poses = forward_kinematics(chain, &mut d, q)?;
         let ours: Vec<Transform> = all.iter().map(|&l| poses.world_from_link(l)).collect();
         let (p, r) = crate::reference::max_errors(&ours, &exact);
         position = position.max(p);
         rotation = rotation.max(r);
     }
 
-    let mut rows: Vec<(String, f64)> = Vec::new();
-    let per = |ns: f64| ns / qs.len() as f64;
+    let flat: Vec<f64> = qs.concat();
+    let big: Vec<f64> = (0..64).flat_map(|_| flat.iter().copied()).collect();
+    let (flat, big) = (&flat, &big);
+    let all_links = |isa: Option<crate::Isa>| -> Box<dyn FnMut() + '_> {
+        let mut d = data();
+        Box::new(move || {
+            crate::force_isa(isa);
+            for q in qs.iter() {
+                black_box(
+                    forward_kinematics(chain, &mut d, black_box(q))
+                        .ok()
+                        .map(|p| p.world_from_link(end)),
+                );
+            }
+            crate::force_isa(None);
+        })
+    };
+    let mut methods: Vec<Method<'_>> = Vec::new();
     match level {
         Level::Pose => {
-            // Every link of every configuration (also timed on the baseline path below).
-            let all_links = |data: &mut Data| {
-                per(time_per_call(|| {
-                    for q in &qs {
-                        black_box(
-                            forward_kinematics(&chain, data, black_box(q))
-                                .ok()
-                                .map(|p| p.world_from_link(end)),
-                        );
-                    }
-                }))
-            };
-            rows.push(("kinechain, all links".into(), all_links(&mut data)));
-            rows.push((
+            methods.push(("kinechain, all links".into(), all_links(None), n));
+            let mut d = data();
+            methods.push((
                 format!("kinechain, end link {} only", chain.link(end).name()),
-                per(time_per_call(|| {
-                    for q in &qs {
-                        black_box(forward_kinematics_to(&chain, &mut data, black_box(q), end).ok());
+                Box::new(move || {
+                    for q in qs.iter() {
+                        black_box(forward_kinematics_to(chain, &mut d, black_box(q), end).ok());
                     }
-                })),
+                }),
+                n,
             ));
             if chain.dof() > 0 {
                 let last = chain.dof() - 1;
@@ -964,59 +979,66 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                         m
                     })
                     .collect();
-                rows.push((
+                let mut d = data();
+                methods.push((
                     "kinechain, incremental (last joint moves)".into(),
-                    per(time_per_call(|| {
+                    Box::new(move || {
                         for q in &moving {
                             black_box(
-                                forward_kinematics_incremental(&chain, &mut data, black_box(q))
+                                forward_kinematics_incremental(chain, &mut d, black_box(q))
                                     .ok()
                                     .map(|p| p.world_from_link(end)),
                             );
                         }
-                    })),
+                    }),
+                    n,
                 ));
             }
-            let flat: Vec<f64> = qs.concat();
-            let mut batch = BatchData::new(&chain);
-            batch.set_limit_policy(LimitPolicy::Ignore);
-            rows.push((
+            let mut b = batch_data();
+            methods.push((
                 "kinechain, batch, 1 thread".into(),
-                per(time_per_call(|| {
+                Box::new(move || {
                     black_box(
-                        forward_kinematics_batch(&chain, &mut batch, black_box(&flat))
+                        forward_kinematics_batch(chain, &mut b, black_box(flat))
                             .ok()
                             .map(|b| b.len()),
                     );
-                })),
+                }),
+                n,
             ));
-            let big: Vec<f64> = (0..64).flat_map(|_| flat.iter().copied()).collect();
-            rows.push((
+            let mut b = batch_data();
+            methods.push((
                 format!("kinechain, batch, {} threads", rayon::current_num_threads()),
-                time_per_call(|| {
+                Box::new(move || {
                     black_box(
-                        forward_kinematics_batch_par(&chain, &mut batch, black_box(&big))
+                        forward_kinematics_batch_par(chain, &mut b, black_box(big))
                             .ok()
                             .map(|b| b.len()),
                     );
-                }) / (64 * qs.len()) as f64,
+                }),
+                64 * n,
             ));
             for parallel in [false, true] {
-                let qs = if parallel { &big } else { &flat };
-                rows.push((
-                    if parallel {
+                let (qs, label, count) = if parallel {
+                    (
+                        &big,
                         format!(
                             "kinechain, batch, end link only, {} threads",
                             rayon::current_num_threads()
-                        )
-                    } else {
-                        "kinechain, batch, end link only, 1 thread".to_string()
-                    },
-                    time_per_call(|| {
+                        ),
+                        64 * n,
+                    )
+                } else {
+                    (&flat, "kinechain, batch, end link only, 1 thread".into(), n)
+                };
+                let mut b = batch_data();
+                methods.push((
+                    label,
+                    Box::new(move || {
                         black_box(
                             forward_kinematics_batch_to(
-                                &chain,
-                                &mut batch,
+                                chain,
+                                &mut b,
                                 black_box(qs),
                                 end,
                                 parallel,
@@ -1024,62 +1046,57 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                             .ok()
                             .map(|b| b.len()),
                         );
-                    }) / (qs.len() / chain.dof().max(1)) as f64,
+                    }),
+                    count,
                 ));
             }
-            crate::force_isa(Some(crate::Isa::Baseline));
-            rows.push((
+            methods.push((
                 "kinechain, baseline x86-64 path".into(),
-                all_links(&mut data),
+                all_links(Some(crate::Isa::Baseline)),
+                n,
             ));
-            crate::force_isa(None);
-            if let Some(ns) = k_time(path, &chain, &qs) {
-                rows.push(("k 0.32, update_transforms".into(), ns));
+            if let Some(k) = k_method(path, chain, qs) {
+                methods.push(("k 0.32, update_transforms".into(), k, n));
             }
         }
         Level::Vel | Level::Acc => {
             let acc = level == Level::Acc;
-            rows.push((
+            let mut d = data();
+            let qd = &qd;
+            methods.push((
                 if acc {
                     "kinechain, poses + velocities + accelerations"
                 } else {
                     "kinechain, poses + velocities"
                 }
                 .into(),
-                per(time_per_call(|| {
-                    for (q, v) in qs.iter().zip(&qd) {
+                Box::new(move || {
+                    for (q, v) in qs.iter().zip(qd) {
                         if acc {
                             black_box(
-                                forward_accelerations(&chain, &mut data, black_box(q), v, v)
+                                forward_accelerations(chain, &mut d, black_box(q), v, v)
                                     .ok()
                                     .map(|a| a.acceleration(end)),
                             );
                         } else {
                             black_box(
-                                forward_velocities(&chain, &mut data, black_box(q), v)
+                                forward_velocities(chain, &mut d, black_box(q), v)
                                     .ok()
                                     .map(|a| a.velocity(end)),
                             );
                         }
                     }
-                })),
+                }),
+                n,
             ));
-            rows.push((
-                "kinechain, poses only".into(),
-                per(time_per_call(|| {
-                    for q in &qs {
-                        black_box(
-                            forward_kinematics(&chain, &mut data, black_box(q))
-                                .ok()
-                                .map(|p| p.world_from_link(end)),
-                        );
-                    }
-                })),
-            ));
+            methods.push(("kinechain, poses only".into(), all_links(None), n));
         }
     }
 
-    let k_ns = rows.iter().find(|(m, _)| m.starts_with("k ")).map(|r| r.1);
+    let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.1 as _).collect();
+    let timings =
+        crate::measure::Interleaved::run(std::time::Duration::from_millis(20), 7, &mut calls);
+    let k = methods.iter().position(|(m, _, _)| m.starts_with("k "));
     let reach = chain.reach().max(f64::MIN_POSITIVE);
     let mut text = format!(
         "{}: {} dof, {} links, {} moving joints; {} random configurations; kernels: {}\n",
@@ -1094,10 +1111,18 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
         "{:<48} {:>12} {:>10}\n",
         "method", "ns/config", "vs k"
     ));
-    for (method, ns) in &rows {
-        let ratio = k_ns.map_or("-".to_string(), |k| format!("{:.1}x", k / ns));
+    for (i, (method, _, count)) in methods.iter().enumerate() {
+        let ns = timings.median(i) / *count as f64;
+        // Both per configuration: the per-call ratio scaled by the calls' sizes.
+        let ratio = k.map_or("-".to_string(), |k| {
+            let per_k = methods[k].2 as f64;
+            format!("{:.1}x", timings.ratio(k, i) * *count as f64 / per_k)
+        });
         text.push_str(&format!("{method:<48} {ns:>12.1} {ratio:>10}\n"));
     }
+    text.push_str(
+        "times: medians of 7 rounds, the methods run in alternation; \"vs k\": median of the ratios within a round\n",
+    );
     text.push_str(&format!(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
@@ -1105,8 +1130,13 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
     write_line(out, &text)
 }
 
-/// Time per configuration of the `k` crate on a URDF it can load (mimic joints in its vector).
-fn k_time(path: &std::path::Path, chain: &Chain, qs: &[Vec<f64>]) -> Option<f64> {
+/// One call of the `k` crate evaluating every configuration of `qs`, on a URDF it can load
+/// (mimic joints in its vector).
+fn k_method<'a>(
+    path: &std::path::Path,
+    chain: &Chain,
+    qs: &[Vec<f64>],
+) -> Option<Box<dyn FnMut() + 'a>> {
     use std::hint::black_box;
     if crate::io::Format::from_path(path) != Some(crate::io::Format::Urdf) {
         return None;
@@ -1118,12 +1148,10 @@ fn k_time(path: &std::path::Path, chain: &Chain, qs: &[Vec<f64>]) -> Option<f64>
         .map(|q| chain.positions_by_name(names.iter().map(String::as_str), q))
         .collect::<Result<_, _>>()
         .ok()?;
-    Some(
-        time_per_call(|| {
-            for q in &kq {
-                robot.set_joint_positions_unchecked(black_box(q));
-                black_box(robot.update_transforms());
-            }
-        }) / qs.len() as f64,
-    )
+    Some(Box::new(move || {
+        for q in &kq {
+            robot.set_joint_positions_unchecked(black_box(q));
+            black_box(robot.update_transforms());
+        }
+    }))
 }

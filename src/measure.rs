@@ -52,10 +52,76 @@ pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// Time of one call of `f` in ns: the number of calls per run is doubled until a run lasts at
-/// least `min_run`, then the median of `runs` such runs is returned (the median resists the
-/// outliers of a shared machine).
-pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64 {
+/// Times of several methods measured in alternation: round `r` runs every method once, each for
+/// its own fixed number of calls (chosen so that a run lasts at least `min_run`), starting with a
+/// different method each round. On a shared or virtual machine whose speed drifts, methods then
+/// see the same conditions, and the ratio of two methods is taken within each round
+/// ([`Interleaved::ratio`]) rather than between medians measured seconds apart.
+#[derive(Clone, Debug)]
+pub struct Interleaved {
+    /// `ns[r][m]`: ns per call of method `m` in round `r`.
+    ns: Vec<Vec<f64>>,
+}
+
+impl Interleaved {
+    /// Runs `methods` (each a function timed per call) for `rounds` rounds.
+    ///
+    /// # Examples
+    /// ```
+    /// use std::time::Duration;
+    /// let (mut a, mut b) = (0u64, 0u64);
+    /// let t = kinechain::measure::Interleaved::run(
+    ///     Duration::from_micros(200),
+    ///     5,
+    ///     &mut [
+    ///         &mut || a = std::hint::black_box(a + 1),
+    ///         &mut || for _ in 0..50 { b = std::hint::black_box(b + 1) },
+    ///     ],
+    /// );
+    /// assert!(t.median(0) > 0.0 && t.ratio(1, 0) > 1.0);
+    /// ```
+    pub fn run(min_run: Duration, rounds: usize, methods: &mut [&mut dyn FnMut()]) -> Interleaved {
+        let calls: Vec<u64> = methods.iter_mut().map(|f| calls_for(min_run, f)).collect();
+        let m = methods.len();
+        let ns = (0..rounds.max(1))
+            .map(|r| {
+                let mut row = vec![0.0; m];
+                for i in 0..m {
+                    let k = (r + i) % m;
+                    let t = Instant::now();
+                    for _ in 0..calls[k] {
+                        (methods[k])();
+                    }
+                    row[k] = t.elapsed().as_nanos() as f64 / calls[k] as f64;
+                }
+                row
+            })
+            .collect();
+        Interleaved { ns }
+    }
+
+    /// Median over the rounds of method `m`'s ns per call.
+    #[must_use]
+    pub fn median(&self, m: usize) -> f64 {
+        median(self.ns.iter().map(|row| row[m]).collect())
+    }
+
+    /// Median over the rounds of `time(over) / time(m)`: how many times faster `m` ran than
+    /// `over` in the same rounds.
+    #[must_use]
+    pub fn ratio(&self, over: usize, m: usize) -> f64 {
+        median(self.ns.iter().map(|row| row[over] / row[m]).collect())
+    }
+}
+
+/// The middle value (the upper one of an even count).
+fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs[xs.len() / 2]
+}
+
+/// Calls of `f` per run: doubled until a run lasts at least `min_run`.
+fn calls_for(min_run: Duration, f: &mut dyn FnMut()) -> u64 {
     let mut calls = 1u64;
     loop {
         let t = Instant::now();
@@ -63,19 +129,15 @@ pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64
             f();
         }
         if t.elapsed() >= min_run {
-            break;
+            return calls;
         }
         calls *= 2;
     }
-    let mut times: Vec<f64> = (0..runs.max(1))
-        .map(|_| {
-            let t = Instant::now();
-            for _ in 0..calls {
-                f();
-            }
-            t.elapsed().as_nanos() as f64 / calls as f64
-        })
-        .collect();
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
+}
+
+/// Time of one call of `f` in ns: the number of calls per run is doubled until a run lasts at
+/// least `min_run`, then the median of `runs` such runs is returned (the median resists the
+/// outliers of a shared machine).
+pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64 {
+    Interleaved::run(min_run, runs, &mut [&mut f]).median(0)
 }
