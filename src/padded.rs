@@ -467,11 +467,14 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
         a: zero,
     };
     if ACC {
+        // The terms of this joint are summed first and the parent's α and a added last: each is
+        // then one addition per body along the chain, not three or more dependent
+        // multiply–adds (the parent's a and α arrive late, at the end of long chains).
         let th_dd = term_rate(&m.theta, q_ddot);
         let w_rel = scale(th_d, z);
-        out.alpha = cross_add(parent.omega, w_rel, axpy(th_dd, z, parent.alpha));
+        out.alpha = C::<A>::add(parent.alpha, cross_add(parent.omega, w_rel, scale(th_dd, z)));
         // eq. (2.75): tangential and normal terms of the parent's motion ...
-        let mut a = cross_add(parent.alpha, r, cross_add(parent.omega, w_r, parent.a));
+        let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
         // ... and the Coriolis and local terms when the origin moves relative to the parent
         // (eq. 2.125: d'' z + α_rel × u + ω_rel × (ω_rel × u)).
         if let Some(v_rel) = v_rel {
@@ -484,7 +487,7 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
                 a = cross_add(w_rel, scale(th_d, z_u), a);
             }
         }
-        out.a = a;
+        out.a = C::<A>::add(parent.a, a);
     }
     (f, out)
 }
