@@ -506,86 +506,114 @@ pub(crate) struct Body {
 }
 
 /// The in-place evaluation of a body about its z axis, `f ← f · pre · M(θ, d) · post`, with the
-/// kinds of `pre` and `post` resolved at load time.
+/// kinds of `pre`, `post` and of the motion's terms resolved at load time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ZSteps {
     pub(crate) pre: CheapPlacement,
     pub(crate) post: CheapPlacement,
+    /// The kind of d (bits 0–1) and of θ (bits 2–3): [`ZSteps::ZERO`], [`ZSteps::CONSTANT`] or
+    /// [`ZSteps::VARIABLE`].
+    pub(crate) motion: u8,
 }
 
 /// A placement that is a translation followed by a rotation about x (either may be absent),
-/// applied in place as separate steps.
+/// applied in place as separate steps. `shape` says which steps there are, so that a kernel
+/// chooses its code for the placement in one jump rather than testing for each step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CheapPlacement {
-    /// A translation along x (one multiply–add per entry) ...
-    pub(crate) x: Option<f64>,
+    /// [`CheapPlacement::ALONG_X`] or [`CheapPlacement::TRANSLATE`], plus the rotation's kind
+    /// shifted left by two: [`CheapPlacement::NO_TURN`], `ANY_TURN`, `QUARTER` or
+    /// `NEGATIVE_QUARTER`.
+    pub(crate) shape: u8,
+    /// The translation along x (one multiply–add per entry) ...
+    pub(crate) x: f64,
     /// ... or along any vector (three).
-    pub(crate) t: Option<[f64; 3]>,
-    /// Then a rotation about x.
-    pub(crate) rot_x: Option<XTurn>,
-}
-
-/// A rotation about x by α, `(c, s) = (cos α, sin α)`. Most DH tables and URDF arms turn by
-/// quarter turns, where `sin α` is exactly ±1 (even for the double nearest π/2, whose cosine is
-/// 6.1·10⁻¹⁷, not 0): then each product `s · column` is the column or its negative, bit for
-/// bit, and the kernels skip it, which shortens the dependency chain from joint to joint.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum XTurn {
-    Any {
-        c: f64,
-        s: f64,
-    },
-    /// `s = 1` (`negative: false`) or `s = −1`.
-    Quarter {
-        c: f64,
-        negative: bool,
-    },
-}
-
-impl XTurn {
-    fn new(c: f64, s: f64) -> XTurn {
-        if s.abs() == 1.0 {
-            XTurn::Quarter {
-                c,
-                negative: s < 0.0,
-            }
-        } else {
-            XTurn::Any { c, s }
-        }
-    }
+    pub(crate) t: [f64; 3],
+    /// Then the rotation about x by α, `(c, s) = (cos α, sin α)`. Most DH tables and URDF arms
+    /// turn by quarter turns, where `sin α` is exactly ±1 (even for the double nearest π/2,
+    /// whose cosine is 6.1·10⁻¹⁷, not 0): then each product `s · column` is the column or its
+    /// negative, bit for bit, and the kernels skip it, which shortens the dependency chain
+    /// from joint to joint.
+    pub(crate) c: f64,
+    pub(crate) s: f64,
 }
 
 impl CheapPlacement {
-    fn new(p: &Placement) -> Option<CheapPlacement> {
+    pub(crate) const ALONG_X: u8 = 1;
+    pub(crate) const TRANSLATE: u8 = 2;
+    pub(crate) const NO_TURN: u8 = 0;
+    pub(crate) const ANY_TURN: u8 = 1;
+    /// `s = 1`.
+    pub(crate) const QUARTER: u8 = 2;
+    /// `s = −1`.
+    pub(crate) const NEGATIVE_QUARTER: u8 = 3;
+
+    pub(crate) fn new(p: &Placement) -> Option<CheapPlacement> {
         let along_x = |t: [f64; 3]| t[1] == 0.0 && t[2] == 0.0;
         let mut out = CheapPlacement {
-            x: None,
-            t: None,
-            rot_x: None,
+            shape: 0,
+            x: 0.0,
+            t: [0.0; 3],
+            c: 1.0,
+            s: 0.0,
         };
         match *p {
             Placement::Identity => {}
-            Placement::Translation(t) if along_x(t) => out.x = Some(t[0]),
-            Placement::Translation(t) => out.t = Some(t),
-            Placement::ScrewX { a, c, s } => (out.x, out.rot_x) = (Some(a), Some(XTurn::new(c, s))),
-            Placement::OffsetRot { t, axis: 0, c, s } => {
-                (out.t, out.rot_x) = (Some(t), Some(XTurn::new(c, s)));
+            Placement::Translation(t) if along_x(t) => out.along_x(t[0]),
+            Placement::Translation(t) => out.translate(t),
+            Placement::ScrewX { a, c, s } => {
+                out.along_x(a);
+                out.turn_x(c, s);
             }
-            Placement::OffsetRot { .. } => return None,
-            Placement::General(_) => return None,
+            Placement::OffsetRot { t, axis: 0, c, s } => {
+                out.translate(t);
+                out.turn_x(c, s);
+            }
+            Placement::OffsetRot { .. } | Placement::General(_) => return None,
         }
         Some(out)
+    }
+
+    fn along_x(&mut self, a: f64) {
+        (self.x, self.shape) = (a, self.shape | Self::ALONG_X);
+    }
+
+    fn translate(&mut self, t: [f64; 3]) {
+        (self.t, self.shape) = (t, self.shape | Self::TRANSLATE);
+    }
+
+    /// Adds the rotation about x with `(cos α, sin α) = (c, s)`.
+    pub(crate) fn turn_x(&mut self, c: f64, s: f64) {
+        let kind = if s == 1.0 {
+            Self::QUARTER
+        } else if s == -1.0 {
+            Self::NEGATIVE_QUARTER
+        } else {
+            Self::ANY_TURN
+        };
+        (self.c, self.s, self.shape) = (c, s, self.shape | kind << 2);
     }
 }
 
 impl ZSteps {
+    /// A term that is zero (its step is skipped), another constant, or read from `q`.
+    pub(crate) const ZERO: u8 = 0;
+    pub(crate) const CONSTANT: u8 = 1;
+    pub(crate) const VARIABLE: u8 = 2;
+
     fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
         if motion.axis != crate::joint::Axis::Z {
             return None;
         }
+        let kind = |t: &Term| match *t {
+            Term::Const(v) if v == 0.0 => Self::ZERO,
+            Term::Const(_) => Self::CONSTANT,
+            Term::Var { .. } => Self::VARIABLE,
+        };
         Some(ZSteps {
             pre: CheapPlacement::new(pre)?,
             post: CheapPlacement::new(post)?,
+            motion: kind(&motion.d) | kind(&motion.theta) << 2,
         })
     }
 }

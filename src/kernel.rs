@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, CheapPlacement, Placement, XTurn, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -743,38 +743,86 @@ fn z_steps<N: Num, A: Arith>(
     sin_cos: (N, N),
 ) -> Frame<N> {
     cheap_place::<N, A>(&mut f, &steps.pre);
-    let m = &body.motion;
-    if !matches!(m.d, Term::Const(0.0)) {
-        f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
-    }
-    let (s, c) = match m.theta {
-        Term::Const(_) => (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1)),
-        Term::Var { .. } => sin_cos,
-    };
-    if !matches!(m.theta, Term::Const(0.0)) {
-        plane::<N, A>(&mut f.r, 0, 1, s, c);
-    }
+    by_shape!(steps.motion, z_motion::<N, A>(&mut f, body, q, sin_cos));
     cheap_place::<N, A>(&mut f, &steps.post);
     f
 }
 
+/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZSteps::motion`]).
+#[inline(always)]
+fn z_motion<N: Num, A: Arith, const MOTION: u8>(
+    f: &mut Frame<N>,
+    body: &Body,
+    q: &[N],
+    sin_cos: (N, N),
+) {
+    let m = &body.motion;
+    if MOTION & 3 != ZSteps::ZERO {
+        f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
+    }
+    match MOTION >> 2 {
+        ZSteps::ZERO => {}
+        ZSteps::CONSTANT => {
+            let (s, c) = m.const_sin_cos;
+            plane::<N, A>(&mut f.r, 0, 1, N::splat(s), N::splat(c));
+        }
+        _ => plane::<N, A>(&mut f.r, 0, 1, sin_cos.0, sin_cos.1),
+    }
+}
+
+/// Calls `$f::<…, SHAPE>(args)` for the [`CheapPlacement`] shape `$shape`: one jump through a
+/// table on the shape instead of one test per step, each arm the steps of its shape.
+macro_rules! by_shape {
+    ($shape:expr, $f:ident::<$($g:ty),*>($($arg:expr),*)) => {
+        match $shape & 15 {
+            0 => $f::<$($g,)* 0>($($arg),*),
+            1 => $f::<$($g,)* 1>($($arg),*),
+            2 => $f::<$($g,)* 2>($($arg),*),
+            3 => $f::<$($g,)* 3>($($arg),*),
+            4 => $f::<$($g,)* 4>($($arg),*),
+            5 => $f::<$($g,)* 5>($($arg),*),
+            6 => $f::<$($g,)* 6>($($arg),*),
+            7 => $f::<$($g,)* 7>($($arg),*),
+            8 => $f::<$($g,)* 8>($($arg),*),
+            9 => $f::<$($g,)* 9>($($arg),*),
+            10 => $f::<$($g,)* 10>($($arg),*),
+            11 => $f::<$($g,)* 11>($($arg),*),
+            12 => $f::<$($g,)* 12>($($arg),*),
+            13 => $f::<$($g,)* 13>($($arg),*),
+            14 => $f::<$($g,)* 14>($($arg),*),
+            15 => $f::<$($g,)* 15>($($arg),*),
+            // `& 15` leaves no other value; the compiler drops this arm.
+            _ => unreachable!(),
+        }
+    };
+}
+pub(crate) use by_shape;
+
 /// `f ← f · placement` for a [`CheapPlacement`] (the operations of `place` for its forms).
 #[inline(always)]
 fn cheap_place<N: Num, A: Arith>(f: &mut Frame<N>, p: &CheapPlacement) {
-    if let Some(a) = p.x {
-        f.p = axpy::<N, A>(N::splat(a), f.r[0], f.p);
+    by_shape!(p.shape, cheap_steps::<N, A>(f, p));
+}
+
+/// The steps of a [`CheapPlacement`] of shape `SHAPE`.
+#[inline(always)]
+fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p: &CheapPlacement) {
+    if SHAPE & CheapPlacement::ALONG_X != 0 {
+        f.p = axpy::<N, A>(N::splat(p.x), f.r[0], f.p);
     }
-    if let Some(t) = p.t {
-        f.p = apply_const_add::<N, A>(&f.r, t, f.p);
+    if SHAPE & CheapPlacement::TRANSLATE != 0 {
+        f.p = apply_const_add::<N, A>(&f.r, p.t, f.p);
     }
-    match p.rot_x {
-        None => {}
-        Some(XTurn::Any { c, s }) => plane::<N, A>(&mut f.r, 1, 2, N::splat(s), N::splat(c)),
-        Some(XTurn::Quarter { c, negative }) => {
+    match SHAPE >> 2 {
+        CheapPlacement::NO_TURN => {}
+        CheapPlacement::ANY_TURN => {
+            plane::<N, A>(&mut f.r, 1, 2, N::splat(p.s), N::splat(p.c));
+        }
+        turn => {
             // `plane` with s = ±1, the products s · column written as what they are.
-            let (c, r1, r2) = (N::splat(c), f.r[1], f.r[2]);
+            let (c, r1, r2) = (N::splat(p.c), f.r[1], f.r[2]);
             for k in 0..3 {
-                let (s_r2, s_r1) = if negative {
+                let (s_r2, s_r1) = if turn == CheapPlacement::NEGATIVE_QUARTER {
                     (-r2[k], -r1[k])
                 } else {
                     (r2[k], r1[k])

@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, XTurn, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::kernel::{Rates, term_value};
 use crate::transform::Transform;
@@ -215,40 +215,56 @@ fn z_steps<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) -> [A::Col; 4] {
-    type C<A> = <A as Arith>::Col;
     cheap_place::<A>(&mut f, &steps.pre);
-    let m = &body.motion;
-    if !matches!(m.d, Term::Const(0.0)) {
-        let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
-        f[3] = C::<A>::mul_add(d, f[2], f[3]);
-    }
-    let (s, c) = match m.theta {
-        Term::Const(_) => m.const_sin_cos,
-        Term::Var { .. } => sin_cos,
-    };
-    if !matches!(m.theta, Term::Const(0.0)) {
-        plane(&mut f, 0, 1, s, c);
-    }
+    crate::kernel::by_shape!(steps.motion, z_motion::<A>(&mut f, body, q, sin_cos));
     cheap_place::<A>(&mut f, &steps.post);
     f
 }
 
-/// `f ← f · placement` for a [`CheapPlacement`] (see `kernel::cheap_place`).
+/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::z_motion`).
+#[inline(always)]
+fn z_motion<A: Arith, const MOTION: u8>(
+    f: &mut [A::Col; 4],
+    body: &Body,
+    q: &[f64],
+    sin_cos: (f64, f64),
+) {
+    type C<A> = <A as Arith>::Col;
+    let m = &body.motion;
+    if MOTION & 3 != ZSteps::ZERO {
+        let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
+        f[3] = C::<A>::mul_add(d, f[2], f[3]);
+    }
+    match MOTION >> 2 {
+        ZSteps::ZERO => {}
+        ZSteps::CONSTANT => plane(f, 0, 1, m.const_sin_cos.0, m.const_sin_cos.1),
+        _ => plane(f, 0, 1, sin_cos.0, sin_cos.1),
+    }
+}
+
+/// `f ← f · placement` for a [`CheapPlacement`]: one jump on its shape (see
+/// `kernel::cheap_place`).
 #[inline(always)]
 fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
-    if let Some(a) = p.x {
-        f[3] = A::Col::mul_add(A::Col::splat(a), f[0], f[3]);
+    crate::kernel::by_shape!(p.shape, cheap_steps::<A>(f, p));
+}
+
+/// The steps of a [`CheapPlacement`] of shape `SHAPE` (see `kernel::cheap_steps`).
+#[inline(always)]
+fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacement) {
+    if SHAPE & CheapPlacement::ALONG_X != 0 {
+        f[3] = A::Col::mul_add(A::Col::splat(p.x), f[0], f[3]);
     }
-    if let Some(t) = p.t {
-        f[3] = combine_const(f, t, f[3]);
+    if SHAPE & CheapPlacement::TRANSLATE != 0 {
+        f[3] = combine_const(f, p.t, f[3]);
     }
-    match p.rot_x {
-        None => {}
-        Some(XTurn::Any { c, s }) => plane(f, 1, 2, s, c),
-        Some(XTurn::Quarter { c, negative }) => {
-            // `plane` with s = ±1 (see `kernel::cheap_place`).
-            let (c, c1, c2) = (A::Col::splat(c), f[1], f[2]);
-            let (s_c2, s_c1) = if negative {
+    match SHAPE >> 2 {
+        CheapPlacement::NO_TURN => {}
+        CheapPlacement::ANY_TURN => plane(f, 1, 2, p.s, p.c),
+        turn => {
+            // `plane` with s = ±1 (see `kernel::cheap_steps`).
+            let (c, c1, c2) = (A::Col::splat(p.c), f[1], f[2]);
+            let (s_c2, s_c1) = if turn == CheapPlacement::NEGATIVE_QUARTER {
                 (c2.neg(), c1.neg())
             } else {
                 (c2, c1)
@@ -472,7 +488,10 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
         // multiply–adds (the parent's a and α arrive late, at the end of long chains).
         let th_dd = term_rate(&m.theta, q_ddot);
         let w_rel = scale(th_d, z);
-        out.alpha = C::<A>::add(parent.alpha, cross_add(parent.omega, w_rel, scale(th_dd, z)));
+        out.alpha = C::<A>::add(
+            parent.alpha,
+            cross_add(parent.omega, w_rel, scale(th_dd, z)),
+        );
         // eq. (2.75): tangential and normal terms of the parent's motion ...
         let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
         // ... and the Coriolis and local terms when the origin moves relative to the parent
@@ -618,14 +637,9 @@ mod tests {
         for frame in &frames {
             for alpha in [std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2] {
                 let (s, c) = alpha.sin_cos();
-                let turn = CheapPlacement {
-                    x: None,
-                    t: None,
-                    rot_x: Some(XTurn::Quarter {
-                        c,
-                        negative: s < 0.0,
-                    }),
-                };
+                let mut turn = CheapPlacement::new(&Placement::Identity).unwrap();
+                turn.turn_x(c, s);
+                assert_eq!(turn.shape >> 2, 2 + u8::from(s < 0.0));
                 let mut quarter = Frame4::<A::Col>::load(&stored(frame)).0;
                 cheap_place::<A>(&mut quarter, &turn);
                 let mut general = Frame4::<A::Col>::load(&stored(frame)).0;
