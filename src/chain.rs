@@ -606,7 +606,7 @@ impl ZSteps {
             return None;
         }
         let kind = |t: &Term| match *t {
-            Term::Const(v) if v == 0.0 => Self::ZERO,
+            Term::Const(0.0) => Self::ZERO,
             Term::Const(_) => Self::CONSTANT,
             Term::Var { .. } => Self::VARIABLE,
         };
