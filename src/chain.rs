@@ -503,6 +503,9 @@ pub(crate) struct Body {
     /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
+    /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
+    /// [`Body::ABOUT_Z`].
+    pub(crate) rate_shape: u8,
 }
 
 /// The in-place evaluation of a body about its z axis, `f ← f · pre · M(θ, d) · post`, with the
@@ -619,6 +622,13 @@ impl ZSteps {
 }
 
 impl Body {
+    /// `post` is the identity: the child origin lies on the joint axis.
+    pub(crate) const NO_POST: u8 = 1;
+    /// d varies.
+    pub(crate) const SLIDES: u8 = 2;
+    /// The joint turns or slides about its frame's z axis.
+    pub(crate) const ABOUT_Z: u8 = 4;
+
     /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
     /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
     pub(crate) fn in_place(&self) -> bool {
@@ -643,6 +653,14 @@ impl Body {
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
+            rate_shape: [
+                (matches!(post, Placement::Identity), Body::NO_POST),
+                (matches!(motion.d, Term::Var { .. }), Body::SLIDES),
+                (motion.axis == crate::joint::Axis::Z, Body::ABOUT_Z),
+            ]
+            .iter()
+            .filter(|(holds, _)| *holds)
+            .fold(0, |shape, (_, bit)| shape | bit),
             pre_frame,
             axis_in_parent,
         }

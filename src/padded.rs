@@ -436,15 +436,33 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
     q_ddot: &[f64],
     sin_cos: (f64, f64),
 ) -> State<A::Col> {
-    type C<A> = <A as Arith>::Col;
-    let zero = C::<A>::splat(0.0);
     // The same frame as `pose_step`, bit for bit.
     let f = pose_step::<A>(parent.map(|(frame, _)| frame), body, q, sin_cos);
+    let rates = body_rates::<A, ACC>(parent, body, &f, q_dot, q_ddot);
+    (f, rates)
+}
+
+/// The rates of a body whose frame is `f`, for the cases its [`Body::rate_shape`] names.
+#[inline(always)]
+fn body_rates<A: Arith, const ACC: bool>(
+    parent: Option<&State<A::Col>>,
+    body: &Body,
+    f: &Frame4<A::Col>,
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) -> Rates4<A::Col> {
+    type C<A> = <A as Arith>::Col;
+    let zero = C::<A>::splat(0.0);
+    let shape = body.rate_shape;
     // Without a placement after the motion, the child origin lies on the joint axis (u = d z), so
     // z × u = 0 and the axis is a column of the child frame. Otherwise (standard DH) the joint
     // origin and axis follow from the parent frame and the constant `pre`.
-    let (z, z_u) = if matches!(body.post, Placement::Identity) {
-        (axis_of(&f.0, &body.motion.axis), None)
+    let (z, z_u) = if shape & Body::NO_POST != 0 {
+        if shape & Body::ABOUT_Z != 0 {
+            (f.0[2], None)
+        } else {
+            (axis_of(&f.0, &body.motion.axis), None)
+        }
     } else {
         let (p_joint, z) = match parent {
             Some((frame, _)) => (
@@ -464,7 +482,7 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
     let r = C::<A>::sub(f.0[3], p_parent);
     // eq. (2.120): velocity of the origin relative to the parent; zero for a turning joint whose
     // child origin lies on its axis.
-    let slides = matches!(m.d, Term::Var { .. });
+    let slides = shape & Body::SLIDES != 0;
     let v_rel = match (z_u, slides) {
         (Some(z_u), true) => Some(C::<A>::add(
             scale(term_rate(&m.d, q_dot), z),
@@ -508,7 +526,7 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
         }
         out.a = C::<A>::add(parent.a, a);
     }
-    (f, out)
+    out
 }
 
 #[cfg(test)]
