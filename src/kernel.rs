@@ -137,11 +137,12 @@ fn lanes_sin_cos<A: Arith, const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn assert_rows_within(qs: &[f64], rows: &[usize; LANES], dof: usize) {
-    let in_bounds = rows.iter().all(|&r| {
-        r.checked_mul(dof)
-            .and_then(|o| o.checked_add(dof))
-            .is_some_and(|e| e <= qs.len())
-    });
+    // The last row decides: one check rather than one per row.
+    let last = rows.iter().fold(0, |m, &r| m.max(r));
+    let in_bounds = last
+        .checked_mul(dof)
+        .and_then(|o| o.checked_add(dof))
+        .is_some_and(|e| e <= qs.len());
     assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
 }
 
@@ -271,40 +272,55 @@ impl LaneNum for Y4 {
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
         use std::arch::x86_64::{
-            __m256d, __m256i, _mm256_maskload_pd, _mm256_permute2f128_pd, _mm256_setr_epi64x,
-            _mm256_unpackhi_pd, _mm256_unpacklo_pd,
+            __m256d, __m256i, _mm256_loadu_pd, _mm256_maskload_pd, _mm256_permute2f128_pd,
+            _mm256_setr_epi64x, _mm256_unpackhi_pd, _mm256_unpacklo_pd,
         };
+        /// Rows `a` as four columns: rows interleaved in pairs, then 128-bit halves exchanged.
+        #[inline(always)]
+        fn columns(a: [__m256d; 4]) -> [__m256d; 4] {
+            // SAFETY: see the `Y4` impls.
+            unsafe {
+                let lo01 = _mm256_unpacklo_pd(a[0], a[1]);
+                let hi01 = _mm256_unpackhi_pd(a[0], a[1]);
+                let lo23 = _mm256_unpacklo_pd(a[2], a[3]);
+                let hi23 = _mm256_unpackhi_pd(a[2], a[3]);
+                [
+                    _mm256_permute2f128_pd::<0x20>(lo01, lo23),
+                    _mm256_permute2f128_pd::<0x20>(hi01, hi23),
+                    _mm256_permute2f128_pd::<0x31>(lo01, lo23),
+                    _mm256_permute2f128_pd::<0x31>(hi01, hi23),
+                ]
+            }
+        }
         let dof = q.len();
         assert_rows_within(qs, &rows, dof);
         let out = Y4::cast_mut(q);
+        let full = dof - dof % 4;
+        let n = dof - full;
+        // Lane i of the mask (sign bit set) loads entry `full + i` of the last, partial block.
+        let lane = |i: usize| -i64::from(i < n);
+        // SAFETY: see the `Y4` impls.
+        let mask: __m256i = unsafe { _mm256_setr_epi64x(lane(0), lane(1), lane(2), lane(3)) };
         for part in 0..2 {
             let starts: [usize; 4] = std::array::from_fn(|l| rows[4 * part + l] * dof);
-            for first in (0..dof).step_by(4) {
-                let n = (dof - first).min(4);
-                // Lane i of the mask (sign bit set) loads entry `first + i` when it exists.
-                let lane = |i: usize| -i64::from(i < n);
-                // SAFETY: see the `Y4` impls; each load reads entries `first..first + n` of a
-                // row (masked entries are not read), within `qs` as checked above.
-                unsafe {
-                    let mask: __m256i = _mm256_setr_epi64x(lane(0), lane(1), lane(2), lane(3));
-                    let a: [__m256d; 4] = std::array::from_fn(|l| {
-                        _mm256_maskload_pd(qs.as_ptr().add(starts[l] + first), mask)
-                    });
-                    // Rows interleaved in pairs, then 128-bit halves exchanged.
-                    let lo01 = _mm256_unpacklo_pd(a[0], a[1]);
-                    let hi01 = _mm256_unpackhi_pd(a[0], a[1]);
-                    let lo23 = _mm256_unpacklo_pd(a[2], a[3]);
-                    let hi23 = _mm256_unpackhi_pd(a[2], a[3]);
-                    let columns = [
-                        _mm256_permute2f128_pd::<0x20>(lo01, lo23),
-                        _mm256_permute2f128_pd::<0x20>(hi01, hi23),
-                        _mm256_permute2f128_pd::<0x31>(lo01, lo23),
-                        _mm256_permute2f128_pd::<0x31>(hi01, hi23),
-                    ];
-                    let o = &mut out[part * dof + first..part * dof + first + n];
-                    for (o, c) in o.iter_mut().zip(columns) {
-                        *o = Y4(c);
-                    }
+            let out = &mut out[part * dof..(part + 1) * dof];
+            for first in (0..full).step_by(4) {
+                // SAFETY: see the `Y4` impls; each load reads entries `first..first + 4` of a
+                // row, within `qs` as checked above.
+                let a = std::array::from_fn(|l| unsafe {
+                    _mm256_loadu_pd(qs.as_ptr().add(starts[l] + first))
+                });
+                for (o, c) in out[first..first + 4].iter_mut().zip(columns(a)) {
+                    *o = Y4(c);
+                }
+            }
+            if n > 0 {
+                // SAFETY: as above, for entries `full..dof` (masked entries are not read).
+                let a = std::array::from_fn(|l| unsafe {
+                    _mm256_maskload_pd(qs.as_ptr().add(starts[l] + full), mask)
+                });
+                for (o, c) in out[full..].iter_mut().zip(columns(a)) {
+                    *o = Y4(c);
                 }
             }
         }
