@@ -786,8 +786,9 @@ fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     }
 }
 
-/// Calls `$f::<…, SHAPE>(args)` for the [`CheapPlacement`] shape `$shape`: one jump through a
-/// table on the shape instead of one test per step, each arm the steps of its shape.
+/// Calls `$f::<…, SHAPE>(args)` for a four-bit shape code `$shape` resolved at load time (a
+/// [`CheapPlacement::shape`], a [`ZSteps::motion`]): one jump through a table instead of one
+/// test per step, each arm the code for its shape.
 macro_rules! by_shape {
     ($shape:expr, $f:ident::<$($g:ty),*>($($arg:expr),*)) => {
         match $shape & 15 {

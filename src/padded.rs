@@ -378,13 +378,13 @@ impl<C: Col> Rates4<C> {
 /// Frame and rates of a body.
 pub(crate) type State<C> = (Frame4<C>, Rates4<C>);
 
-/// `a × b` (the operations of `kernel::cross`).
+/// `a × b`, with the two permutations of each operand as whole-register shuffles.
 #[inline(always)]
 fn cross<C: Col>(a: C, b: C) -> C {
     C::sub(C::mul(a.yzx(), b.zxy()), C::mul(a.zxy(), b.yzx()))
 }
 
-/// `a × b + c` (the operations of `kernel::cross_add`).
+/// `a × b + c` in two multiply–adds (`c` enters the first).
 #[inline(always)]
 fn cross_add<C: Col>(a: C, b: C, c: C) -> C {
     C::mul_add(a.yzx(), b.zxy(), C::mul_add(a.zxy().neg(), b.yzx(), c))
