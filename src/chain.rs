@@ -551,6 +551,11 @@ impl CheapPlacement {
     /// `s = −1`.
     pub(crate) const NEGATIVE_QUARTER: u8 = 3;
 
+    /// The rotation's kind in a `shape`.
+    pub(crate) const fn turn(shape: u8) -> u8 {
+        shape >> 2
+    }
+
     pub(crate) fn new(p: &Placement) -> Option<CheapPlacement> {
         let along_x = |t: [f64; 3]| t[1] == 0.0 && t[2] == 0.0;
         let mut out = CheapPlacement {
@@ -594,7 +599,7 @@ impl CheapPlacement {
         } else {
             Self::ANY_TURN
         };
-        (self.c, self.s, self.shape) = (c, s, self.shape | kind << 2);
+        (self.c, self.s, self.shape) = (c, s, (self.shape & 3) | kind << 2);
     }
 }
 
@@ -603,6 +608,16 @@ impl ZSteps {
     pub(crate) const ZERO: u8 = 0;
     pub(crate) const CONSTANT: u8 = 1;
     pub(crate) const VARIABLE: u8 = 2;
+
+    /// The kind of d in a `motion` code.
+    pub(crate) const fn d_kind(motion: u8) -> u8 {
+        motion & 3
+    }
+
+    /// The kind of θ in a `motion` code.
+    pub(crate) const fn theta_kind(motion: u8) -> u8 {
+        motion >> 2
+    }
 
     fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
         if motion.axis != crate::joint::Axis::Z {
@@ -653,14 +668,9 @@ impl Body {
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
-            rate_shape: [
-                (matches!(post, Placement::Identity), Body::NO_POST),
-                (matches!(motion.d, Term::Var { .. }), Body::SLIDES),
-                (motion.axis == crate::joint::Axis::Z, Body::ABOUT_Z),
-            ]
-            .iter()
-            .filter(|(holds, _)| *holds)
-            .fold(0, |shape, (_, bit)| shape | bit),
+            rate_shape: (u8::from(matches!(post, Placement::Identity)) * Body::NO_POST)
+                | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
+                | (u8::from(motion.axis == crate::joint::Axis::Z) * Body::ABOUT_Z),
             pre_frame,
             axis_in_parent,
         }

@@ -773,10 +773,10 @@ fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     sin_cos: (N, N),
 ) {
     let m = &body.motion;
-    if MOTION & 3 != ZSteps::ZERO {
+    if ZSteps::d_kind(MOTION) != ZSteps::ZERO {
         f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
     }
-    match MOTION >> 2 {
+    match ZSteps::theta_kind(MOTION) {
         ZSteps::ZERO => {}
         ZSteps::CONSTANT => {
             let (s, c) = m.const_sin_cos;
@@ -830,7 +830,7 @@ fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p: &CheapPla
     if SHAPE & CheapPlacement::TRANSLATE != 0 {
         f.p = apply_const_add::<N, A>(&f.r, p.t, f.p);
     }
-    match SHAPE >> 2 {
+    match CheapPlacement::turn(SHAPE) {
         CheapPlacement::NO_TURN => {}
         CheapPlacement::ANY_TURN => {
             plane::<N, A>(&mut f.r, 1, 2, N::splat(p.s), N::splat(p.c));

@@ -231,11 +231,11 @@ fn z_motion<A: Arith, const MOTION: u8>(
 ) {
     type C<A> = <A as Arith>::Col;
     let m = &body.motion;
-    if MOTION & 3 != ZSteps::ZERO {
+    if ZSteps::d_kind(MOTION) != ZSteps::ZERO {
         let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
         f[3] = C::<A>::mul_add(d, f[2], f[3]);
     }
-    match MOTION >> 2 {
+    match ZSteps::theta_kind(MOTION) {
         ZSteps::ZERO => {}
         ZSteps::CONSTANT => plane(f, 0, 1, m.const_sin_cos.0, m.const_sin_cos.1),
         _ => plane(f, 0, 1, sin_cos.0, sin_cos.1),
@@ -258,7 +258,7 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
     if SHAPE & CheapPlacement::TRANSLATE != 0 {
         f[3] = combine_const(f, p.t, f[3]);
     }
-    match SHAPE >> 2 {
+    match CheapPlacement::turn(SHAPE) {
         CheapPlacement::NO_TURN => {}
         CheapPlacement::ANY_TURN => plane(f, 1, 2, p.s, p.c),
         turn => {
@@ -657,7 +657,12 @@ mod tests {
                 let (s, c) = alpha.sin_cos();
                 let mut turn = CheapPlacement::new(&Placement::Identity).unwrap();
                 turn.turn_x(c, s);
-                assert_eq!(turn.shape >> 2, 2 + u8::from(s < 0.0));
+                let quarter = if s < 0.0 {
+                    CheapPlacement::NEGATIVE_QUARTER
+                } else {
+                    CheapPlacement::QUARTER
+                };
+                assert_eq!(CheapPlacement::turn(turn.shape), quarter);
                 let mut quarter = Frame4::<A::Col>::load(&stored(frame)).0;
                 cheap_place::<A>(&mut quarter, &turn);
                 let mut general = Frame4::<A::Col>::load(&stored(frame)).0;
