@@ -277,16 +277,14 @@ fn rows_for(path: &Path) -> Vec<Row> {
         });
     }
 
+    let n = qs.len();
+    let items: Vec<usize> = methods.iter().map(|m| m.repeat * n).collect();
     let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.call as _).collect();
-    let timings = Interleaved::run(Duration::from_millis(100), 7, &mut calls);
+    let timings = Interleaved::run(Duration::from_millis(100), 7, &mut calls).per_item(&items);
     let k = methods.iter().position(|m| m.label == "k 0.32");
     let naive = methods
         .iter()
         .position(|m| m.label == "naive nalgebra Matrix4");
-    let n = qs.len();
-    let faster_than = |over: Option<usize>, i: usize| {
-        over.map(|o| timings.ratio(o, i) * methods[i].repeat as f64 / methods[o].repeat as f64)
-    };
     methods
         .iter()
         .enumerate()
@@ -295,9 +293,9 @@ fn rows_for(path: &Path) -> Vec<Row> {
             Row {
                 method: m.label.to_string(),
                 robot: robot.clone(),
-                ns: timings.median(i) / (m.repeat * n) as f64,
-                vs_k: faster_than(k, i),
-                vs_naive: faster_than(naive, i),
+                ns: timings.median(i),
+                vs_k: k.map(|k| timings.ratio(k, i)),
+                vs_naive: naive.map(|naive| timings.ratio(naive, i)),
                 position,
                 reach,
                 rotation,

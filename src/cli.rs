@@ -1093,9 +1093,11 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
         }
     }
 
+    let items: Vec<usize> = methods.iter().map(|m| m.2).collect();
     let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.1 as _).collect();
     let timings =
-        crate::measure::Interleaved::run(std::time::Duration::from_millis(20), 7, &mut calls);
+        crate::measure::Interleaved::run(std::time::Duration::from_millis(20), 7, &mut calls)
+            .per_item(&items);
     let k = methods.iter().position(|(m, _, _)| m.starts_with("k "));
     let reach = chain.reach().max(f64::MIN_POSITIVE);
     let mut text = format!(
@@ -1111,13 +1113,9 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
         "{:<48} {:>12} {:>10}\n",
         "method", "ns/config", "vs k"
     ));
-    for (i, (method, _, count)) in methods.iter().enumerate() {
-        let ns = timings.median(i) / *count as f64;
-        // Both per configuration: the per-call ratio scaled by the calls' sizes.
-        let ratio = k.map_or("-".to_string(), |k| {
-            let per_k = methods[k].2 as f64;
-            format!("{:.1}x", timings.ratio(k, i) * *count as f64 / per_k)
-        });
+    for (i, (method, _, _)) in methods.iter().enumerate() {
+        let ns = timings.median(i);
+        let ratio = k.map_or("-".to_string(), |k| format!("{:.1}x", timings.ratio(k, i)));
         text.push_str(&format!("{method:<48} {ns:>12.1} {ratio:>10}\n"));
     }
     text.push_str(

@@ -100,6 +100,23 @@ impl Interleaved {
         Interleaved { ns }
     }
 
+    /// The times per item when a call of method `m` handles `items[m]` items (configurations,
+    /// say): [`Interleaved::median`] then gives ns per item, and [`Interleaved::ratio`] compares
+    /// methods per item.
+    ///
+    /// # Panics
+    /// If `items` is shorter than the number of methods.
+    #[must_use]
+    pub fn per_item(mut self, items: &[usize]) -> Interleaved {
+        for row in &mut self.ns {
+            assert!(items.len() >= row.len(), "items for {} methods", row.len());
+            for (t, &n) in row.iter_mut().zip(items) {
+                *t /= n.max(1) as f64;
+            }
+        }
+        self
+    }
+
     /// Median over the rounds of method `m`'s ns per call.
     #[must_use]
     pub fn median(&self, m: usize) -> f64 {
@@ -140,4 +157,24 @@ fn calls_for(min_run: Duration, f: &mut dyn FnMut()) -> u64 {
 /// outliers of a shared machine).
 pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64 {
     Interleaved::run(min_run, runs, &mut [&mut f]).median(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn per_item_times_and_ratios() {
+        // Two methods, three rounds; method 1 handles 4 items per call.
+        let t = Interleaved {
+            ns: vec![vec![10.0, 80.0], vec![12.0, 40.0], vec![30.0, 60.0]],
+        };
+        assert_eq!(t.median(1), 60.0);
+        assert_eq!(t.ratio(0, 1), 0.3);
+        let t = t.per_item(&[1, 4]);
+        assert_eq!(t.median(0), 12.0);
+        assert_eq!(t.median(1), 15.0);
+        // Per round 10/20, 12/10, 30/15: the median ratio is the middle one.
+        assert_eq!(t.ratio(0, 1), 1.2);
+    }
 }
