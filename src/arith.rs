@@ -29,8 +29,6 @@ pub(crate) trait Arith: Copy {
 /// entry by entry and bit for bit, as the scalar operation of the owning [`Arith`].
 pub(crate) trait Col: Copy {
     fn load(v: &[f64; 4]) -> Self;
-    /// `[v, 0]`.
-    fn from3(v: &[f64; 3]) -> Self;
     /// The first three entries.
     fn store3(self, out: &mut [f64; 3]);
     /// All four entries.
@@ -131,10 +129,6 @@ impl<A: Arith> Col for Portable<A> {
         Portable(*v, std::marker::PhantomData)
     }
     #[inline(always)]
-    fn from3(v: &[f64; 3]) -> Self {
-        Portable([v[0], v[1], v[2], 0.0], std::marker::PhantomData)
-    }
-    #[inline(always)]
     fn store3(self, out: &mut [f64; 3]) {
         out.copy_from_slice(&self.0[..3]);
     }
@@ -225,11 +219,6 @@ impl Col for Avx {
     fn load(v: &[f64; 4]) -> Self {
         use std::arch::x86_64::_mm256_loadu_pd;
         Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
-    }
-    #[inline(always)]
-    fn from3(v: &[f64; 3]) -> Self {
-        use std::arch::x86_64::_mm256_setr_pd;
-        Avx(unsafe { _mm256_setr_pd(v[0], v[1], v[2], 0.0) })
     }
     #[inline(always)]
     fn store3(self, out: &mut [f64; 3]) {

@@ -26,7 +26,7 @@ pub struct Data {
     /// Padded columns (see [`crate::padded`]).
     pub(crate) world_from_body: Vec<crate::padded::Stored>,
     /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
-    pub(crate) rates: Vec<Rates<f64>>,
+    pub(crate) rates: Vec<Rates>,
     /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain
     /// (padded to a whole number of lanes).
     pub(crate) sin: Vec<f64>,
@@ -51,7 +51,7 @@ impl Data {
         let trig = chain.theta_gather.len().max(1) * crate::kernel::LANES;
         Data {
             world_from_body: vec![crate::padded::stored(&Transform::IDENTITY); n],
-            rates: vec![Rates::zero(); n],
+            rates: vec![Rates::ZERO; n],
             sin: vec![0.0; trig],
             cos: vec![1.0; trig],
             path: Vec::with_capacity(n),

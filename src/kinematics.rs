@@ -188,7 +188,8 @@ impl<'a> Poses<'a> {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                (body.omega, add3(body.v, cross3(body.omega, r)))
+                let omega = kernel::cut(&body.omega);
+                (omega, add3(kernel::cut(&body.v), cross3(omega, r)))
             }
         };
         LinkVelocity {
@@ -256,8 +257,11 @@ impl<'a> Poses<'a> {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                let (w, al) = (body.omega, body.alpha);
-                let a = add3(body.a, add3(cross3(al, r), cross3(w, cross3(w, r))));
+                let (w, al) = (kernel::cut(&body.omega), kernel::cut(&body.alpha));
+                let a = add3(
+                    kernel::cut(&body.a),
+                    add3(cross3(al, r), cross3(w, cross3(w, r))),
+                );
                 (al, a)
             }
         };

@@ -302,6 +302,16 @@ pub(crate) fn compose<C: Col>(a: &Frame4<C>, b: &Frame4<C>) -> Frame4<C> {
     ])
 }
 
+/// The columns of `parent`, or of the world frame for `None`. (A function, not a closure: see
+/// `kernel::apply_motion`.)
+#[inline(always)]
+fn columns_or_world<C: Col>(parent: Option<&Frame4<C>>) -> [C; 4] {
+    match parent {
+        Some(f) => f.0,
+        None => Frame4::identity().0,
+    }
+}
+
 /// The frame of a body from its parent's frame (`None`: the body hangs from the world), in the
 /// order `kernel::pose_step` chose for the body.
 #[inline(always)]
@@ -311,15 +321,18 @@ pub(crate) fn pose_step<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) -> Frame4<A::Col> {
+    // (Bodies with z steps are evaluated in place: their `pre` is cheap.)
+    if let Some(steps) = &body.z_steps {
+        return Frame4(z_steps::<A>(
+            columns_or_world(parent),
+            body,
+            steps,
+            q,
+            sin_cos,
+        ));
+    }
     if body.in_place() {
-        let f = match parent {
-            Some(f) => f.0,
-            None => Frame4::identity().0,
-        };
-        if let Some(steps) = &body.z_steps {
-            return Frame4(z_steps::<A>(f, body, steps, q, sin_cos));
-        }
-        let mut f = f;
+        let mut f = columns_or_world(parent);
         place::<A>(&mut f, &body.pre);
         apply_motion::<A>(&mut f, body, q, None, sin_cos);
         place::<A>(&mut f, &body.post);
@@ -354,23 +367,23 @@ impl<C: Col> Rates4<C> {
     }
 
     #[inline(always)]
-    pub(crate) fn from_rates(r: &Rates<f64>) -> Self {
+    pub(crate) fn from_rates(r: &Rates) -> Self {
         Rates4 {
-            omega: C::from3(&r.omega),
-            v: C::from3(&r.v),
-            alpha: C::from3(&r.alpha),
-            a: C::from3(&r.a),
+            omega: C::load(&r.omega),
+            v: C::load(&r.v),
+            alpha: C::load(&r.alpha),
+            a: C::load(&r.a),
         }
     }
 
     /// Stores ω and v, and α and a when `ACC`.
     #[inline(always)]
-    pub(crate) fn store<const ACC: bool>(self, out: &mut Rates<f64>) {
-        self.omega.store3(&mut out.omega);
-        self.v.store3(&mut out.v);
+    pub(crate) fn store<const ACC: bool>(self, out: &mut Rates) {
+        self.omega.store(&mut out.omega);
+        self.v.store(&mut out.v);
         if ACC {
-            self.alpha.store3(&mut out.alpha);
-            self.a.store3(&mut out.a);
+            self.alpha.store(&mut out.alpha);
+            self.a.store(&mut out.a);
         }
     }
 }
