@@ -504,7 +504,7 @@ pub(crate) struct Body {
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
-    /// [`Body::ABOUT_Z`].
+    /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
 }
 
@@ -643,6 +643,9 @@ impl Body {
     pub(crate) const SLIDES: u8 = 2;
     /// The joint turns or slides about its frame's z axis.
     pub(crate) const ABOUT_Z: u8 = 4;
+    /// `pre` is the identity, the joint moves about z and `post` is not the identity: the joint
+    /// sits at the parent's origin on the parent's z axis (standard DH rows).
+    pub(crate) const ON_PARENT_Z: u8 = 8;
 
     /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
     /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
@@ -659,6 +662,8 @@ impl Body {
     ) -> Body {
         let pre_frame = pre.to_transform();
         let axis_in_parent = pre_frame.apply(motion.axis.vector());
+        let no_post = post == Placement::Identity;
+        let about_z = motion.axis == crate::joint::Axis::Z;
         Body {
             parent,
             pre,
@@ -668,9 +673,10 @@ impl Body {
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
-            rate_shape: (u8::from(matches!(post, Placement::Identity)) * Body::NO_POST)
+            rate_shape: (u8::from(no_post) * Body::NO_POST)
                 | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
-                | (u8::from(motion.axis == crate::joint::Axis::Z) * Body::ABOUT_Z),
+                | (u8::from(about_z) * Body::ABOUT_Z)
+                | (u8::from(about_z && !no_post && pre == Placement::Identity) * Body::ON_PARENT_Z),
             pre_frame,
             axis_in_parent,
         }

@@ -455,6 +455,60 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
     (f, rates)
 }
 
+/// The rates of a body whose joint sits at its parent's origin and moves about the parent's z
+/// axis ([`Body::ON_PARENT_Z`]: standard DH rows), with frame `f`. The child's origin is then
+/// `r = d z + u` from the parent's, `u` fixed in the child and `z` turning with it, so
+/// `ṙ = ḋ z + ω × r` with the child's own ω, and (eq. 2.75 for the child, plus the sliding terms)
+/// `v = v_p + ω × r + ḋ z`, `a = a_p + α × r + ω × (ω × r) + 2 ḋ ω × z + d̈ z`: four cross
+/// products where the general form needs seven.
+#[inline(always)]
+fn rates_on_parent_z<A: Arith, const ACC: bool>(
+    parent: Option<&State<A::Col>>,
+    body: &Body,
+    f: &Frame4<A::Col>,
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) -> Rates4<A::Col> {
+    type C<A> = <A as Arith>::Col;
+    let zero = C::<A>::splat(0.0);
+    let (z, p_parent, parent) = match parent {
+        Some((frame, rates)) => (frame.0[2], frame.0[3], *rates),
+        None => (C::<A>::load(&body.axis4), zero, Rates4::zero()),
+    };
+    let m = &body.motion;
+    let slides = body.rate_shape & Body::SLIDES != 0;
+    let th_d = term_rate(&m.theta, q_dot);
+    let r = C::<A>::sub(f.0[3], p_parent);
+    let omega = axpy(th_d, z, parent.omega);
+    let w_r = cross(omega, r);
+    let mut out = Rates4 {
+        omega,
+        v: C::<A>::add(parent.v, w_r),
+        alpha: zero,
+        a: zero,
+    };
+    let d_d = if slides { term_rate(&m.d, q_dot) } else { 0.0 };
+    if slides {
+        out.v = axpy(d_d, z, out.v);
+    }
+    if ACC {
+        let th_dd = term_rate(&m.theta, q_ddot);
+        // α = α_p + ω_p × θ' z + θ'' z (eq. 2.123), its own terms summed first.
+        let alpha = C::<A>::add(
+            parent.alpha,
+            cross_add(parent.omega, scale(th_d, z), scale(th_dd, z)),
+        );
+        let mut a = cross_add(alpha, r, cross(omega, w_r));
+        if slides {
+            a = cross_add(omega, scale(2.0 * d_d, z), a);
+            a = axpy(term_rate(&m.d, q_ddot), z, a);
+        }
+        out.alpha = alpha;
+        out.a = C::<A>::add(parent.a, a);
+    }
+    out
+}
+
 /// The rates of a body whose frame is `f`, for the cases its [`Body::rate_shape`] names.
 #[inline(always)]
 fn body_rates<A: Arith, const ACC: bool>(
@@ -477,6 +531,9 @@ fn body_rates<A: Arith, const ACC: bool>(
             (axis_of(&f.0, &body.motion.axis), None)
         }
     } else {
+        if shape & Body::ON_PARENT_Z != 0 {
+            return rates_on_parent_z::<A, ACC>(parent, body, f, q_dot, q_ddot);
+        }
         let (p_joint, z) = match parent {
             Some((frame, _)) => (
                 combine_const(&frame.0, body.pre_frame.p, frame.0[3]),

@@ -98,3 +98,22 @@ fn poses_are_within_8_ulp_of_the_50_digit_reference() {
         );
     }
 }
+
+/// Against the 50-digit references, with default settings: ω, v, α and a of every link within
+/// 8 ulp of the largest magnitude of each quantity in the file (the bound the poses meet; the
+/// recursion rounds each of them O(1) times per joint).
+#[test]
+fn rates_are_within_8_ulp_of_the_50_digit_reference() {
+    for path in reference_files() {
+        let [omega, v, alpha, a] = rate_ulps(&path);
+        eprintln!(
+            "{}: omega {omega:.2} v {v:.2} alpha {alpha:.2} a {a:.2} ulp",
+            path.file_name().unwrap().to_string_lossy()
+        );
+        assert!(
+            [omega, v, alpha, a].iter().all(|&e| e <= 8.0),
+            "{}: omega {omega:.2} v {v:.2} alpha {alpha:.2} a {a:.2} ulp of the largest value",
+            path.display()
+        );
+    }
+}

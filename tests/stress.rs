@@ -76,6 +76,37 @@ fn random_chain(
     b.build().unwrap()
 }
 
+/// A random chain of `n` standard DH rows (`Rz(θ) Tz(d) Tx(a) Rx(α)`, the joint at its parent's
+/// origin on the parent's z axis): a and d up to 0.3 m, random α, θ and d offsets, revolute,
+/// prismatic and cylindrical joints.
+fn random_standard_dh_chain(n: usize, seed: u64) -> Chain {
+    let mut rng = rng(seed);
+    let mut b = ChainBuilder::new(format!("dh{n}"));
+    b.link("link0");
+    for i in 1..=n {
+        let kind = match rng.random_range(0..10) {
+            0 => JointKind::Prismatic,
+            1 => JointKind::Cylindrical,
+            _ => JointKind::Revolute,
+        };
+        let (a, d) = (0.3 * rng.random::<f64>(), 0.3 * rng.random::<f64>());
+        let alpha = rng.random::<f64>() * 6.0 - 3.0;
+        let theta = rng.random::<f64>() * 6.0 - 3.0;
+        b.link(format!("link{i}"));
+        b.joint(
+            JointSpec::new(
+                format!("j{i}"),
+                kind,
+                format!("link{}", i - 1),
+                format!("link{i}"),
+            )
+            .with_offsets(theta, d)
+            .with_post(Transform::from_xyz_rpy([a, 0.0, 0.0], [alpha, 0.0, 0.0])),
+        );
+    }
+    b.build().unwrap()
+}
+
 /// Errors of one configuration, in meaningful units: positions in ulp of the reach, rotation
 /// entries in ulp of 1, rates relative to their largest magnitude over the chain.
 #[derive(Clone, Copy, Debug, Default)]
@@ -189,6 +220,20 @@ fn assert_within(n: usize, e: &Errors) {
 fn chains_of_10_and_100_joints_stay_within_the_linear_bound() {
     for n in [10, 100] {
         let e = chain_errors(n, 3);
+        assert_within(n, &e);
+    }
+}
+
+/// The same bound for standard DH rows, whose rates take the form for a joint at the parent's
+/// origin (the child's own ω and α applied to the whole offset).
+#[test]
+fn standard_dh_chains_of_10_and_100_joints_stay_within_the_linear_bound() {
+    for n in [10, 100] {
+        let chain = random_standard_dh_chain(n, 2000 + n as u64);
+        let e = (0..3).fold(Errors::default(), |e, s| {
+            e.max(measure(&chain, s, std::f64::consts::PI))
+        });
+        eprintln!("standard DH, n = {n}: {e:?}");
         assert_within(n, &e);
     }
 }

@@ -2,7 +2,7 @@
 //! (see its README), turned into chains and joint vectors.
 #![allow(dead_code)]
 
-use kinechain::{Chain, Data, LimitPolicy, Transform, forward_kinematics};
+use kinechain::{Chain, Data, LimitPolicy, Transform, forward_accelerations, forward_kinematics};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -308,6 +308,35 @@ pub fn pose_ulps(path: &Path) -> (f64, f64) {
         }
     }
     (position / (reach * ULP), rotation / ULP)
+}
+
+/// Largest errors of ω, v, α and a of every link of every sample of the reference file `path`
+/// against its 50-digit twin, each in ulps (2⁻⁵²) of the largest magnitude of that quantity over
+/// the file.
+pub fn rate_ulps(path: &Path) -> [f64; 4] {
+    let reference = read_json(path);
+    let exact = read_json(&hp_path(path));
+    let chain = reference_chain(path, &reference);
+    let mut data = Data::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let fields = ["omega", "v", "alpha", "a"];
+    let (mut worst, mut largest) = ([0.0_f64; 4], [0.0_f64; 4]);
+    for sample in exact["samples"].as_array().unwrap() {
+        let q = joint_vector(&chain, &sample["q"]);
+        let qd = joint_vector(&chain, &sample["qd"]);
+        let qdd = joint_vector(&chain, &sample["qdd"]);
+        let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+        for (name, link) in sample["links"].as_object().unwrap() {
+            let id = chain.link_id(name).unwrap();
+            let (v, a) = (acc.velocity(id), acc.acceleration(id));
+            for (k, got) in [v.omega, v.v, a.alpha, a.a].iter().enumerate() {
+                let want = vec3(&link[fields[k]]);
+                worst[k] = worst[k].max(vec_error(got, want));
+                largest[k] = want.iter().fold(largest[k], |m, x| m.max(x.abs()));
+            }
+        }
+    }
+    std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON))
 }
 
 /// Asserts that batches (one thread and parallel) of 37 random configurations of each robot
