@@ -455,6 +455,16 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
     (f, rates)
 }
 
+/// `α = α_p + ω_p × θ̇ z + θ̈ z` (eq. 2.123) for a joint turning about `z` at rates θ̇, θ̈: the
+/// body's own terms summed first, so that the chain from parent to child is one addition.
+#[inline(always)]
+fn angular_acceleration<C: Col>(parent: &Rates4<C>, z: C, th_d: f64, th_dd: f64) -> C {
+    C::add(
+        parent.alpha,
+        cross_add(parent.omega, scale(th_d, z), scale(th_dd, z)),
+    )
+}
+
 /// The rates of a body whose joint sits at its parent's origin and moves about the parent's z
 /// axis ([`Body::ON_PARENT_Z`]: standard DH rows), with frame `f`. The child's origin is then
 /// `r = d z + u` from the parent's, `u` fixed in the child and `z` turning with it, so
@@ -493,11 +503,7 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
     }
     if ACC {
         let th_dd = term_rate(&m.theta, q_ddot);
-        // α = α_p + ω_p × θ' z + θ'' z (eq. 2.123), its own terms summed first.
-        let alpha = C::<A>::add(
-            parent.alpha,
-            cross_add(parent.omega, scale(th_d, z), scale(th_dd, z)),
-        );
+        let alpha = angular_acceleration(&parent, z, th_d, th_dd);
         let mut a = cross_add(alpha, r, cross(omega, w_r));
         if slides {
             a = cross_add(omega, scale(2.0 * d_d, z), a);
@@ -576,10 +582,7 @@ fn body_rates<A: Arith, const ACC: bool>(
         // multiply–adds (the parent's a and α arrive late, at the end of long chains).
         let th_dd = term_rate(&m.theta, q_ddot);
         let w_rel = scale(th_d, z);
-        out.alpha = C::<A>::add(
-            parent.alpha,
-            cross_add(parent.omega, w_rel, scale(th_dd, z)),
-        );
+        out.alpha = angular_acceleration(&parent, z, th_d, th_dd);
         // eq. (2.75): tangential and normal terms of the parent's motion ...
         let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
         // ... and the Coriolis and local terms when the origin moves relative to the parent

@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use kinechain::{Data, LimitPolicy, forward_accelerations, forward_kinematics};
+use kinechain::{Data, LimitPolicy, forward_kinematics};
 
 /// Poses agree with the double-precision reference to 1e-12 of the chain's reach (the reference
 /// itself is accurate to ~1e-15; 1e-12 leaves room for the 4e-12 disagreement the reference
@@ -47,32 +47,15 @@ fn rates_match_the_reference_for_every_model_sample_and_link() {
     for path in reference_files() {
         let reference = read_json(&path);
         let chain = reference_chain(&path, &reference);
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
-        let fields = ["omega", "v", "alpha", "a"];
-        let scales = fields.map(|f| scale_of(&reference, f));
-        let mut worst = [0.0_f64; 4];
-        for sample in reference["samples"].as_array().unwrap() {
-            let q = joint_vector(&chain, &sample["q"]);
-            let qd = joint_vector(&chain, &sample["qd"]);
-            let qdd = joint_vector(&chain, &sample["qdd"]);
-            let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
-            for (name, link) in sample["links"].as_object().unwrap() {
-                let id = chain.link_id(name).unwrap();
-                let (v, a) = (acc.velocity(id), acc.acceleration(id));
-                let got = [v.omega, v.v, a.alpha, a.a];
-                for k in 0..4 {
-                    let e = vec_error(&got[k], vec3(&link[fields[k]]));
-                    worst[k] = worst[k].max(e / scales[k]);
-                }
-            }
-        }
+        let (errors, _) = rate_errors(&chain, &reference);
+        let worst: [f64; 4] =
+            std::array::from_fn(|k| errors[k] / scale_of(&reference, RATE_FIELDS[k]));
         for k in 0..4 {
             assert!(
                 worst[k] < 1e-10,
                 "{}: {} error {:e} (relative)",
                 path.display(),
-                fields[k],
+                RATE_FIELDS[k],
                 worst[k]
             );
         }

@@ -23,6 +23,25 @@ use rand::Rng;
 
 const EPS: f64 = f64::EPSILON;
 
+/// Revolute seven times in ten, else prismatic or cylindrical.
+fn random_kind(rng: &mut impl Rng) -> JointKind {
+    match rng.random_range(0..10) {
+        0 => JointKind::Prismatic,
+        1 => JointKind::Cylindrical,
+        _ => JointKind::Revolute,
+    }
+}
+
+/// Joint `j{i}` of `kind` from `link{i-1}` to `link{i}`.
+fn joint_to_link(i: usize, kind: JointKind) -> JointSpec {
+    JointSpec::new(
+        format!("j{i}"),
+        kind,
+        format!("link{}", i - 1),
+        format!("link{i}"),
+    )
+}
+
 /// A random chain of `n` joints in the axis form: random rotations and translations of length
 /// `length(i)` between joints, random unit axes (or `axis(i)` when given), revolute, prismatic and
 /// cylindrical joints.
@@ -48,11 +67,7 @@ fn random_chain(
             rng.random::<f64>() * 6.0 - 3.0,
         ];
         let origin = Transform::from_xyz_rpy((dir * length(i)).into(), rpy);
-        let kind = match rng.random_range(0..10) {
-            0 => JointKind::Prismatic,
-            1 => JointKind::Cylindrical,
-            _ => JointKind::Revolute,
-        };
+        let kind = random_kind(&mut rng);
         let a = match axis {
             Some(f) => f(i),
             None => [
@@ -62,16 +77,7 @@ fn random_chain(
             ],
         };
         b.link(format!("link{i}"));
-        b.joint(
-            JointSpec::new(
-                format!("j{i}"),
-                kind,
-                format!("link{}", i - 1),
-                format!("link{i}"),
-            )
-            .with_origin(origin)
-            .with_axis(a),
-        );
+        b.joint(joint_to_link(i, kind).with_origin(origin).with_axis(a));
     }
     b.build().unwrap()
 }
@@ -84,24 +90,15 @@ fn random_standard_dh_chain(n: usize, seed: u64) -> Chain {
     let mut b = ChainBuilder::new(format!("dh{n}"));
     b.link("link0");
     for i in 1..=n {
-        let kind = match rng.random_range(0..10) {
-            0 => JointKind::Prismatic,
-            1 => JointKind::Cylindrical,
-            _ => JointKind::Revolute,
-        };
+        let kind = random_kind(&mut rng);
         let (a, d) = (0.3 * rng.random::<f64>(), 0.3 * rng.random::<f64>());
         let alpha = rng.random::<f64>() * 6.0 - 3.0;
         let theta = rng.random::<f64>() * 6.0 - 3.0;
         b.link(format!("link{i}"));
         b.joint(
-            JointSpec::new(
-                format!("j{i}"),
-                kind,
-                format!("link{}", i - 1),
-                format!("link{i}"),
-            )
-            .with_offsets(theta, d)
-            .with_post(Transform::from_xyz_rpy([a, 0.0, 0.0], [alpha, 0.0, 0.0])),
+            joint_to_link(i, kind)
+                .with_offsets(theta, d)
+                .with_post(Transform::from_xyz_rpy([a, 0.0, 0.0], [alpha, 0.0, 0.0])),
         );
     }
     b.build().unwrap()

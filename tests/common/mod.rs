@@ -310,32 +310,38 @@ pub fn pose_ulps(path: &Path) -> (f64, f64) {
     (position / (reach * ULP), rotation / ULP)
 }
 
-/// Largest errors of ω, v, α and a of every link of every sample of the reference file `path`
-/// against its 50-digit twin, each in ulps (2⁻⁵²) of the largest magnitude of that quantity over
-/// the file.
-pub fn rate_ulps(path: &Path) -> [f64; 4] {
-    let reference = read_json(path);
-    let exact = read_json(&hp_path(path));
-    let chain = reference_chain(path, &reference);
-    let mut data = Data::new(&chain);
+/// The fields of a reference file's link rates: ω, v, α and a.
+pub const RATE_FIELDS: [&str; 4] = ["omega", "v", "alpha", "a"];
+
+/// Largest absolute errors of ω, v, α and a (in the order of [`RATE_FIELDS`]) over every sample and
+/// link of a reference file (`file`, for `chain`), and the largest magnitude of each in the file.
+pub fn rate_errors(chain: &Chain, file: &Value) -> ([f64; 4], [f64; 4]) {
+    let mut data = Data::new(chain);
     data.set_limit_policy(LimitPolicy::Ignore);
-    let fields = ["omega", "v", "alpha", "a"];
     let (mut worst, mut largest) = ([0.0_f64; 4], [0.0_f64; 4]);
-    for sample in exact["samples"].as_array().unwrap() {
-        let q = joint_vector(&chain, &sample["q"]);
-        let qd = joint_vector(&chain, &sample["qd"]);
-        let qdd = joint_vector(&chain, &sample["qdd"]);
-        let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+    for sample in file["samples"].as_array().unwrap() {
+        let q = joint_vector(chain, &sample["q"]);
+        let qd = joint_vector(chain, &sample["qd"]);
+        let qdd = joint_vector(chain, &sample["qdd"]);
+        let acc = forward_accelerations(chain, &mut data, &q, &qd, &qdd).unwrap();
         for (name, link) in sample["links"].as_object().unwrap() {
             let id = chain.link_id(name).unwrap();
             let (v, a) = (acc.velocity(id), acc.acceleration(id));
             for (k, got) in [v.omega, v.v, a.alpha, a.a].iter().enumerate() {
-                let want = vec3(&link[fields[k]]);
+                let want = vec3(&link[RATE_FIELDS[k]]);
                 worst[k] = worst[k].max(vec_error(got, want));
                 largest[k] = want.iter().fold(largest[k], |m, x| m.max(x.abs()));
             }
         }
     }
+    (worst, largest)
+}
+
+/// [`rate_errors`] of the reference file `path` against its 50-digit twin, in ulps (2⁻⁵²) of the
+/// largest magnitude of each quantity over the file.
+pub fn rate_ulps(path: &Path) -> [f64; 4] {
+    let chain = reference_chain(path, &read_json(path));
+    let (worst, largest) = rate_errors(&chain, &read_json(&hp_path(path)));
     std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON))
 }
 
