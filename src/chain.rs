@@ -506,6 +506,30 @@ pub(crate) struct Body {
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
     /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
+    /// The rates of θ and d as read by the rate recursion.
+    pub(crate) theta_rate: RateTerm,
+    pub(crate) d_rate: RateTerm,
+}
+
+/// How the rate of a joint term follows from `q̇` (or `q̈`): `scale · q̇[index]`, with scale zero
+/// (and index 0) for a constant term, so that the kernels multiply instead of testing the term's
+/// kind. (Every body has a variable term, so `q̇` is never empty where this is read.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RateTerm {
+    pub(crate) index: usize,
+    pub(crate) scale: f64,
+}
+
+impl RateTerm {
+    fn of(t: &Term) -> RateTerm {
+        match *t {
+            Term::Const(_) => RateTerm {
+                index: 0,
+                scale: 0.0,
+            },
+            Term::Var { index, scale, .. } => RateTerm { index, scale },
+        }
+    }
 }
 
 /// The in-place evaluation of a body about its z axis, `f ← f · pre · M(θ, d) · post`, with the
@@ -677,6 +701,8 @@ impl Body {
                 | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
                 | (u8::from(about_z) * Body::ABOUT_Z)
                 | (u8::from(about_z && !no_post && pre == Placement::Identity) * Body::ON_PARENT_Z),
+            theta_rate: RateTerm::of(&motion.theta),
+            d_rate: RateTerm::of(&motion.d),
             pre_frame,
             axis_in_parent,
         }

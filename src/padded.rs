@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZSteps};
 use crate::joint::{Axis, Term};
 use crate::kernel::{Rates, term_value};
 use crate::transform::Transform;
@@ -431,11 +431,8 @@ fn axis_of<C: Col>(f: &[C; 4], axis: &Axis) -> C {
 
 /// Rate of a θ or d term given `q_dot` (or `q_ddot`).
 #[inline(always)]
-fn term_rate(t: &Term, rates: &[f64]) -> f64 {
-    match *t {
-        Term::Const(_) => 0.0,
-        Term::Var { index, scale, .. } => scale * rates[index],
-    }
+fn term_rate(t: RateTerm, rates: &[f64]) -> f64 {
+    t.scale * rates[t.index]
 }
 
 /// Frame and rates of a body from its parent's (eqs. 2.120, 2.123–2.125 for the joint, 2.75 for
@@ -485,9 +482,8 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
         Some((frame, rates)) => (frame.0[2], frame.0[3], *rates),
         None => (C::<A>::load(&body.axis4), zero, Rates4::zero()),
     };
-    let m = &body.motion;
     let slides = body.rate_shape & Body::SLIDES != 0;
-    let th_d = term_rate(&m.theta, q_dot);
+    let th_d = term_rate(body.theta_rate, q_dot);
     let r = C::<A>::sub(f.0[3], p_parent);
     let omega = axpy(th_d, z, parent.omega);
     let w_r = cross(omega, r);
@@ -497,17 +493,21 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
         alpha: zero,
         a: zero,
     };
-    let d_d = if slides { term_rate(&m.d, q_dot) } else { 0.0 };
+    let d_d = if slides {
+        term_rate(body.d_rate, q_dot)
+    } else {
+        0.0
+    };
     if slides {
         out.v = axpy(d_d, z, out.v);
     }
     if ACC {
-        let th_dd = term_rate(&m.theta, q_ddot);
+        let th_dd = term_rate(body.theta_rate, q_ddot);
         let alpha = angular_acceleration(&parent, z, th_d, th_dd);
         let mut a = cross_add(alpha, r, cross(omega, w_r));
         if slides {
             a = cross_add(omega, scale(2.0 * d_d, z), a);
-            a = axpy(term_rate(&m.d, q_ddot), z, a);
+            a = axpy(term_rate(body.d_rate, q_ddot), z, a);
         }
         out.alpha = alpha;
         out.a = C::<A>::add(parent.a, a);
@@ -553,19 +553,18 @@ fn body_rates<A: Arith, const ACC: bool>(
         Some((frame, rates)) => (frame.0[3], *rates),
         None => (zero, Rates4::zero()),
     };
-    let m = &body.motion;
-    let th_d = term_rate(&m.theta, q_dot);
+    let th_d = term_rate(body.theta_rate, q_dot);
     let r = C::<A>::sub(f.0[3], p_parent);
     // eq. (2.120): velocity of the origin relative to the parent; zero for a turning joint whose
     // child origin lies on its axis.
     let slides = shape & Body::SLIDES != 0;
     let v_rel = match (z_u, slides) {
         (Some(z_u), true) => Some(C::<A>::add(
-            scale(term_rate(&m.d, q_dot), z),
+            scale(term_rate(body.d_rate, q_dot), z),
             scale(th_d, z_u),
         )),
         (Some(z_u), false) => Some(scale(th_d, z_u)),
-        (None, true) => Some(scale(term_rate(&m.d, q_dot), z)),
+        (None, true) => Some(scale(term_rate(body.d_rate, q_dot), z)),
         (None, false) => None,
     };
     let w_r = cross(parent.omega, r);
@@ -580,7 +579,7 @@ fn body_rates<A: Arith, const ACC: bool>(
         // The terms of this joint are summed first and the parent's α and a added last: each is
         // then one addition per body along the chain, not three or more dependent
         // multiply–adds (the parent's a and α arrive late, at the end of long chains).
-        let th_dd = term_rate(&m.theta, q_ddot);
+        let th_dd = term_rate(body.theta_rate, q_ddot);
         let w_rel = scale(th_d, z);
         out.alpha = angular_acceleration(&parent, z, th_d, th_dd);
         // eq. (2.75): tangential and normal terms of the parent's motion ...
@@ -590,7 +589,7 @@ fn body_rates<A: Arith, const ACC: bool>(
         if let Some(v_rel) = v_rel {
             a = cross_add(parent.omega, scale(2.0, v_rel), a);
             if slides {
-                a = axpy(term_rate(&m.d, q_ddot), z, a);
+                a = axpy(term_rate(body.d_rate, q_ddot), z, a);
             }
             if let Some(z_u) = z_u {
                 a = axpy(th_dd, z_u, a);
