@@ -513,7 +513,8 @@ pub(crate) struct Body {
 
 /// How the rate of a joint term follows from `q̇` (or `q̈`): `scale · q̇[index]`, with scale zero
 /// (and index 0) for a constant term, so that the kernels multiply instead of testing the term's
-/// kind. (Every body has a variable term, so `q̇` is never empty where this is read.)
+/// kind. (Every body of a chain has a joint that moves, so `q̇` is never empty where this is
+/// read.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct RateTerm {
     pub(crate) index: usize,

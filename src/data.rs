@@ -1,7 +1,7 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
 use crate::chain::Chain;
-use crate::kernel::Rates;
+use crate::padded::Rates;
 use crate::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.

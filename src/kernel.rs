@@ -954,32 +954,6 @@ pub(crate) fn all_sin_cos<A: Arith>(
     }
 }
 
-/// Per-body motion state of the rate recursion, as stored in [`crate::Data`]: ω, v, α and a in
-/// world coordinates, each padded to four entries (the last zero) so that one vector store or
-/// load moves it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Rates {
-    pub(crate) omega: [f64; 4],
-    pub(crate) v: [f64; 4],
-    pub(crate) alpha: [f64; 4],
-    pub(crate) a: [f64; 4],
-}
-
-impl Rates {
-    pub(crate) const ZERO: Rates = Rates {
-        omega: [0.0; 4],
-        v: [0.0; 4],
-        alpha: [0.0; 4],
-        a: [0.0; 4],
-    };
-}
-
-/// The three entries of a padded vector.
-#[inline(always)]
-pub(crate) fn cut(v: &[f64; 4]) -> [f64; 3] {
-    [v[0], v[1], v[2]]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -188,8 +188,8 @@ impl<'a> Poses<'a> {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                let omega = kernel::cut(&body.omega);
-                (omega, add3(kernel::cut(&body.v), cross3(omega, r)))
+                let omega = padded::cut(&body.omega);
+                (omega, add3(padded::cut(&body.v), cross3(omega, r)))
             }
         };
         LinkVelocity {
@@ -257,9 +257,9 @@ impl<'a> Poses<'a> {
             None => ([0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                let (w, al) = (kernel::cut(&body.omega), kernel::cut(&body.alpha));
+                let (w, al) = (padded::cut(&body.omega), padded::cut(&body.alpha));
                 let a = add3(
-                    kernel::cut(&body.a),
+                    padded::cut(&body.a),
                     add3(cross3(al, r), cross3(w, cross3(w, r))),
                 );
                 (al, a)

@@ -10,7 +10,7 @@
 use crate::arith::{Arith, Col};
 use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZSteps};
 use crate::joint::{Axis, Term};
-use crate::kernel::{Rates, term_value};
+use crate::kernel::term_value;
 use crate::transform::Transform;
 
 /// A column padded to four entries (the last one is zero), as stored.
@@ -25,9 +25,33 @@ pub(crate) fn stored(t: &Transform) -> Stored {
     [pad(t.r[0]), pad(t.r[1]), pad(t.r[2]), pad(t.p)]
 }
 
+/// The three entries of a padded column.
+#[inline(always)]
+pub(crate) fn cut(v: &C4) -> [f64; 3] {
+    [v[0], v[1], v[2]]
+}
+
+/// Per-body motion state of the rate recursion, as stored in [`crate::Data`]: ω, v, α and a in
+/// world coordinates, each padded like a frame column so that one vector store or load moves it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Rates {
+    pub(crate) omega: C4,
+    pub(crate) v: C4,
+    pub(crate) alpha: C4,
+    pub(crate) a: C4,
+}
+
+impl Rates {
+    pub(crate) const ZERO: Rates = Rates {
+        omega: [0.0; 4],
+        v: [0.0; 4],
+        alpha: [0.0; 4],
+        a: [0.0; 4],
+    };
+}
+
 /// The transform held in padded columns.
 pub(crate) fn transform(s: &Stored) -> Transform {
-    let cut = |v: &C4| [v[0], v[1], v[2]];
     Transform {
         r: [cut(&s[0]), cut(&s[1]), cut(&s[2])],
         p: cut(&s[3]),
@@ -493,19 +517,15 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
         alpha: zero,
         a: zero,
     };
-    let d_d = if slides {
-        term_rate(body.d_rate, q_dot)
-    } else {
-        0.0
-    };
     if slides {
-        out.v = axpy(d_d, z, out.v);
+        out.v = axpy(term_rate(body.d_rate, q_dot), z, out.v);
     }
     if ACC {
         let th_dd = term_rate(body.theta_rate, q_ddot);
         let alpha = angular_acceleration(&parent, z, th_d, th_dd);
         let mut a = cross_add(alpha, r, cross(omega, w_r));
         if slides {
+            let d_d = term_rate(body.d_rate, q_dot);
             a = cross_add(omega, scale(2.0 * d_d, z), a);
             a = axpy(term_rate(body.d_rate, q_ddot), z, a);
         }
@@ -528,8 +548,10 @@ fn body_rates<A: Arith, const ACC: bool>(
     let zero = C::<A>::splat(0.0);
     let shape = body.rate_shape;
     // Without a placement after the motion, the child origin lies on the joint axis (u = d z), so
-    // z × u = 0 and the axis is a column of the child frame. Otherwise (standard DH) the joint
-    // origin and axis follow from the parent frame and the constant `pre`.
+    // z × u = 0 and the axis is a column of the child frame. Otherwise the joint origin and axis
+    // follow from the parent frame and the constant `pre`, or, for a joint at the parent's origin
+    // (standard DH rows), the shorter form applies. (Tested here rather than first: in front of
+    // every body, the test made the kernels of the other shapes spill more.)
     let (z, z_u) = if shape & Body::NO_POST != 0 {
         if shape & Body::ABOUT_Z != 0 {
             (f.0[2], None)
