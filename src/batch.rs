@@ -6,10 +6,10 @@
 //! configuration, to the last bit on the same instruction set.
 
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Chain, DenseLimits, LinkId, Placement};
+use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZSteps};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
-use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
+use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num, by_shape};
 use crate::kinematics::{all_valid, check_q};
 use crate::padded;
 use crate::transform::Transform;
@@ -37,7 +37,7 @@ pub struct BatchError {
 pub struct BatchData {
     /// Chunk-major: `frames[c * bodies + k]` holds body `k` of configurations `8c..8c+8`.
     frames: Vec<Frame<Lanes>>,
-    /// One chunk's joint values, transposed into lanes.
+    /// One block's joint values (one chunk's for the all-links kernel), transposed into lanes.
     q_lanes: Vec<Lanes>,
     /// [`forward_kinematics_batch_to`]: the link's body frame of each chunk, and the bodies from
     /// the base to it.
@@ -55,7 +55,7 @@ impl BatchData {
     pub fn new(chain: &Chain) -> Self {
         BatchData {
             frames: Vec::new(),
-            q_lanes: vec![Lanes::splat(0.0); chain.dof()],
+            q_lanes: vec![Lanes::splat(0.0); BLOCK * chain.dof()],
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
             len: 0,
@@ -183,7 +183,14 @@ pub fn forward_kinematics_batch<'a>(
         .take(chunks)
         .enumerate()
     {
-        all_ok &= chunk_poses(chain, check, frames, &mut data.q_lanes, qs, c);
+        all_ok &= chunk_poses(
+            chain,
+            check,
+            frames,
+            &mut data.q_lanes[..chain.dof()],
+            qs,
+            c,
+        );
     }
     if !all_ok {
         data.first_error(chain, qs)?;
@@ -216,6 +223,7 @@ pub fn forward_kinematics_batch_par<'a>(
         chain,
         data.limit_policy,
         qs,
+        1,
         data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
         |check, q_lanes, c, frames| chunk_poses(chain, check, frames, q_lanes, qs, c),
     );
@@ -254,31 +262,31 @@ fn lane_pose<'f>(
     }
 }
 
-/// Runs `eval(check, q_lanes, c, out)` for each chunk `c` of `qs` and its output `out` on
-/// rayon's pool (one pass over the batch and one fork–join). Each chunk is checked by the kernel
-/// on its lanes, or, when the limits do not allow that, by its task before evaluation. False
-/// when some configuration is invalid.
+/// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
+/// first chunk `c0`) and its output `out` on rayon's pool (one pass over the batch and one
+/// fork–join). Each group is checked by the kernel on its lanes, or, when the limits do not
+/// allow that, by its task before evaluation. False when some configuration is invalid.
 fn par_chunks_checked<T: Send>(
     chain: &Chain,
     policy: LimitPolicy,
     qs: &[f64],
+    per_item: usize,
     outs: impl IndexedParallelIterator<Item = T>,
     eval: impl Fn(Option<LaneCheck<'_>>, &mut [Lanes], usize, T) -> bool + Sync + Send,
 ) -> bool {
     let dof = chain.dof();
     let check = LaneCheck::of(chain, policy);
+    let rows = per_item * LANES * dof;
     outs.enumerate()
-        .with_min_len(16)
+        .with_min_len(16usize.div_ceil(per_item))
         .map_init(
-            || vec![Lanes::splat(0.0); dof],
-            |q_lanes, (c, out)| {
-                if check.is_none() {
-                    let rows = &qs[c * LANES * dof..((c + 1) * LANES * dof).min(qs.len())];
-                    if !all_valid(chain, rows, policy) {
-                        return false;
-                    }
+            || vec![Lanes::splat(0.0); per_item * dof],
+            |q_lanes, (i, out)| {
+                let group = &qs[i * rows..((i + 1) * rows).min(qs.len())];
+                if check.is_none() && !all_valid(chain, group, policy) {
+                    return false;
                 }
-                eval(check, q_lanes, c, out)
+                eval(check, q_lanes, i * per_item, out)
             },
         )
         .reduce(|| true, |a, b| a & b)
@@ -417,16 +425,17 @@ pub fn forward_kinematics_batch_to<'a>(
             chain,
             data.limit_policy,
             qs,
-            data.link_frames[..chunks].par_iter_mut(),
-            |check, q_lanes, c, out| chunk_path(chain, check, path, q_lanes, qs, c, out),
+            BLOCK,
+            data.link_frames[..chunks].par_chunks_mut(BLOCK),
+            |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
         );
         if !all_ok {
             data.first_error(chain, qs)?;
         }
     } else {
         let mut all_ok = true;
-        for (c, out) in data.link_frames[..chunks].iter_mut().enumerate() {
-            all_ok &= chunk_path(chain, check, path, &mut data.q_lanes, qs, c, out);
+        for (b, out) in data.link_frames[..chunks].chunks_mut(BLOCK).enumerate() {
+            all_ok &= block_path(chain, check, path, &mut data.q_lanes, qs, b * BLOCK, out);
         }
         if !all_ok {
             data.first_error(chain, qs)?;
@@ -484,38 +493,132 @@ fn chunk_poses_generic<A: Arith>(
     ok
 }
 
-/// One chunk, one body: the frames along `path` (base first, each body the parent of the next),
-/// kept in registers; only the last is written, to `out`. False if `check` rejects a
-/// configuration.
+fma_dispatch!(fn chunk_poses(chain: &Chain, check: Option<LaneCheck<'_>>, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) -> bool => chunk_poses_generic);
+
+/// Chunks of [`LANES`] configurations per block of [`forward_kinematics_batch_to`]: its kernel
+/// goes through the path once per block, each body over all chunks of the block (sixteen values
+/// of four lanes, or eight of eight), rather than through the whole path once per chunk. The
+/// code for a body's shape and its constants are then chosen once per block, and each of its
+/// steps is a loop over independent frames instead of a link of one dependency chain; the frames
+/// go through memory (a block's 6 KiB stay in the first-level cache), and each step rewrites only
+/// the columns it changes.
+///
+/// The all-links kernel keeps one chunk at a time: there every body's frame is written anyway,
+/// and writing it once per step instead of once per body cost more than it saved (Panda 45.6 →
+/// 47.5 ns per configuration, modified DH Panda 37.5 → 39.3; UR5 34.2 → 32.8).
+const BLOCK: usize = 8;
+
+/// The frame of the last body of `path` (base first, each body the parent of the next) for
+/// chunks `c0 .. c0 + out.len()` of `qs` (at most [`BLOCK`]), built in `out`. False if `check`
+/// rejects a configuration (the frames are then meaningless).
 #[inline(always)]
-fn chunk_path_generic<A: Arith>(
+fn block_path_generic<A: Arith>(
     chain: &Chain,
     check: Option<LaneCheck<'_>>,
     path: &[usize],
     q: &mut [Lanes],
     qs: &[f64],
-    c: usize,
-    out: &mut Frame<Lanes>,
+    c0: usize,
+    out: &mut [Frame<Lanes>],
 ) -> bool {
+    let dof = chain.dof();
+    let n = qs.len() / dof;
     let mut ok = true;
-    for (part, q) in lane_parts::<A::Lanes>(chain, q, qs, c) {
-        ok &= LaneCheck::admits(check, q);
-        let mut f = Frame::splat(&Transform::IDENTITY);
-        for &k in path {
-            let body = &chain.bodies[k];
-            let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, q);
-            // Two calls rather than one with `body.parent.map(|_| &f)`: the frame is then never
-            // reached through a pointer that may be null, and stays in registers.
-            f = match body.parent {
-                Some(_) => kernel::pose_step::<A::Lanes, A>(Some(&f), body, q, sin_cos),
-                None => kernel::pose_step::<A::Lanes, A>(None, body, q, sin_cos),
-            };
+    for (i, qc) in q.chunks_exact_mut(dof).take(out.len()).enumerate() {
+        // The last chunk repeats the last configuration in its unused lanes.
+        A::Lanes::transpose(
+            qc,
+            qs,
+            std::array::from_fn(|l| ((c0 + i) * LANES + l).min(n - 1)),
+        );
+        for qp in A::Lanes::cast(qc).chunks_exact(dof) {
+            ok &= LaneCheck::admits(check, qp);
         }
-        f.put(out, part);
+    }
+    let q = &q[..out.len() * dof];
+    for &k in path {
+        block_body::<A>(&chain.bodies[k], q, dof, out);
     }
     ok
 }
 
-fma_dispatch!(fn chunk_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &[usize], q: &mut [Lanes], qs: &[f64], c: usize, out: &mut Frame<Lanes>) -> bool => chunk_path_generic);
+fma_dispatch!(fn block_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &[usize], q: &mut [Lanes], qs: &[f64], c0: usize, out: &mut [Frame<Lanes>]) -> bool => block_path_generic);
 
-fma_dispatch!(fn chunk_poses(chain: &Chain, check: Option<LaneCheck<'_>>, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) -> bool => chunk_poses_generic);
+/// `f ← f · body` for the frames `out` of a block's chunks (`q` their joint values, `dof` per
+/// chunk; a body that hangs from the world starts from the identity): the operations of
+/// [`kernel::pose_step`], so the frames are those of a single evaluation, bit for bit.
+#[inline(always)]
+fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<Lanes>]) {
+    let Some(steps) = &body.z_steps else {
+        for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
+            for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
+                let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+                let f = match body.parent {
+                    Some(_) => {
+                        let f = Frame::get(f_out, part);
+                        kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
+                    }
+                    None => kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos),
+                };
+                f.put(f_out, part);
+            }
+        }
+        return;
+    };
+    if body.parent.is_none() {
+        out.fill(Frame::splat(&Transform::IDENTITY));
+    }
+    by_shape!(steps.pre.shape, block_place::<A>(out, &steps.pre));
+    by_shape!(steps.motion, block_motion::<A>(out, body, q, dof));
+    by_shape!(steps.post.shape, block_place::<A>(out, &steps.post));
+}
+
+/// `f ← f · p` for every frame of a block, `p` of shape `SHAPE`.
+#[inline(always)]
+fn block_place<A: Arith, const SHAPE: u8>(out: &mut [Frame<Lanes>], p: &CheapPlacement) {
+    if SHAPE == 0 {
+        return;
+    }
+    for f_out in out.iter_mut() {
+        for part in 0..A::Lanes::PARTS {
+            let mut f = Frame::<A::Lanes>::get(f_out, part);
+            kernel::cheap_steps::<A::Lanes, A, SHAPE>(&mut f, p);
+            match (SHAPE & 3 != 0, CheapPlacement::turn(SHAPE) != 0) {
+                (true, true) => f.put_columns::<0b1110>(f_out, part),
+                (true, false) => f.put_columns::<0b1000>(f_out, part),
+                _ => f.put_columns::<0b0110>(f_out, part),
+            }
+        }
+    }
+}
+
+/// `f ← f · M(θ, d)` about z for every frame of a block, the kinds of θ and d in `MOTION`.
+#[inline(always)]
+fn block_motion<A: Arith, const MOTION: u8>(
+    out: &mut [Frame<Lanes>],
+    body: &Body,
+    q: &[Lanes],
+    dof: usize,
+) {
+    let turns = ZSteps::theta_kind(MOTION) != ZSteps::ZERO;
+    let slides = ZSteps::d_kind(MOTION) != ZSteps::ZERO;
+    if !turns && !slides {
+        return;
+    }
+    for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
+        for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
+            let sin_cos = if ZSteps::theta_kind(MOTION) == ZSteps::VARIABLE {
+                kernel::body_sin_cos::<A::Lanes, A>(body, qp)
+            } else {
+                (A::Lanes::splat(0.0), A::Lanes::splat(1.0))
+            };
+            let mut f = Frame::<A::Lanes>::get(f_out, part);
+            kernel::z_motion::<A::Lanes, A, MOTION>(&mut f, body, qp, sin_cos);
+            match (slides, turns) {
+                (true, true) => f.put_columns::<0b1011>(f_out, part),
+                (true, false) => f.put_columns::<0b1000>(f_out, part),
+                _ => f.put_columns::<0b0011>(f_out, part),
+            }
+        }
+    }
+}

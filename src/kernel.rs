@@ -209,6 +209,23 @@ impl<N: LaneNum> Frame<N> {
             p: std::array::from_fn(|j| N::get(&f.p[j], part)),
         }
     }
+    /// Writes the columns of `self` chosen by `COLUMNS` (bit `i` for rotation column `i`, bit 3
+    /// for the origin) as part `part` of `f`.
+    #[inline(always)]
+    pub(crate) fn put_columns<const COLUMNS: u8>(&self, f: &mut Frame<Lanes>, part: usize) {
+        for i in 0..3 {
+            if COLUMNS & (1 << i) != 0 {
+                for j in 0..3 {
+                    self.r[i][j].put(&mut f.r[i][j], part);
+                }
+            }
+        }
+        if COLUMNS & 8 != 0 {
+            for j in 0..3 {
+                self.p[j].put(&mut f.p[j], part);
+            }
+        }
+    }
     /// Writes `self` as part `part` of `f`.
     #[inline(always)]
     pub(crate) fn put(&self, f: &mut Frame<Lanes>, part: usize) {
@@ -766,7 +783,7 @@ fn z_steps<N: Num, A: Arith>(
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZSteps::motion`]).
 #[inline(always)]
-fn z_motion<N: Num, A: Arith, const MOTION: u8>(
+pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     f: &mut Frame<N>,
     body: &Body,
     q: &[N],
@@ -823,7 +840,7 @@ fn cheap_place<N: Num, A: Arith>(f: &mut Frame<N>, p: &CheapPlacement) {
 
 /// The steps of a [`CheapPlacement`] of shape `SHAPE`.
 #[inline(always)]
-fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p: &CheapPlacement) {
+pub(crate) fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p: &CheapPlacement) {
     if SHAPE & CheapPlacement::ALONG_X != 0 {
         f.p = axpy::<N, A>(N::splat(p.x), f.r[0], f.p);
     }
