@@ -530,7 +530,11 @@ pub fn forward_kinematics_incremental<'a>(
     data.assert_matches(chain);
     if data.poses_valid {
         let (first, start) = first_changed(chain, data, q)?;
-        if first != usize::MAX {
+        if first == usize::MAX {
+            // Nothing changed.
+        } else if chain.is_serial() && chain.bodies.len() - first <= 2 {
+            poses_tail(chain, data, q, first);
+        } else {
             poses_incremental(chain, data, q, first);
             data.last_q[start..].copy_from_slice(&q[start..]);
         }
@@ -935,35 +939,45 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
 }
 
 /// Poses of bodies `first..` of a serial chain (each body hangs from the one before), the
-/// bodies before `first` being up to date.
+/// bodies before `first` being up to date; the trigonometry vectorised like a full evaluation's.
 #[inline(always)]
 fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
-    let bodies = &chain.bodies[first..];
-    // One body's trigonometry in scalar code; more, vectorised like a full evaluation.
-    let vectorised = bodies.len() > 2;
-    if vectorised {
-        let chunk = chain.turning_before[first] / kernel::LANES;
-        let start = chunk * kernel::LANES;
-        kernel::all_sin_cos::<A>(
-            &chain.theta_gather[chunk..],
-            q,
-            &mut data.sin[start..],
-            &mut data.cos[start..],
-        );
-    }
+    let chunk = chain.turning_before[first] / kernel::LANES;
+    let start = chunk * kernel::LANES;
+    kernel::all_sin_cos::<A>(
+        &chain.theta_gather[chunk..],
+        q,
+        &mut data.sin[start..],
+        &mut data.cos[start..],
+    );
     let frames = &mut data.world_from_body;
     let mut f = match first.checked_sub(1) {
         Some(p) => Frame4::load(&frames[p]),
         None => Frame4::identity(),
     };
-    for (k, body) in bodies.iter().enumerate() {
-        let k = first + k;
-        let sin_cos = if vectorised {
-            let slot = chain.trig_slot[k];
-            (data.sin[slot], data.cos[slot])
-        } else {
-            kernel::body_sin_cos::<f64, A>(body, q)
+    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
+        let slot = chain.trig_slot[k];
+        let sin_cos = (data.sin[slot], data.cos[slot]);
+        f = match body.parent {
+            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            None => padded::pose_step::<A>(None, body, q, sin_cos),
         };
+        f.store(&mut frames[k]);
+    }
+}
+
+/// As [`poses_from`] for the last one or two bodies, with their trigonometry in scalar code: a
+/// function of its own, so that moving the last joints (the common incremental update) runs none
+/// of the set-up of the vectorised or tree paths.
+#[inline(always)]
+fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
+    let frames = &mut data.world_from_body;
+    let mut f = match first.checked_sub(1) {
+        Some(p) => Frame4::load(&frames[p]),
+        None => Frame4::identity(),
+    };
+    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
+        let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
         f = match body.parent {
             Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
             None => padded::pose_step::<A>(None, body, q, sin_cos),
@@ -1069,6 +1083,7 @@ fma_dispatch!(
     pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
 );
 fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
+fma_dispatch!(fn poses_tail(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_tail_generic);
 fma_dispatch!(fn rates_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: Option<&[f64]>, limits: Option<&DenseLimits>) -> bool => rates_admitted_either_generic);
 fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
 fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
