@@ -532,7 +532,7 @@ pub fn forward_kinematics_incremental<'a>(
         let (first, start) = first_changed(chain, data, q)?;
         if first == usize::MAX {
             // Nothing changed.
-        } else if chain.is_serial() && chain.bodies.len() - first <= 2 {
+        } else if is_tail(chain, first) {
             poses_tail(chain, data, q, first);
         } else {
             poses_incremental(chain, data, q, first);
@@ -966,20 +966,30 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     }
 }
 
-/// As [`poses_from`] for the last one or two bodies, with their trigonometry in scalar code: a
-/// function of its own, so that moving the last joints (the common incremental update) runs none
-/// of the set-up of the vectorised or tree paths.
+/// Whether the bodies from `first` on are few enough for [`poses_tail`]: at most four, of which
+/// at most two turn (a sliding or fixed-θ body needs no `sin`/`cos`). In a tree they may include
+/// bodies that did not move; recomputing one gives the same frame, bit for bit.
+fn is_tail(chain: &Chain, first: usize) -> bool {
+    let n = chain.bodies.len();
+    n - first <= 4 && chain.turning_before[n] - chain.turning_before[first] <= 2
+}
+
+/// Poses of the bodies from `first` on ([`is_tail`]), the bodies before `first` being up to
+/// date, with their trigonometry in scalar code: a function of its own, so that moving the last
+/// joints (the common incremental update) runs none of the set-up of the vectorised or tree
+/// paths.
 #[inline(always)]
 fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
     let frames = &mut data.world_from_body;
-    let mut f = match first.checked_sub(1) {
-        Some(p) => Frame4::load(&frames[p]),
-        None => Frame4::identity(),
-    };
+    let mut f = Frame4::<A::Col>::identity();
     for (k, body) in chain.bodies.iter().enumerate().skip(first) {
         let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
+        // The parent's frame stays in registers when it was just computed.
         f = match body.parent {
-            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            Some(p) if p + 1 == k && k > first => {
+                padded::pose_step::<A>(Some(&f), body, q, sin_cos)
+            }
+            Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
             None => padded::pose_step::<A>(None, body, q, sin_cos),
         };
         f.store(&mut frames[k]);
