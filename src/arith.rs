@@ -323,11 +323,18 @@ static LEVEL: AtomicU8 = AtomicU8::new(0);
 #[must_use]
 #[inline]
 pub fn isa() -> Isa {
-    let level = match LEVEL.load(Ordering::Relaxed) {
-        0 => update_level(),
-        level => level,
-    };
-    match level {
+    // One load and two comparisons on every kernel call; the detection only on the first.
+    match LEVEL.load(Ordering::Relaxed) {
+        3 => Isa::Avx512,
+        2 => Isa::Avx2,
+        1 => Isa::Baseline,
+        _ => first_isa(),
+    }
+}
+
+#[cold]
+fn first_isa() -> Isa {
+    match update_level() {
         3 => Isa::Avx512,
         2 => Isa::Avx2,
         _ => Isa::Baseline,
