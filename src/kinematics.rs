@@ -836,12 +836,14 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -
 /// [`poses_prefix`] once the trigonometry of bodies `0..n` is in `data`.
 #[inline(always)]
 fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
-    let frames = &mut data.world_from_body;
+    // Sliced to `n` first, so that indexing by `k < n` needs no bounds checks.
+    let frames = &mut data.world_from_body[..n];
+    let slots = &chain.trig_slot[..n];
     let mut f = Frame4::<A::Col>::identity();
     for (k, body) in chain.bodies[..n].iter().enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
         // (One call per case, so that the frame is never reached through an optional pointer.)
-        let slot = chain.trig_slot[k];
+        let slot = slots[k];
         let sin_cos = (data.sin[slot], data.cos[slot]);
         f = match body.parent {
             Some(p) if p + 1 == k => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
@@ -1005,26 +1007,27 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_ddot: &[f64],
 ) {
     kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
+    // Sliced to the number of bodies first, so that indexing by body needs no bounds checks.
+    let n = chain.bodies.len();
+    let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
+    let slots = &chain.trig_slot[..n];
     let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
     for (k, body) in chain.bodies.iter().enumerate() {
         // The previous body's state stays in registers; only branches read a parent from memory.
         // (One call per case, as in `poses_prefix`.)
-        let sin_cos = (data.sin[chain.trig_slot[k]], data.cos[chain.trig_slot[k]]);
+        let sin_cos = (data.sin[slots[k]], data.cos[slots[k]]);
         previous = match body.parent {
             Some(p) if p + 1 == k => {
                 padded::rates_step::<A, ACC>(Some(&previous), body, q, q_dot, q_ddot, sin_cos)
             }
             Some(p) => {
-                let loaded = (
-                    Frame4::load(&data.world_from_body[p]),
-                    Rates4::from_rates(&data.rates[p]),
-                );
+                let loaded = (Frame4::load(&frames[p]), Rates4::from_rates(&rates[p]));
                 padded::rates_step::<A, ACC>(Some(&loaded), body, q, q_dot, q_ddot, sin_cos)
             }
             None => padded::rates_step::<A, ACC>(None, body, q, q_dot, q_ddot, sin_cos),
         };
-        previous.0.store(&mut data.world_from_body[k]);
-        previous.1.store::<ACC>(&mut data.rates[k]);
+        previous.0.store(&mut frames[k]);
+        previous.1.store::<ACC>(&mut rates[k]);
     }
 }
 
