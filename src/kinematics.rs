@@ -530,12 +530,12 @@ pub fn forward_kinematics_incremental<'a>(
     data.assert_matches(chain);
     if data.poses_valid {
         let (first, start) = first_changed(chain, data, q)?;
-        if first == usize::MAX {
-            // Nothing changed.
-        } else if is_tail(chain, first) {
-            poses_tail(chain, data, q, first);
-        } else {
-            poses_incremental(chain, data, q, first);
+        if first != usize::MAX {
+            if is_tail(chain, first) {
+                poses_tail(chain, data, q, first);
+            } else {
+                poses_incremental(chain, data, q, first);
+            }
             data.last_q[start..].copy_from_slice(&q[start..]);
         }
     } else {
