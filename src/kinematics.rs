@@ -536,7 +536,14 @@ pub fn forward_kinematics_incremental<'a>(
             } else {
                 poses_incremental(chain, data, q, first);
             }
-            data.last_q[start..].copy_from_slice(&q[start..]);
+            // Only the entries that differ are written: a loop the compiler does not turn into
+            // a call to `memcpy`, which for the one or two entries of a typical update costs
+            // more than the copy.
+            for (last, x) in data.last_q[start..].iter_mut().zip(&q[start..]) {
+                if last.to_bits() != x.to_bits() {
+                    *last = *x;
+                }
+            }
         }
     } else {
         check_q(chain, q, data.limit_policy)?;
