@@ -671,6 +671,8 @@ impl Body {
     /// `pre` is the identity, the joint moves about z and `post` is not the identity: the joint
     /// sits at the parent's origin on the parent's z axis (standard DH rows).
     pub(crate) const ON_PARENT_Z: u8 = 8;
+    /// θ varies (the joint turns).
+    pub(crate) const TURNS: u8 = 16;
 
     /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
     /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
@@ -701,7 +703,8 @@ impl Body {
             rate_shape: (u8::from(no_post) * Body::NO_POST)
                 | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
                 | (u8::from(about_z) * Body::ABOUT_Z)
-                | (u8::from(about_z && !no_post && pre == Placement::Identity) * Body::ON_PARENT_Z),
+                | (u8::from(about_z && !no_post && pre == Placement::Identity) * Body::ON_PARENT_Z)
+                | (u8::from(matches!(motion.theta, Term::Var { .. })) * Body::TURNS),
             theta_rate: RateTerm::of(&motion.theta),
             d_rate: RateTerm::of(&motion.d),
             pre_frame,

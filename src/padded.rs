@@ -535,6 +535,56 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
     out
 }
 
+/// The rates of a body whose joint does not turn (θ constant: a prismatic joint, such as a
+/// gripper finger) and whose origin lies on the joint axis (no placement after the motion), with
+/// frame `f`: `ω = ω_p`, `α = α_p`, and with `r` from the parent's origin,
+/// `v = v_p + ω_p × r + ḋ z`, `a = a_p + α_p × r + ω_p × (ω_p × r) + 2 ω_p × ḋ z + d̈ z`
+/// (eqs. 2.120, 2.125 without the turning terms): the general form's products with `θ̇ = θ̈ = 0`
+/// left out.
+#[inline(always)]
+fn rates_sliding<A: Arith, const ACC: bool>(
+    parent: Option<&State<A::Col>>,
+    body: &Body,
+    f: &Frame4<A::Col>,
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) -> Rates4<A::Col> {
+    type C<A> = <A as Arith>::Col;
+    let zero = C::<A>::splat(0.0);
+    let shape = body.rate_shape;
+    let z = if shape & Body::ABOUT_Z != 0 {
+        f.0[2]
+    } else {
+        axis_of(&f.0, &body.motion.axis)
+    };
+    let (p_parent, parent) = match parent {
+        Some((frame, rates)) => (frame.0[3], *rates),
+        None => (zero, Rates4::zero()),
+    };
+    let r = C::<A>::sub(f.0[3], p_parent);
+    let w_r = cross(parent.omega, r);
+    let slides = shape & Body::SLIDES != 0;
+    // (Computed whatever the shape: the branch-free form takes fewer instructions. A body reads
+    // at least one entry, so index 0 exists.)
+    let v_rel = scale(term_rate(body.d_rate, q_dot), z);
+    let v = C::<A>::add(parent.v, w_r);
+    let mut out = Rates4 {
+        omega: parent.omega,
+        v: if slides { C::<A>::add(v, v_rel) } else { v },
+        alpha: parent.alpha,
+        a: zero,
+    };
+    if ACC {
+        let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
+        if slides {
+            a = cross_add(parent.omega, scale(2.0, v_rel), a);
+            a = axpy(term_rate(body.d_rate, q_ddot), z, a);
+        }
+        out.a = C::<A>::add(parent.a, a);
+    }
+    out
+}
+
 /// The rates of a body whose frame is `f`, for the cases its [`Body::rate_shape`] names.
 #[inline(always)]
 fn body_rates<A: Arith, const ACC: bool>(
@@ -553,6 +603,9 @@ fn body_rates<A: Arith, const ACC: bool>(
     // (standard DH rows), the shorter form applies. (Tested here rather than first: in front of
     // every body, the test made the kernels of the other shapes spill more.)
     let (z, z_u) = if shape & Body::NO_POST != 0 {
+        if shape & Body::TURNS == 0 {
+            return rates_sliding::<A, ACC>(parent, body, f, q_dot, q_ddot);
+        }
         if shape & Body::ABOUT_Z != 0 {
             (f.0[2], None)
         } else {
