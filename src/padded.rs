@@ -575,11 +575,20 @@ fn rates_sliding<A: Arith, const ACC: bool>(
         a: zero,
     };
     if ACC {
-        let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
-        if slides {
-            a = cross_add(parent.omega, scale(2.0, v_rel), a);
-            a = axpy(term_rate(body.d_rate, q_ddot), z, a);
-        }
+        // Summed so that the term that arrives last, ω_p × (ω_p × r) (r, then two cross products),
+        // enters by one addition: the other terms need only r or z. (A sliding body is often the
+        // last of its branch, a gripper finger, where nothing hides this latency.)
+        let near = if slides {
+            let local = cross_add(
+                parent.omega,
+                scale(2.0, v_rel),
+                scale(term_rate(body.d_rate, q_ddot), z),
+            );
+            cross_add(parent.alpha, r, local)
+        } else {
+            cross(parent.alpha, r)
+        };
+        let a = C::<A>::add(near, cross(parent.omega, w_r));
         out.a = C::<A>::add(parent.a, a);
     }
     out
