@@ -537,7 +537,7 @@ fn rates_on_parent_z<A: Arith, const ACC: bool>(
 
 /// The rates of a body whose joint does not turn (θ constant: a prismatic joint, such as a
 /// gripper finger) and whose origin lies on the joint axis (no placement after the motion), with
-/// frame `f`: `ω = ω_p`, `α = α_p`, and with `r` from the parent's origin,
+/// frame `f` and joint axis `z` (world): `ω = ω_p`, `α = α_p`, and with `r` from the parent's origin,
 /// `v = v_p + ω_p × r + ḋ z`, `a = a_p + α_p × r + ω_p × (ω_p × r) + 2 ω_p × ḋ z + d̈ z`
 /// (eqs. 2.120, 2.125 without the turning terms): the general form's products with `θ̇ = θ̈ = 0`
 /// left out.
@@ -546,24 +546,19 @@ fn rates_sliding<A: Arith, const ACC: bool>(
     parent: Option<&State<A::Col>>,
     body: &Body,
     f: &Frame4<A::Col>,
+    z: A::Col,
     q_dot: &[f64],
     q_ddot: &[f64],
 ) -> Rates4<A::Col> {
     type C<A> = <A as Arith>::Col;
     let zero = C::<A>::splat(0.0);
-    let shape = body.rate_shape;
-    let z = if shape & Body::ABOUT_Z != 0 {
-        f.0[2]
-    } else {
-        axis_of(&f.0, &body.motion.axis)
-    };
     let (p_parent, parent) = match parent {
         Some((frame, rates)) => (frame.0[3], *rates),
         None => (zero, Rates4::zero()),
     };
     let r = C::<A>::sub(f.0[3], p_parent);
     let w_r = cross(parent.omega, r);
-    let slides = shape & Body::SLIDES != 0;
+    let slides = body.rate_shape & Body::SLIDES != 0;
     // (Computed whatever the shape: the branch-free form takes fewer instructions. A body reads
     // at least one entry, so index 0 exists.)
     let v_rel = scale(term_rate(body.d_rate, q_dot), z);
@@ -612,14 +607,15 @@ fn body_rates<A: Arith, const ACC: bool>(
     // (standard DH rows), the shorter form applies. (Tested here rather than first: in front of
     // every body, the test made the kernels of the other shapes spill more.)
     let (z, z_u) = if shape & Body::NO_POST != 0 {
-        if shape & Body::TURNS == 0 {
-            return rates_sliding::<A, ACC>(parent, body, f, q_dot, q_ddot);
-        }
-        if shape & Body::ABOUT_Z != 0 {
-            (f.0[2], None)
+        let z = if shape & Body::ABOUT_Z != 0 {
+            f.0[2]
         } else {
-            (axis_of(&f.0, &body.motion.axis), None)
+            axis_of(&f.0, &body.motion.axis)
+        };
+        if shape & Body::TURNS == 0 {
+            return rates_sliding::<A, ACC>(parent, body, f, z, q_dot, q_ddot);
         }
+        (z, None)
     } else {
         if shape & Body::ON_PARENT_Z != 0 {
             return rates_on_parent_z::<A, ACC>(parent, body, f, q_dot, q_ddot);
