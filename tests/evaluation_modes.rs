@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use kinechain::{
-    Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics,
+    Chain, Data, LimitPolicy, Poses, Transform, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
 };
 
@@ -25,13 +25,27 @@ fn chains() -> Vec<Chain> {
     out
 }
 
+/// A buffer for `chain` that does not check limits (random configurations may leave them).
+fn unchecked(chain: &Chain) -> Data {
+    let mut data = Data::new(chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    data
+}
+
+/// Every link's pose, in the chain's link order.
+fn link_poses(chain: &Chain, poses: &Poses) -> Vec<Transform> {
+    chain
+        .links()
+        .iter()
+        .map(|l| poses.world_from_link(chain.link_id(l.name()).unwrap()))
+        .collect()
+}
+
 #[test]
 fn one_link_equals_the_full_evaluation() {
     let mut rng = rng(11);
     for chain in chains() {
-        let (mut full, mut partial) = (Data::new(&chain), Data::new(&chain));
-        full.set_limit_policy(LimitPolicy::Ignore);
-        partial.set_limit_policy(LimitPolicy::Ignore);
+        let (mut full, mut partial) = (unchecked(&chain), unchecked(&chain));
         for _ in 0..10 {
             let q = random_q(&chain, &mut rng);
             let poses = forward_kinematics(&chain, &mut full, &q).unwrap();
@@ -55,9 +69,7 @@ fn one_link_equals_the_full_evaluation() {
 fn incremental_updates_equal_fresh_evaluations() {
     let mut rng = rng(12);
     for chain in chains() {
-        let (mut fresh, mut inc) = (Data::new(&chain), Data::new(&chain));
-        fresh.set_limit_policy(LimitPolicy::Ignore);
-        inc.set_limit_policy(LimitPolicy::Ignore);
+        let (mut fresh, mut inc) = (unchecked(&chain), unchecked(&chain));
         let mut q = random_q(&chain, &mut rng);
         for step in 0..200 {
             // Change one entry, sometimes several, sometimes none.
@@ -69,13 +81,10 @@ fn incremental_updates_equal_fresh_evaluations() {
                 q = random_q(&chain, &mut rng);
             }
             let a = forward_kinematics_incremental(&chain, &mut inc, &q).unwrap();
-            let a: Vec<_> = (0..chain.links().len())
-                .map(|i| a.world_from_link(chain.link_id(chain.links()[i].name()).unwrap()))
-                .collect();
+            let a = link_poses(&chain, &a);
             let b = forward_kinematics(&chain, &mut fresh, &q).unwrap();
-            for (i, pose) in a.iter().enumerate() {
-                let id = chain.link_id(chain.links()[i].name()).unwrap();
-                assert_eq!(*pose, b.world_from_link(id), "{} step {step}", chain.name());
+            for (pose, fresh_pose) in a.iter().zip(link_poses(&chain, &b)) {
+                assert_eq!(*pose, fresh_pose, "{} step {step}", chain.name());
             }
         }
     }
@@ -87,10 +96,7 @@ fn an_incremental_update_back_to_the_previous_configuration_restores_its_poses()
     // record of the last evaluation's q follows every update, whichever path evaluated it).
     let mut rng = rng(13);
     for chain in chains() {
-        let mut inc = Data::new(&chain);
-        inc.set_limit_policy(LimitPolicy::Ignore);
-        let mut fresh = Data::new(&chain);
-        fresh.set_limit_policy(LimitPolicy::Ignore);
+        let (mut fresh, mut inc) = (unchecked(&chain), unchecked(&chain));
         let q0 = random_q(&chain, &mut rng);
         forward_kinematics_incremental(&chain, &mut inc, &q0).unwrap();
         for i in 0..chain.dof() {
@@ -98,12 +104,16 @@ fn an_incremental_update_back_to_the_previous_configuration_restores_its_poses()
             q1[i] += 0.25;
             forward_kinematics_incremental(&chain, &mut inc, &q1).unwrap();
             let back = forward_kinematics_incremental(&chain, &mut inc, &q0).unwrap();
+            let back = link_poses(&chain, &back);
             let full = forward_kinematics(&chain, &mut fresh, &q0).unwrap();
-            for link in chain.links() {
-                let id = chain.link_id(link.name()).unwrap();
+            for ((pose, full_pose), link) in back
+                .iter()
+                .zip(link_poses(&chain, &full))
+                .zip(chain.links())
+            {
                 assert_eq!(
-                    back.world_from_link(id),
-                    full.world_from_link(id),
+                    *pose,
+                    full_pose,
                     "{} entry {i} link {}",
                     chain.name(),
                     link.name()
@@ -168,19 +178,11 @@ fn incremental_updates_check_what_changed_and_respect_a_new_limit_policy() {
 fn every_level_gives_the_same_poses() {
     let mut rng = rng(13);
     for chain in chains() {
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = unchecked(&chain);
         let q = random_q(&chain, &mut rng);
         let qd = random_vec(chain.dof(), 1.0, &mut rng);
         let qdd = random_vec(chain.dof(), 1.0, &mut rng);
-        let poses: Vec<_> = {
-            let p = forward_kinematics(&chain, &mut data, &q).unwrap();
-            chain
-                .links()
-                .iter()
-                .map(|l| p.world_from_link(chain.link_id(l.name()).unwrap()))
-                .collect()
-        };
+        let poses = link_poses(&chain, &forward_kinematics(&chain, &mut data, &q).unwrap());
         let vel: Vec<_> = {
             let v = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
             chain
