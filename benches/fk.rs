@@ -172,8 +172,10 @@ fn naive_baseline(c: &mut Criterion) {
     let _ = BatchSize::SmallInput;
 }
 
-/// Batches of 4096 configurations; criterion reports time per batch and configurations per
-/// second (`thrpt`).
+/// Batches of 4 096 configurations (`fk/batch/...`, where waking the second thread is a visible
+/// part of a 150 µs call) and of 65 536 (`fk/batch_large/...`, where the threads' scaling is
+/// measured: the frames of all links then no longer fit the cache); criterion reports time per
+/// batch and configurations per second (`thrpt`).
 fn batches(c: &mut Criterion) {
     use criterion::Throughput;
     use kinechain::batch::{
@@ -181,14 +183,19 @@ fn batches(c: &mut Criterion) {
         forward_kinematics_batch_to,
     };
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let n = 4096;
-    for (name, file) in robots() {
+    for ((name, file), (group_name, n)) in robots()
+        .into_iter()
+        .flat_map(|robot| [(robot, ("batch", 4096)), (robot, ("batch_large", 65536))])
+    {
         let chain = Chain::from_file(root.join(file)).unwrap();
         let qs: Vec<f64> = configurations(&chain, n, 2).concat();
         let mut data = BatchData::new(&chain);
         data.set_limit_policy(LimitPolicy::Ignore);
-        let mut group = c.benchmark_group(format!("fk/batch/{name}"));
+        let mut group = c.benchmark_group(format!("fk/{group_name}/{name}"));
         group.throughput(Throughput::Elements(n as u64));
+        if n > 4096 {
+            group.sample_size(20);
+        }
         group.bench_function("1_thread", |b| {
             b.iter(|| {
                 black_box(
