@@ -859,6 +859,8 @@ pub struct Chain {
     /// The number of leading bodies that form a serial chain (body `k` hangs from `k − 1`):
     /// the part of any body's path that needs no index list.
     pub(crate) serial_run: usize,
+    /// [`Chain::end_link`].
+    end_link: LinkId,
     reach: f64,
     warnings: Vec<String>,
     /// The description the chain was built from (for writing it out again).
@@ -937,21 +939,11 @@ impl Chain {
 
     /// The link farthest from the base, counted in joints (fixed ones included); of equally far
     /// ones, the last in file order. For a serial chain, the tip, whatever frames the file
-    /// declares after it (a URDF's `base` frame fixed to `base_link`, say).
+    /// declares after it (a URDF's `base` frame fixed to `base_link`, say). Found when the chain
+    /// is built.
     #[must_use]
     pub fn end_link(&self) -> LinkId {
-        // Links come parents first, so each depth is known before its children's.
-        let mut depth = vec![0_usize; self.links.len()];
-        let mut end = 0;
-        for (l, link) in self.links.iter().enumerate() {
-            if let Some(j) = link.parent_joint {
-                depth[l] = depth[self.joints[j.0].parent.0] + 1;
-            }
-            if depth[l] >= depth[end] {
-                end = l;
-            }
-        }
-        LinkId(end)
+        self.end_link
     }
 
     /// For each entry of `q`, the joint it drives and, for a cylindrical joint, `theta` or `d`.
@@ -1583,6 +1575,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     let reach = reach_of.iter().copied().fold(0.0, f64::max);
 
     Ok(Chain {
+        end_link: farthest_link(&links, &joints),
         name: spec.name.clone(),
         link_index: links
             .iter()
@@ -1610,6 +1603,22 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         warnings: spec.warnings.clone(),
         source: spec.clone(),
     })
+}
+
+/// The link farthest from the base, counted in joints, the last in file order of equally far
+/// ones ([`Chain::end_link`]); `links` and `joints` parents first.
+fn farthest_link(links: &[Link], joints: &[Joint]) -> LinkId {
+    let mut depth = vec![0_usize; links.len()];
+    let mut end = 0;
+    for (l, link) in links.iter().enumerate() {
+        if let Some(j) = link.parent_joint {
+            depth[l] = depth[joints[j.0].parent.0] + 1;
+        }
+        if depth[l] >= depth[end] {
+            end = l;
+        }
+    }
+    LinkId(end)
 }
 
 #[cfg(test)]
