@@ -138,6 +138,7 @@ impl BatchPoses<'_> {
     /// # Panics
     /// If `index >= self.len()` or `link` comes from another chain.
     #[must_use]
+    #[inline]
     pub fn world_from_link(&self, index: usize, link: LinkId) -> Transform {
         lane_pose(self.chain, self.data.len, link, index, |b| {
             &self.data.frames[(index / LANES) * self.data.bodies + b]
@@ -236,6 +237,7 @@ pub fn forward_kinematics_batch_par<'a>(
 
 /// The pose of `link` in configuration `index` of `len`, from `body_frames(b)`, the lanes holding
 /// the frame of the link's body `b`.
+#[inline]
 fn lane_pose<'f>(
     chain: &Chain,
     len: usize,
@@ -361,6 +363,7 @@ impl BatchLinkPoses<'_> {
     /// # Panics
     /// If `index >= self.len()`.
     #[must_use]
+    #[inline]
     pub fn world_from_link(&self, index: usize) -> Transform {
         lane_pose(self.chain, self.data.len, self.link, index, |_| {
             &self.data.link_frames[index / LANES]

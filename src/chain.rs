@@ -907,6 +907,7 @@ impl Chain {
     /// # Panics
     /// If `id` comes from another chain with more links.
     #[must_use]
+    #[inline]
     pub fn link(&self, id: LinkId) -> &Link {
         &self.links[id.0]
     }

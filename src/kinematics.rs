@@ -129,6 +129,7 @@ impl<'a> Poses<'a> {
     /// # Panics
     /// If `link` comes from another chain with more links.
     #[must_use]
+    #[inline]
     pub fn world_from_link(&self, link: LinkId) -> Transform {
         let l = self.chain.link(link);
         match l.body {
@@ -170,6 +171,7 @@ impl<'a> Poses<'a> {
     }
 
     /// The frame a link's motion is computed for, and the link's offset from it.
+    #[inline]
     fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
         let l = self.chain.link(link);
         let b = l.body?;
@@ -183,6 +185,7 @@ impl<'a> Poses<'a> {
         Some((b, r))
     }
 
+    #[inline]
     fn velocity(&self, link: LinkId) -> LinkVelocity {
         let (omega, v) = match self.carrier(link) {
             None => ([0.0; 3], [0.0; 3]),
@@ -252,6 +255,7 @@ impl<'a> Poses<'a> {
         }
     }
 
+    #[inline]
     fn acceleration(&self, link: LinkId) -> LinkAcceleration {
         let (alpha, a) = match self.carrier(link) {
             None => ([0.0; 3], [0.0; 3]),
@@ -287,12 +291,14 @@ impl<'a> Velocities<'a> {
 
     /// Pose of `link` in the world frame.
     #[must_use]
+    #[inline]
     pub fn world_from_link(&self, link: LinkId) -> Transform {
         self.poses.world_from_link(link)
     }
 
     /// Angular velocity of `link` and linear velocity of its origin, world frame.
     #[must_use]
+    #[inline]
     pub fn velocity(&self, link: LinkId) -> LinkVelocity {
         self.poses.velocity(link)
     }
@@ -337,18 +343,21 @@ impl<'a> Accelerations<'a> {
 
     /// Pose of `link` in the world frame.
     #[must_use]
+    #[inline]
     pub fn world_from_link(&self, link: LinkId) -> Transform {
         self.poses.world_from_link(link)
     }
 
     /// Angular velocity of `link` and linear velocity of its origin, world frame.
     #[must_use]
+    #[inline]
     pub fn velocity(&self, link: LinkId) -> LinkVelocity {
         self.poses.velocity(link)
     }
 
     /// Angular acceleration of `link` and classical acceleration of its origin, world frame.
     #[must_use]
+    #[inline]
     pub fn acceleration(&self, link: LinkId) -> LinkAcceleration {
         self.poses.acceleration(link)
     }

@@ -51,6 +51,7 @@ impl Rates {
 }
 
 /// The transform held in padded columns.
+#[inline]
 pub(crate) fn transform(s: &Stored) -> Transform {
     Transform {
         r: [cut(&s[0]), cut(&s[1]), cut(&s[2])],

@@ -218,18 +218,21 @@ impl Transform {
 
     /// The rotation matrix.
     #[must_use]
+    #[inline]
     pub fn rotation(&self) -> Matrix3<f64> {
         Matrix3::from_fn(|i, j| self.r[j][i])
     }
 
     /// The translation (origin of the child frame in the parent frame).
     #[must_use]
+    #[inline]
     pub fn translation(&self) -> Vector3<f64> {
         Vector3::from(self.p)
     }
 
     /// The 4×4 homogeneous matrix of eq. (2.109).
     #[must_use]
+    #[inline]
     pub fn to_homogeneous(&self) -> Matrix4<f64> {
         Matrix4::from_fn(|i, j| match (i, j) {
             (3, 3) => 1.0,
@@ -241,6 +244,7 @@ impl Transform {
 
     /// The homogeneous matrix as rows, `[[r00, r01, r02, x], .., [0, 0, 0, 1]]`.
     #[must_use]
+    #[inline]
     pub fn to_rows(&self) -> [[f64; 4]; 4] {
         let mut m = [[0.0; 4]; 4];
         for (i, row) in m.iter_mut().take(3).enumerate() {
@@ -271,12 +275,14 @@ impl Transform {
 
     /// Maps a point given in the child frame to the parent frame: `R u + p` (eq. 2.52).
     #[must_use]
+    #[inline]
     pub fn transform_point(&self, u: &Point3<f64>) -> Point3<f64> {
         Point3::from(add3(self.p, self.apply(u.coords.into())))
     }
 
     /// Maps a free vector given in the child frame to the parent frame: `R u`.
     #[must_use]
+    #[inline]
     pub fn transform_vector(&self, u: &Vector3<f64>) -> Vector3<f64> {
         Vector3::from(self.apply((*u).into()))
     }
