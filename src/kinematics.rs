@@ -40,7 +40,7 @@ use crate::error::StateError;
 use crate::joint::{Motion, Term};
 use crate::kernel;
 use crate::padded::{self, Frame4, Rates4};
-use crate::transform::{Transform, add3, cross3, scale3, sub3};
+use crate::transform::{Transform, add3, cross3, scale3};
 use nalgebra::Vector3;
 
 /// Angular velocity and linear velocity of a link-frame origin.
@@ -170,17 +170,20 @@ impl<'a> Poses<'a> {
         ))
     }
 
-    /// The frame a link's motion is computed for, and the link's offset from it.
+    /// The frame a link's motion is computed for, and the link's offset from it in world axes:
+    /// the body's rotation applied to the offset's translation (not the difference of the two
+    /// origins, which would cancel and need the link's whole pose).
     #[inline]
     fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
         let l = self.chain.link(link);
         let b = l.body?;
         let r = match l.offset {
             Placement::Identity => [0.0; 3],
-            _ => sub3(
-                self.world_from_link(link).p,
-                padded::transform(&self.data.world_from_body[b]).p,
-            ),
+            offset => {
+                let body = &self.data.world_from_body[b];
+                let t = offset.translation();
+                std::array::from_fn(|i| body[0][i] * t[0] + body[1][i] * t[1] + body[2][i] * t[2])
+            }
         };
         Some((b, r))
     }
