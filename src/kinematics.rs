@@ -179,11 +179,7 @@ impl<'a> Poses<'a> {
         let b = l.body?;
         let r = match l.offset {
             Placement::Identity => [0.0; 3],
-            offset => {
-                let body = &self.data.world_from_body[b];
-                let t = offset.translation();
-                std::array::from_fn(|i| body[0][i] * t[0] + body[1][i] * t[1] + body[2][i] * t[2])
-            }
+            offset => padded::transform(&self.data.world_from_body[b]).apply(offset.translation()),
         };
         Some((b, r))
     }
