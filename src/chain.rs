@@ -461,17 +461,7 @@ impl Placement {
         }
     }
 
-    /// The translation part: the placed frame's origin in the unplaced frame's axes.
     #[inline]
-    pub(crate) fn translation(&self) -> [f64; 3] {
-        match *self {
-            Placement::Identity => [0.0; 3],
-            Placement::Translation(t) | Placement::OffsetRot { t, .. } => t,
-            Placement::ScrewX { a, .. } => [a, 0.0, 0.0],
-            Placement::General(t) => t.p,
-        }
-    }
-
     pub(crate) fn to_transform(self) -> Transform {
         match self {
             Placement::Identity => Transform::IDENTITY,

@@ -179,7 +179,9 @@ impl<'a> Poses<'a> {
         let b = l.body?;
         let r = match l.offset {
             Placement::Identity => [0.0; 3],
-            offset => padded::transform(&self.data.world_from_body[b]).apply(offset.translation()),
+            offset => {
+                padded::transform(&self.data.world_from_body[b]).apply(offset.to_transform().p)
+            }
         };
         Some((b, r))
     }
