@@ -446,25 +446,14 @@ fn chunk_poses_generic<A: Arith>(
 ) -> bool {
     let dof = chain.dof();
     let ok = transpose_chunk::<A::Lanes>(check, q, qs, c);
-    // Eight lanes in one register: trigonometry first, for all bodies, so that it does not
-    // compete with the composition for registers; it is written to `frames` and then read back
-    // one body at a time. Two parts of four lanes: interleaved with the composition (computing
-    // it first, for both parts at once, was slower: UR5 34.6 → 35.5 ns, Panda 45.3 → 47.4).
-    let first = A::Lanes::PARTS == 1;
-    if first {
-        for (k, body) in chain.bodies.iter().enumerate() {
-            (frames[k].r[0][0], frames[k].r[0][1]) = chunk_sin_cos::<A>(body, q, dof);
-        }
-    }
+    // Each body's `sin`/`cos` next to its composition, on eight lanes in one register or as two
+    // parts of four. With eight lanes, computing them first for all bodies (into `frames`, read
+    // back body by body) was slower on Zen 4: UR5 17.8 → 18.2 ns, Panda 23.5 → 25.3, modified DH
+    // Panda 20.0 → 20.8 (best of alternated runs, 4 096 configurations).
     for (part, qp) in A::Lanes::cast(q).chunks_exact(dof).enumerate() {
         let mut f = Frame::splat(&Transform::IDENTITY);
         for (k, body) in chain.bodies.iter().enumerate() {
-            let get = |x: &Lanes| A::Lanes::get(x, part);
-            let sin_cos = if first {
-                (get(&frames[k].r[0][0]), get(&frames[k].r[0][1]))
-            } else {
-                kernel::body_sin_cos::<A::Lanes, A>(body, qp)
-            };
+            let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
             f = match body.parent {
                 Some(p) if p + 1 == k => {
                     kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
@@ -518,9 +507,10 @@ fn chunk_sin_cos<A: Arith>(body: &Body, q: &[Lanes], dof: usize) -> (Lanes, Lane
 
 fma_dispatch!(fn chunk_poses(chain: &Chain, check: Option<LaneCheck<'_>>, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize) -> bool => chunk_poses_generic);
 
-/// Chunks of [`LANES`] configurations per block of [`forward_kinematics_batch_to`]: its kernel
-/// goes through the path once per block, each body over all chunks of the block (sixteen values
-/// of four lanes, or eight of eight), rather than through the whole path once per chunk. The
+/// Chunks of [`LANES`] configurations per block of [`forward_kinematics_batch_to`]: with four
+/// lanes per value its kernel goes through the path once per block, each body over all chunks of
+/// the block (sixteen values of four lanes), rather than through the whole path once per chunk
+/// (with eight lanes per register it does the latter, see [`block_path_generic`]). The
 /// code for a body's shape and its constants are then chosen once per block, and each of its
 /// steps is a loop over independent frames instead of a link of one dependency chain; the frames
 /// go through memory (a block's 6 KiB stay in the first-level cache), and each step rewrites only
@@ -550,6 +540,29 @@ fn block_path_generic<A: Arith>(
         ok &= transpose_chunk::<A::Lanes>(check, qc, qs, c0 + i);
     }
     let q = &q[..out.len() * dof];
+    if A::Lanes::PARTS == 1 {
+        // Eight lanes in one register (32 of them): a chunk's frame stays in registers along the
+        // whole path, each body's `sin`/`cos` next to its step, and only the last frame is
+        // stored. Faster on Zen 4 than the body-by-body order below, which suits AVX2's 16
+        // registers: UR5 URDF tool link 17.4 → 15.4 ns, UR5 DH 17.6 → 15.1, Panda URDF hand
+        // 24.1 → 19.8, modified DH Panda 21.1 → 17.0 (best of alternated runs, 4 096
+        // configurations, one thread).
+        for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
+            let qp = A::Lanes::cast(qc);
+            let mut f = Frame::<A::Lanes>::get(&Frame::splat(&Transform::IDENTITY), 0);
+            for (i, &k) in path.iter().enumerate() {
+                let body = &chain.bodies[k];
+                let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+                f = if i == 0 {
+                    kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos)
+                } else {
+                    kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
+                };
+            }
+            f.put(f_out, 0);
+        }
+        return ok;
+    }
     for &k in path {
         block_body::<A>(&chain.bodies[k], q, dof, out);
     }

@@ -345,11 +345,14 @@ pub fn rate_ulps(path: &Path) -> [f64; 4] {
     std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON))
 }
 
-/// Asserts that batches (one thread and parallel) of 37 random configurations of each robot
-/// file give, configuration by configuration and bit for bit, what single evaluations give:
-/// four full chunks of eight and a partial one.
+/// Asserts that batches (one thread and parallel, and of the end link alone) of 37 random
+/// configurations of each robot file give, configuration by configuration and bit for bit, what
+/// single evaluations give: four full chunks of eight and a partial one.
 pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
-    use kinechain::batch::{BatchData, forward_kinematics_batch, forward_kinematics_batch_par};
+    use kinechain::batch::{
+        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
+        forward_kinematics_batch_to,
+    };
     let mut rng = rng(seed);
     for file in files {
         let chain = Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
@@ -386,6 +389,16 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
                     );
                 }
             }
+        }
+        let end = chain.end_link();
+        let end_index = links.iter().position(|&l| l == end).unwrap();
+        let one = forward_kinematics_batch_to(&chain, &mut batch, &qs, end, false).unwrap();
+        for (i, want) in expected.iter().enumerate() {
+            assert_eq!(
+                one.world_from_link(i),
+                want[end_index],
+                "{file} configuration {i}, end link alone"
+            );
         }
     }
 }
