@@ -12,6 +12,7 @@ use kinechain::{
     Chain, Data, LimitPolicy, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
 };
+use rayon::prelude::*;
 use std::hint::black_box;
 use std::path::Path;
 
@@ -237,11 +238,45 @@ fn batches(c: &mut Criterion) {
     }
 }
 
+/// `n` rounds of eight independent multiply–add chains: arithmetic with no memory traffic and no
+/// shared state, the best case for threads.
+fn arithmetic(n: u64) -> f64 {
+    let mut x: [f64; 8] = std::array::from_fn(|i| 1.0 + i as f64 * 1e-9);
+    for _ in 0..n {
+        for v in &mut x {
+            *v = black_box(*v) * 0.999_999_9 + 1e-9;
+        }
+    }
+    x.iter().sum()
+}
+
+/// What two threads can gain on this machine at all: the same independent arithmetic on one
+/// thread and split over rayon's pool, in the same run as `fk/batch_large`. A virtual machine's
+/// second core may share a physical core (and its floating-point units) with the first, which
+/// caps the ratio of any kernel below 2.
+fn machine_baseline(c: &mut Criterion) {
+    const ROUNDS: u64 = 200_000;
+    let mut group = c.benchmark_group("machine/arithmetic");
+    group.bench_function("1_thread", |b| b.iter(|| black_box(arithmetic(ROUNDS))));
+    group.bench_function("all_threads", |b| {
+        b.iter(|| {
+            let parts = rayon::current_num_threads() as u64;
+            let sum: f64 = (0..parts)
+                .into_par_iter()
+                .map(|_| arithmetic(ROUNDS / parts))
+                .sum();
+            black_box(sum)
+        })
+    });
+    group.finish();
+}
+
 criterion_group!(
     benches,
     kinechain_modes,
     k_baseline,
     naive_baseline,
-    batches
+    batches,
+    machine_baseline
 );
 criterion_main!(benches);
