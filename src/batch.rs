@@ -549,10 +549,11 @@ fn block_path_generic<A: Arith>(
         // configurations, one thread).
         for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
             let qp = A::Lanes::cast(qc);
-            let mut f = Frame::<A::Lanes>::get(&Frame::splat(&Transform::IDENTITY), 0);
+            let mut f = Frame::<A::Lanes>::splat(&Transform::IDENTITY);
             for (i, &k) in path.iter().enumerate() {
                 let body = &chain.bodies[k];
                 let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+                // The first body hangs from the world, each next one from the one before it.
                 f = if i == 0 {
                     kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos)
                 } else {
