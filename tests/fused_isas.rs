@@ -10,14 +10,13 @@ mod common;
 
 use common::*;
 use kinechain::{
-    Chain, Data, Isa, LimitPolicy, force_isa, forward_accelerations, forward_kinematics_to, isa,
+    Data, Isa, LimitPolicy, force_isa, forward_accelerations, forward_kinematics_to, isa,
 };
 
 /// Every link's pose, velocity and acceleration (as bits) over random states of `file`, and the
 /// end link's pose from [`forward_kinematics_to`].
 fn fingerprint(file: &str, seed: u64) -> Vec<u64> {
-    let chain = Chain::from_file(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(file))
-        .unwrap_or_else(|e| panic!("{file}: {e}"));
+    let chain = repo_chain(file);
     let mut data = Data::new(&chain);
     data.set_limit_policy(LimitPolicy::Ignore);
     let mut rng = rng(seed);

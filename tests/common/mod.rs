@@ -16,6 +16,12 @@ pub fn robots_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("robots")
 }
 
+/// The chain of a robot file given relative to the repository root.
+pub fn repo_chain(file: &str) -> Chain {
+    Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join(file))
+        .unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
 /// Every file of `robots/`, sorted.
 pub fn robot_files() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(robots_dir())
@@ -355,7 +361,7 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
     };
     let mut rng = rng(seed);
     for file in files {
-        let chain = Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).unwrap();
+        let chain = repo_chain(file);
         let mut single = Data::new(&chain);
         single.set_limit_policy(LimitPolicy::Ignore);
         let mut batch = BatchData::new(&chain);
