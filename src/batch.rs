@@ -16,9 +16,22 @@ use crate::padded;
 use crate::transform::Transform;
 use rayon::prelude::*;
 
-/// Below this many configurations, waking rayon's pool costs more than a second thread saves
-/// (measured on a 2-vCPU VM: at 1 024 configurations, about 10 µs of fork–join).
-const PARALLEL_FROM: usize = 2048;
+/// Work, in joint evaluations (configurations × moving joints on the evaluated path, fixed
+/// joints folded), below which [`forward_kinematics_batch_par`] and a parallel
+/// [`forward_kinematics_batch_to`] stay on the calling thread: waking rayon's pool and joining
+/// costs more than a second thread saves. On 2-vCPU VMs (AVX2 and AVX-512 kernels, ≈3 ns per
+/// joint and configuration) two threads broke even at 40–60 µs of one thread's work; this is
+/// about 60 µs: 3 334 configurations of a six-joint arm, 200 of a hundred-joint chain.
+pub const PARALLEL_WORK: usize = 20_000;
+
+/// Work, in joint evaluations, of the smallest task a parallel batch is split into (a few µs).
+const TASK_WORK: usize = 1024;
+
+/// Whether `qs` (rows of `dof` entries) with `bodies` evaluated per configuration is worth
+/// splitting over threads ([`PARALLEL_WORK`]).
+fn worth_parallel(qs: &[f64], dof: usize, bodies: usize) -> bool {
+    qs.len().saturating_mul(bodies.max(1)) >= PARALLEL_WORK.saturating_mul(dof)
+}
 
 /// A configuration of a batch cannot be evaluated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -202,7 +215,9 @@ pub fn forward_kinematics_batch<'a>(
 
 /// As [`forward_kinematics_batch`], with the chunks of eight configurations spread over the
 /// threads of rayon's global pool (set its size with `RAYON_NUM_THREADS` or
-/// `rayon::ThreadPoolBuilder`). Results are identical to the single-threaded call.
+/// `rayon::ThreadPoolBuilder`). Results are identical to the single-threaded call. A batch of
+/// fewer than [`PARALLEL_WORK`] joint evaluations (configurations × moving joints) runs on the
+/// calling thread.
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`] (the same configuration is named); no result is returned.
@@ -214,7 +229,7 @@ pub fn forward_kinematics_batch_par<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    if qs.len() < PARALLEL_FROM * chain.dof() {
+    if !worth_parallel(qs, chain.dof(), chain.bodies.len()) {
         return forward_kinematics_batch(chain, data, qs);
     }
     // The first bad configuration is looked for only on failure.
@@ -226,6 +241,7 @@ pub fn forward_kinematics_batch_par<'a>(
         data.limit_policy,
         qs,
         1,
+        bodies,
         data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
         |check, q_lanes, c, frames| chunk_poses(chain, check, frames, q_lanes, qs, c),
     );
@@ -267,21 +283,24 @@ fn lane_pose<'f>(
 
 /// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
 /// first chunk `c0`) and its output `out` on rayon's pool (one pass over the batch and one
-/// fork–join). Each group is checked by the kernel on its lanes, or, when the limits do not
+/// fork–join), `bodies` being the bodies evaluated per configuration. Each group is checked by the kernel on its lanes, or, when the limits do not
 /// allow that, by its task before evaluation. False when some configuration is invalid.
 fn par_chunks_checked<T: Send>(
     chain: &Chain,
     policy: LimitPolicy,
     qs: &[f64],
     per_item: usize,
+    bodies: usize,
     outs: impl IndexedParallelIterator<Item = T>,
     eval: impl Fn(Option<LaneCheck<'_>>, &mut [Lanes], usize, T) -> bool + Sync + Send,
 ) -> bool {
     let dof = chain.dof();
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
+    // Items per task: at least TASK_WORK bodies (16 chunks of a six-joint arm, one of a long chain).
+    let per_task = TASK_WORK.div_ceil(per_item * LANES * bodies.max(1));
     outs.enumerate()
-        .with_min_len(16usize.div_ceil(per_item))
+        .with_min_len(per_task)
         .map_init(
             || vec![Lanes::splat(0.0); per_item * dof],
             |q_lanes, (i, out)| {
@@ -375,7 +394,8 @@ impl BatchLinkPoses<'_> {
 /// the base and that link are evaluated, and only that link's pose is kept (one frame per
 /// configuration written to memory instead of one per joint, which is what bounds a large
 /// batch of all poses). On the calling thread, or with `parallel` over rayon's global pool
-/// (batches under 2 048 configurations always run on the calling thread). The poses are the
+/// (batches of fewer than [`PARALLEL_WORK`] joint evaluations always run on the calling
+/// thread). The poses are the
 /// same, bit for bit, as [`forward_kinematics_batch`] gives for the link.
 ///
 /// # Errors
@@ -402,20 +422,23 @@ pub fn forward_kinematics_batch_to<'a>(
     link: LinkId,
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
-    let parallel = parallel && qs.len() >= PARALLEL_FROM * chain.dof();
+    chain.body_path(chain.link(link).body, &mut data.path);
+    let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, !parallel && check.is_none())?;
-    chain.body_path(chain.link(link).body, &mut data.path);
     let zero = Frame::splat(&Transform::IDENTITY);
     data.link_frames.resize(chunks, zero);
     let path = &data.path;
     if parallel {
+        // Blocks of fewer chunks when a block each would leave a thread idle (a long chain).
+        let per_item = (chunks / 4).clamp(1, BLOCK);
         let all_ok = par_chunks_checked(
             chain,
             data.limit_policy,
             qs,
-            BLOCK,
-            data.link_frames[..chunks].par_chunks_mut(BLOCK),
+            per_item,
+            path.len(),
+            data.link_frames[..chunks].par_chunks_mut(per_item),
             |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
         );
         if !all_ok {

@@ -939,7 +939,14 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
     }
 
     let flat: Vec<f64> = qs.concat();
-    let big: Vec<f64> = (0..64).flat_map(|_| flat.iter().copied()).collect();
+    // The multi-threaded rows evaluate the configurations `copies` times over in one batch: twice
+    // the work from which the pool is used, counted on the end link's path.
+    let mut end_path = Vec::new();
+    chain.body_path(chain.link(end).body, &mut end_path);
+    let copies = (2 * crate::batch::PARALLEL_WORK)
+        .div_ceil(qs.len().max(1) * end_path.len().max(1))
+        .max(1);
+    let big: Vec<f64> = (0..copies).flat_map(|_| flat.iter().copied()).collect();
     let (flat, big) = (&flat, &big);
     let all_links = |isa: Option<crate::Isa>| -> Box<dyn FnMut() + '_> {
         let mut d = data();
@@ -1016,7 +1023,7 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                             .map(|b| b.len()),
                     );
                 }),
-                64 * n,
+                copies * n,
             ));
             for parallel in [false, true] {
                 let (qs, label, count) = if parallel {
@@ -1026,7 +1033,7 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                             "kinechain, batch, end link only, {} threads",
                             rayon::current_num_threads()
                         ),
-                        64 * n,
+                        copies * n,
                     )
                 } else {
                     (&flat, "kinechain, batch, end link only, 1 thread".into(), n)

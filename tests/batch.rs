@@ -112,8 +112,11 @@ fn one_link_batches_equal_the_full_batch() {
         "cylindrical.yaml",
     ] {
         let chain = Chain::from_file(robots_dir().join(file)).unwrap();
-        // Enough configurations for the parallel path, and a partial last chunk.
-        let qs: Vec<f64> = (0..2053).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        // Enough configurations for the parallel path on every link (a path of one body needs
+        // 20 000), and a partial last chunk.
+        let qs: Vec<f64> = (0..20_003)
+            .flat_map(|_| random_q(&chain, &mut rng))
+            .collect();
         let mut full = BatchData::new(&chain);
         full.set_limit_policy(LimitPolicy::Ignore);
         let all = forward_kinematics_batch(&chain, &mut full, &qs).unwrap();
@@ -135,6 +138,51 @@ fn one_link_batches_equal_the_full_batch() {
                 }
             }
         }
+    }
+}
+
+/// A long chain is split over the threads from a few dozen configurations (the threshold is on
+/// joints evaluated, not configurations), one-link batches in groups of fewer chunks than a
+/// block; the results are those of the calling thread, bit for bit.
+#[test]
+fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
+    let rows: String = (0..300)
+        .map(|i| {
+            let alpha = ["1.5707963267948966", "-1.5707963267948966", "0.3"][i % 3];
+            let kind = if i % 7 == 3 { "prismatic" } else { "revolute" };
+            format!(
+                "  - {{name: j{i}, link: l{i}, type: {kind}, a: 0.01, alpha: {alpha}, d: 0.02, theta: 0.1}}\n"
+            )
+        })
+        .collect();
+    let text = format!("name: long\nconvention: modified\nbase: {{name: base}}\njoints:\n{rows}");
+    let chain = Chain::from_dh_yaml_str(&text).unwrap();
+    let mut rng = rng(8);
+    // 69 configurations: 20 700 joints, nine chunks (the last partial), groups of two.
+    let qs: Vec<f64> = (0..69).flat_map(|_| random_q(&chain, &mut rng)).collect();
+    let mut data = [(); 3].map(|()| BatchData::new(&chain));
+    let [one, all, path] = &mut data;
+    let a = forward_kinematics_batch(&chain, one, &qs).unwrap();
+    let b = forward_kinematics_batch_par(&chain, all, &qs).unwrap();
+    for link in ["l0", "l150", "l299"] {
+        let id = chain.link_id(link).unwrap();
+        for i in 0..a.len() {
+            assert_eq!(
+                a.world_from_link(i, id),
+                b.world_from_link(i, id),
+                "{link} {i}"
+            );
+        }
+    }
+    let tip = chain.link_id("l299").unwrap();
+    let poses = forward_kinematics_batch_to(&chain, path, &qs, tip, true).unwrap();
+    assert_eq!(poses.len(), 69);
+    for i in 0..69 {
+        assert_eq!(
+            poses.world_from_link(i),
+            a.world_from_link(i, tip),
+            "tip {i}"
+        );
     }
 }
 
