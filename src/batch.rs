@@ -283,8 +283,9 @@ fn lane_pose<'f>(
 
 /// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
 /// first chunk `c0`) and its output `out` on rayon's pool (one pass over the batch and one
-/// fork–join), `bodies` being the bodies evaluated per configuration. Each group is checked by the kernel on its lanes, or, when the limits do not
-/// allow that, by its task before evaluation. False when some configuration is invalid.
+/// fork–join), `bodies` being the bodies evaluated per configuration. Each group is checked by
+/// the kernel on its lanes, or, when the limits do not allow that, by its task before
+/// evaluation. False when some configuration is invalid.
 fn par_chunks_checked<T: Send>(
     chain: &Chain,
     policy: LimitPolicy,
@@ -297,7 +298,8 @@ fn par_chunks_checked<T: Send>(
     let dof = chain.dof();
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
-    // Items per task: at least TASK_WORK bodies (16 chunks of a six-joint arm, one of a long chain).
+    // Items per task: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
+    // chunk of a chain of 128 joints or more).
     let per_task = TASK_WORK.div_ceil(per_item * LANES * bodies.max(1));
     outs.enumerate()
         .with_min_len(per_task)
