@@ -146,17 +146,7 @@ fn one_link_batches_equal_the_full_batch() {
 /// block; the results are those of the calling thread, bit for bit.
 #[test]
 fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
-    let rows: String = (0..300)
-        .map(|i| {
-            let alpha = ["1.5707963267948966", "-1.5707963267948966", "0.3"][i % 3];
-            let kind = if i % 7 == 3 { "prismatic" } else { "revolute" };
-            format!(
-                "  - {{name: j{i}, link: l{i}, type: {kind}, a: 0.01, alpha: {alpha}, d: 0.02, theta: 0.1}}\n"
-            )
-        })
-        .collect();
-    let text = format!("name: long\nconvention: modified\nbase: {{name: base}}\njoints:\n{rows}");
-    let chain = Chain::from_dh_yaml_str(&text).unwrap();
+    let chain = random_standard_dh_chain(300, 8);
     let mut rng = rng(8);
     // 69 configurations: 20 700 joints, nine chunks (the last partial), groups of two.
     let qs: Vec<f64> = (0..69).flat_map(|_| random_q(&chain, &mut rng)).collect();
@@ -164,7 +154,7 @@ fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
     let [one, all, path] = &mut data;
     let a = forward_kinematics_batch(&chain, one, &qs).unwrap();
     let b = forward_kinematics_batch_par(&chain, all, &qs).unwrap();
-    for link in ["l0", "l150", "l299"] {
+    for link in ["link1", "link150", "link300"] {
         let id = chain.link_id(link).unwrap();
         for i in 0..a.len() {
             assert_eq!(
@@ -174,7 +164,7 @@ fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
             );
         }
     }
-    let tip = chain.link_id("l299").unwrap();
+    let tip = chain.link_id("link300").unwrap();
     let poses = forward_kinematics_batch_to(&chain, path, &qs, tip, true).unwrap();
     assert_eq!(poses.len(), 69);
     for i in 0..69 {

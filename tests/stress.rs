@@ -16,31 +16,12 @@ use common::*;
 use kinechain::nalgebra::Vector3;
 use kinechain::reference::{LinkMotion, link_motion};
 use kinechain::{
-    Chain, ChainBuilder, Data, JointKind, JointSpec, LimitPolicy, Transform, forward_accelerations,
-    forward_kinematics, forward_kinematics_incremental,
+    Chain, ChainBuilder, Data, LimitPolicy, Transform, forward_accelerations, forward_kinematics,
+    forward_kinematics_incremental,
 };
 use rand::Rng;
 
 const EPS: f64 = f64::EPSILON;
-
-/// Revolute seven times in ten, else prismatic or cylindrical.
-fn random_kind(rng: &mut impl Rng) -> JointKind {
-    match rng.random_range(0..10) {
-        0 => JointKind::Prismatic,
-        1 => JointKind::Cylindrical,
-        _ => JointKind::Revolute,
-    }
-}
-
-/// Joint `j{i}` of `kind` from `link{i-1}` to `link{i}`.
-fn joint_to_link(i: usize, kind: JointKind) -> JointSpec {
-    JointSpec::new(
-        format!("j{i}"),
-        kind,
-        format!("link{}", i - 1),
-        format!("link{i}"),
-    )
-}
 
 /// A random chain of `n` joints in the axis form: random rotations and translations of length
 /// `length(i)` between joints, random unit axes (or `axis(i)` when given), revolute, prismatic and
@@ -78,28 +59,6 @@ fn random_chain(
         };
         b.link(format!("link{i}"));
         b.joint(joint_to_link(i, kind).with_origin(origin).with_axis(a));
-    }
-    b.build().unwrap()
-}
-
-/// A random chain of `n` standard DH rows (`Rz(θ) Tz(d) Tx(a) Rx(α)`, the joint at its parent's
-/// origin on the parent's z axis): a and d up to 0.3 m, random α, θ and d offsets, revolute,
-/// prismatic and cylindrical joints.
-fn random_standard_dh_chain(n: usize, seed: u64) -> Chain {
-    let mut rng = rng(seed);
-    let mut b = ChainBuilder::new(format!("dh{n}"));
-    b.link("link0");
-    for i in 1..=n {
-        let kind = random_kind(&mut rng);
-        let (a, d) = (0.3 * rng.random::<f64>(), 0.3 * rng.random::<f64>());
-        let alpha = rng.random::<f64>() * 6.0 - 3.0;
-        let theta = rng.random::<f64>() * 6.0 - 3.0;
-        b.link(format!("link{i}"));
-        b.joint(
-            joint_to_link(i, kind)
-                .with_offsets(theta, d)
-                .with_post(Transform::from_xyz_rpy([a, 0.0, 0.0], [alpha, 0.0, 0.0])),
-        );
     }
     b.build().unwrap()
 }

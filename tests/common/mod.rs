@@ -2,7 +2,11 @@
 //! (see its README), turned into chains and joint vectors.
 #![allow(dead_code)]
 
-use kinechain::{Chain, Data, LimitPolicy, Transform, forward_accelerations, forward_kinematics};
+use kinechain::{
+    Chain, ChainBuilder, Data, JointKind, JointSpec, LimitPolicy, Transform, forward_accelerations,
+    forward_kinematics,
+};
+use rand::Rng;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -421,4 +425,45 @@ pub fn limit_probes(limits: &kinechain::Limits) -> [f64; 7] {
         f64::INFINITY,
         f64::NEG_INFINITY,
     ]
+}
+
+/// Revolute seven times in ten, else prismatic or cylindrical.
+pub fn random_kind(rng: &mut impl rand::Rng) -> JointKind {
+    match rng.random_range(0..10) {
+        0 => JointKind::Prismatic,
+        1 => JointKind::Cylindrical,
+        _ => JointKind::Revolute,
+    }
+}
+
+/// Joint `j{i}` of `kind` from `link{i-1}` to `link{i}`.
+pub fn joint_to_link(i: usize, kind: JointKind) -> JointSpec {
+    JointSpec::new(
+        format!("j{i}"),
+        kind,
+        format!("link{}", i - 1),
+        format!("link{i}"),
+    )
+}
+
+/// A random chain of `n` standard DH rows (`Rz(θ) Tz(d) Tx(a) Rx(α)`, the joint at its parent's
+/// origin on the parent's z axis): a and d up to 0.3 m, random α, θ and d offsets, revolute,
+/// prismatic and cylindrical joints.
+pub fn random_standard_dh_chain(n: usize, seed: u64) -> Chain {
+    let mut rng = rng(seed);
+    let mut b = ChainBuilder::new(format!("dh{n}"));
+    b.link("link0");
+    for i in 1..=n {
+        let kind = random_kind(&mut rng);
+        let (a, d) = (0.3 * rng.random::<f64>(), 0.3 * rng.random::<f64>());
+        let alpha = rng.random::<f64>() * 6.0 - 3.0;
+        let theta = rng.random::<f64>() * 6.0 - 3.0;
+        b.link(format!("link{i}"));
+        b.joint(
+            joint_to_link(i, kind)
+                .with_offsets(theta, d)
+                .with_post(Transform::from_xyz_rpy([a, 0.0, 0.0], [alpha, 0.0, 0.0])),
+        );
+    }
+    b.build().unwrap()
 }
