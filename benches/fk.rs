@@ -175,67 +175,69 @@ fn naive_baseline(c: &mut Criterion) {
 
 /// Batches of 4 096 configurations (`fk/batch/...`, where waking the second thread is a visible
 /// part of a 150 µs call) and of 65 536 (`fk/batch_large/...`, where the threads' scaling is
-/// measured: the frames of all links then no longer fit the cache); criterion reports time per
-/// batch and configurations per second (`thrpt`).
+/// measured: the frames of all links then no longer fit the cache), and 512 configurations of a
+/// 50-joint chain (`fk/batch_long/snake50`: the pool is used from 20 000 joint evaluations, so a
+/// long chain is split over the threads at a few hundred configurations); criterion reports time
+/// per batch and configurations per second (`thrpt`).
 fn batches(c: &mut Criterion) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (name, file) in robots() {
+        let chain = Chain::from_file(root.join(file)).unwrap();
+        for (group_name, n) in [("batch", 4096), ("batch_large", 65536)] {
+            batch_group(c, &format!("fk/{group_name}/{name}"), &chain, n);
+        }
+    }
+    let snake = Chain::from_file(root.join("robots/snake50.yaml")).unwrap();
+    batch_group(c, "fk/batch_long/snake50", &snake, 512);
+}
+
+/// One thread and the pool, all links and the end link only, for `n` configurations of `chain`.
+fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
     use kinechain::batch::{
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to,
     };
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for ((name, file), (group_name, n)) in robots()
-        .into_iter()
-        .flat_map(|robot| [(robot, ("batch", 4096)), (robot, ("batch_large", 65536))])
-    {
-        let chain = Chain::from_file(root.join(file)).unwrap();
-        let qs: Vec<f64> = configurations(&chain, n, 2).concat();
-        let mut data = BatchData::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
-        let mut group = c.benchmark_group(format!("fk/{group_name}/{name}"));
-        group.throughput(Throughput::Elements(n as u64));
-        if n > 4096 {
-            group.sample_size(20);
-        }
-        group.bench_function("1_thread", |b| {
-            b.iter(|| {
-                black_box(
-                    forward_kinematics_batch(&chain, &mut data, black_box(&qs))
-                        .unwrap()
-                        .len(),
-                )
-            })
-        });
-        group.bench_function("all_threads", |b| {
-            b.iter(|| {
-                black_box(
-                    forward_kinematics_batch_par(&chain, &mut data, black_box(&qs))
-                        .unwrap()
-                        .len(),
-                )
-            })
-        });
-        // Only the end link's pose, per configuration.
-        let end = chain.end_link();
-        for (id, parallel) in [("end_link_1_thread", false), ("end_link_all_threads", true)] {
-            group.bench_function(id, |b| {
-                b.iter(|| {
-                    black_box(
-                        forward_kinematics_batch_to(
-                            &chain,
-                            &mut data,
-                            black_box(&qs),
-                            end,
-                            parallel,
-                        )
-                        .unwrap()
-                        .len(),
-                    )
-                })
-            });
-        }
-        group.finish();
+    let qs: Vec<f64> = configurations(chain, n, 2).concat();
+    let mut data = BatchData::new(chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut group = c.benchmark_group(group_id);
+    group.throughput(Throughput::Elements(n as u64));
+    if n > 4096 {
+        group.sample_size(20);
     }
+    group.bench_function("1_thread", |b| {
+        b.iter(|| {
+            black_box(
+                forward_kinematics_batch(chain, &mut data, black_box(&qs))
+                    .unwrap()
+                    .len(),
+            )
+        })
+    });
+    group.bench_function("all_threads", |b| {
+        b.iter(|| {
+            black_box(
+                forward_kinematics_batch_par(chain, &mut data, black_box(&qs))
+                    .unwrap()
+                    .len(),
+            )
+        })
+    });
+    // Only the end link's pose, per configuration.
+    let end = chain.end_link();
+    for (id, parallel) in [("end_link_1_thread", false), ("end_link_all_threads", true)] {
+        group.bench_function(id, |b| {
+            b.iter(|| {
+                black_box(
+                    forward_kinematics_batch_to(chain, &mut data, black_box(&qs), end, parallel)
+                        .unwrap()
+                        .len(),
+                )
+            })
+        });
+    }
+    group.finish();
 }
 
 /// `n` rounds of eight independent multiply–add chains: arithmetic with no memory traffic and no
