@@ -195,7 +195,7 @@ fn batches(c: &mut Criterion) {
 fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
     use kinechain::batch::{
-        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
+        BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to,
     };
     let qs: Vec<f64> = configurations(chain, n, 2).concat();
@@ -206,24 +206,17 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     if n > 4096 {
         group.sample_size(20);
     }
-    group.bench_function("1_thread", |b| {
-        b.iter(|| {
-            black_box(
-                forward_kinematics_batch(chain, &mut data, black_box(&qs))
-                    .unwrap()
-                    .len(),
-            )
-        })
-    });
-    group.bench_function("all_threads", |b| {
-        b.iter(|| {
-            black_box(
-                forward_kinematics_batch_par(chain, &mut data, black_box(&qs))
-                    .unwrap()
-                    .len(),
-            )
-        })
-    });
+    type AllLinks =
+        for<'a> fn(&'a Chain, &'a mut BatchData, &[f64]) -> Result<BatchPoses<'a>, BatchError>;
+    let all_links: [(&str, AllLinks); 2] = [
+        ("1_thread", forward_kinematics_batch),
+        ("all_threads", forward_kinematics_batch_par),
+    ];
+    for (id, evaluate) in all_links {
+        group.bench_function(id, |b| {
+            b.iter(|| black_box(evaluate(chain, &mut data, black_box(&qs)).unwrap().len()))
+        });
+    }
     // Only the end link's pose, per configuration.
     let end = chain.end_link();
     for (id, parallel) in [("end_link_1_thread", false), ("end_link_all_threads", true)] {
