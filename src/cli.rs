@@ -1015,7 +1015,11 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
             ));
             let mut b = batch_data();
             methods.push((
-                format!("kinechain, batch, {} threads", rayon::current_num_threads()),
+                format!(
+                    "kinechain, batch of {}, {} threads",
+                    copies * n,
+                    rayon::current_num_threads()
+                ),
                 Box::new(move || {
                     black_box(
                         forward_kinematics_batch_par(chain, &mut b, black_box(big))
@@ -1030,7 +1034,8 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
                     (
                         &big,
                         format!(
-                            "kinechain, batch, end link only, {} threads",
+                            "kinechain, batch of {}, end link only, {} threads",
+                            copies * n,
                             rayon::current_num_threads()
                         ),
                         copies * n,
@@ -1116,14 +1121,21 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
         qs.len(),
         crate::isa().name()
     );
+    // The method column as wide as its longest name (the end link's name is part of one).
+    let width = methods
+        .iter()
+        .map(|(m, _, _)| m.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(48);
     text.push_str(&format!(
-        "{:<48} {:>12} {:>10}\n",
+        "{:<width$} {:>12} {:>10}\n",
         "method", "ns/config", "vs k"
     ));
     for (i, (method, _, _)) in methods.iter().enumerate() {
         let ns = timings.median(i);
         let ratio = k.map_or("-".to_string(), |k| format!("{:.1}x", timings.ratio(k, i)));
-        text.push_str(&format!("{method:<48} {ns:>12.1} {ratio:>10}\n"));
+        text.push_str(&format!("{method:<width$} {ns:>12.1} {ratio:>10}\n"));
     }
     text.push_str(
         "times: medians of 7 rounds, the methods run in alternation; \"vs k\": median of the ratios within a round\n",

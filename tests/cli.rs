@@ -370,6 +370,16 @@ fn bench_prints_times_ratios_and_errors() {
         .and_then(|s| s.trim().parse().ok())
         .unwrap();
     assert!(ulp < 8.0, "{text}");
+    // The two-thread rows name their batch, large enough for the pool: twice the threshold on the
+    // path of the end link (a finger: seven arm joints and its own).
+    let size: usize = text
+        .split("batch of ")
+        .nth(1)
+        .and_then(|s| s.split(',').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    assert!(size * 8 >= 2 * kinechain::batch::PARALLEL_WORK, "{text}");
+    assert_eq!(size % 4, 0, "whole copies of the 4 configurations: {text}");
     let out = kinechain(&[
         "bench",
         "robots/cylindrical.yaml",
