@@ -432,8 +432,9 @@ pub fn forward_kinematics_batch_to<'a>(
     data.link_frames.resize(chunks, zero);
     let path = &data.path;
     if parallel {
-        // Blocks of fewer chunks when a block each would leave a thread idle (a long chain).
-        let per_item = (chunks / 4).clamp(1, BLOCK);
+        // Groups of fewer chunks than a block when blocks would give a thread fewer than two
+        // (a long chain's batch of a few dozen configurations).
+        let per_item = (chunks / (2 * rayon::current_num_threads())).clamp(1, BLOCK);
         let all_ok = par_chunks_checked(
             chain,
             data.limit_policy,

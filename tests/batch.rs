@@ -148,7 +148,8 @@ fn one_link_batches_equal_the_full_batch() {
 fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
     let chain = random_standard_dh_chain(300, 8);
     let mut rng = rng(8);
-    // 69 configurations: 20 700 joints, nine chunks (the last partial), groups of two.
+    // 69 configurations: 20 700 joints, nine chunks (the last partial), in groups of two on two
+    // threads (of one on more).
     let qs: Vec<f64> = (0..69).flat_map(|_| random_q(&chain, &mut rng)).collect();
     let mut data = [(); 3].map(|()| BatchData::new(&chain));
     let [one, all, path] = &mut data;
