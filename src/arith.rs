@@ -29,8 +29,11 @@ pub(crate) trait Arith: Copy {
 /// entry by entry and bit for bit, as the scalar operation of the owning [`Arith`].
 pub(crate) trait Col: Copy {
     fn load(v: &[f64; 4]) -> Self;
-    /// The first three entries.
-    fn store3(self, out: &mut [f64; 3]);
+    /// The frame of padded columns `[r0, r1, r2, p]` written as its twelve entries in that order
+    /// (the first three of each column), in whole-vector stores: a caller's copy of the result
+    /// in 16-byte pieces then reads each piece from one store (a load that spans two stores
+    /// waits for both to reach the cache, which four 3-entry stores caused on every copy).
+    fn store_frame(frame: [Self; 4], out: &mut [f64; 12]);
     /// All four entries.
     fn store(self, out: &mut [f64; 4]);
     fn splat(x: f64) -> Self;
@@ -129,8 +132,10 @@ impl<A: Arith> Col for Portable<A> {
         Portable(*v, std::marker::PhantomData)
     }
     #[inline(always)]
-    fn store3(self, out: &mut [f64; 3]) {
-        out.copy_from_slice(&self.0[..3]);
+    fn store_frame(frame: [Self; 4], out: &mut [f64; 12]) {
+        for (column, entries) in frame.iter().zip(out.chunks_exact_mut(3)) {
+            entries.copy_from_slice(&column.0[..3]);
+        }
     }
     #[inline(always)]
     fn store(self, out: &mut [f64; 4]) {
@@ -221,13 +226,28 @@ impl Col for Avx {
         Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
     }
     #[inline(always)]
-    fn store3(self, out: &mut [f64; 3]) {
-        use std::arch::x86_64::{
-            _mm_store_sd, _mm_storeu_pd, _mm256_castpd256_pd128, _mm256_extractf128_pd,
-        };
+    fn store_frame([r0, r1, r2, p]: [Self; 4], out: &mut [f64; 12]) {
+        use std::arch::x86_64::_mm256_storeu_pd as store;
+        use std::arch::x86_64::{_mm256_blend_pd as blend, _mm256_permute4x64_pd as permute};
+        // Three vectors of four entries, each a blend of two permuted columns (the compiler
+        // chooses the shuffles: six on AVX-512, where it has two-source permutes).
         unsafe {
-            _mm_storeu_pd(out.as_mut_ptr(), _mm256_castpd256_pd128(self.0));
-            _mm_store_sd(out.as_mut_ptr().add(2), _mm256_extractf128_pd::<1>(self.0));
+            // [r0x r0y r0z r1x]
+            let a = blend::<0b1000>(r0.0, permute::<0b00_00_00_00>(r1.0));
+            // [r1y r1z r2x r2y]
+            let b = blend::<0b1100>(
+                permute::<0b00_00_10_01>(r1.0),
+                permute::<0b01_00_00_00>(r2.0),
+            );
+            // [r2z px py pz]
+            let c = blend::<0b0001>(
+                permute::<0b10_01_00_00>(p.0),
+                permute::<0b00_00_00_10>(r2.0),
+            );
+            let out = out.as_mut_ptr();
+            store(out, a);
+            store(out.add(4), b);
+            store(out.add(8), c);
         }
     }
     #[inline(always)]

@@ -6,7 +6,7 @@
 //! configuration, to the last bit on the same instruction set.
 
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZSteps};
+use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, ZSteps};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::joint::Term;
@@ -275,10 +275,7 @@ fn lane_pose<'f>(
         column(&f.r[2]),
         column(&f.p),
     ];
-    match l.offset {
-        Placement::Identity => padded::transform(&body),
-        offset => padded::link_pose(&body, &offset),
-    }
+    padded::link_pose(&body, &l.offset)
 }
 
 /// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
@@ -481,7 +478,7 @@ fn chunk_poses_generic<A: Arith>(
         for (k, body) in chain.bodies.iter().enumerate() {
             let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
             f = match body.parent {
-                Some(p) if p + 1 == k => {
+                _ if body.follows_previous => {
                     kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
                 }
                 Some(p) => {

@@ -489,6 +489,9 @@ impl Placement {
 pub(crate) struct Body {
     /// Parent body, or `None` when the joint hangs from a link fixed to the world.
     pub(crate) parent: Option<usize>,
+    /// The parent is the body just before this one in the chain's order (set when the chain is
+    /// built): the kernels then take its frame from registers, testing one flag.
+    pub(crate) follows_previous: bool,
     /// Parent body frame (or world) to joint frame, fixed joints folded in.
     pub(crate) pre: Placement,
     pub(crate) motion: Motion,
@@ -694,6 +697,7 @@ impl Body {
         let about_z = motion.axis == crate::joint::Axis::Z;
         Body {
             parent,
+            follows_previous: false,
             pre,
             motion,
             post,
@@ -1448,13 +1452,16 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         }
 
         let body = bodies.len();
-        bodies.push(Body::new(
-            carrier,
-            compose(offset, origin),
-            Motion::new(Axis::from_unit(axis), theta, d),
-            post,
-            new_joint[j],
-        ));
+        bodies.push(Body {
+            follows_previous: carrier.is_some() && carrier == body.checked_sub(1),
+            ..Body::new(
+                carrier,
+                compose(offset, origin),
+                Motion::new(Axis::from_unit(axis), theta, d),
+                post,
+                new_joint[j],
+            )
+        });
         link_carrier[child] = (Some(body), Placement::Identity);
 
         // Limits apply to the joint's own coordinate: q for an independent joint, the implied
@@ -1703,6 +1710,22 @@ mod tests {
         assert!(!tiago.bodies.iter().all(Body::in_place));
         // Seven sines for seven turning joints: one vector of lanes.
         assert_eq!(panda.theta_gather.len(), 1);
+        // The flag the kernels test instead of the parent's index: set on every body whose
+        // parent comes just before it, and on no other (the Panda's second finger hangs from the
+        // hand like the first; TIAGo's tree branches too).
+        for chain in [&panda, &ur5, &tiago] {
+            for (k, body) in chain.bodies.iter().enumerate() {
+                let previous = k.checked_sub(1).is_some_and(|p| body.parent == Some(p));
+                assert_eq!(body.follows_previous, previous, "{} body {k}", chain.name());
+            }
+        }
+        assert!(!panda.bodies[8].follows_previous && panda.bodies[7].follows_previous);
+        assert!(
+            tiago
+                .bodies
+                .iter()
+                .any(|b| b.parent.is_some() && !b.follows_previous)
+        );
     }
 
     #[test]

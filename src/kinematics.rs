@@ -134,13 +134,8 @@ impl<'a> Poses<'a> {
         let l = self.chain.link(link);
         match l.body {
             None => l.offset.to_transform(),
-            Some(b) => {
-                let body = &self.data.world_from_body[b];
-                match l.offset {
-                    Placement::Identity => padded::transform(body),
-                    offset => padded::link_pose(body, &offset),
-                }
-            }
+            // (Also for an identity offset: `link_pose` writes the result in whole vectors.)
+            Some(b) => padded::link_pose(&self.data.world_from_body[b], &l.offset),
         }
     }
 
@@ -850,20 +845,28 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -
     compose_prefix::<A>(chain, data, q, n)
 }
 
+/// `a` and `b` cut to the shorter one's length (`data.sin` and `data.cos`, of one length), so
+/// that one comparison checks an index into both.
+#[inline(always)]
+fn same_length<'a>(a: &'a [f64], b: &'a [f64]) -> (&'a [f64], &'a [f64]) {
+    let m = a.len().min(b.len());
+    (&a[..m], &b[..m])
+}
+
 /// [`poses_prefix`] once the trigonometry of bodies `0..n` is in `data`.
 #[inline(always)]
 fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
     // Sliced to `n` first, so that indexing by `k < n` needs no bounds checks.
     let frames = &mut data.world_from_body[..n];
-    let slots = &chain.trig_slot[..n];
+    let (bodies, slots) = (&chain.bodies[..n], &chain.trig_slot[..n]);
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     let mut f = Frame4::<A::Col>::identity();
-    for (k, body) in chain.bodies[..n].iter().enumerate() {
+    for (k, (body, &slot)) in bodies.iter().zip(slots).enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
         // (One call per case, so that the frame is never reached through an optional pointer.)
-        let slot = slots[k];
-        let sin_cos = (data.sin[slot], data.cos[slot]);
+        let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
-            Some(p) if p + 1 == k => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
+            _ if body.follows_previous => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
             Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
             None => padded::pose_step::<A>(None, body, q, sin_cos),
         };
@@ -904,11 +907,12 @@ fn poses_path_generic<A: Arith>(
         None => Frame4::identity(),
     };
     let frames = &mut data.world_from_body;
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     for &k in data.path.iter().rev() {
         // Each next body's parent is the previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
         let slot = chain.trig_slot[k];
-        let sin_cos = (data.sin[slot], data.cos[slot]);
+        let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
             Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
             None => padded::pose_step::<A>(None, body, q, sin_cos),
@@ -943,7 +947,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             // The frame just computed stays in registers when it is the parent's.
             let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
             f = match body.parent {
-                Some(p) if p + 1 == k && previous_done => {
+                _ if body.follows_previous && previous_done => {
                     padded::pose_step::<A>(Some(&f), body, q, sin_cos)
                 }
                 Some(p) => {
@@ -974,9 +978,10 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
         Some(p) => Frame4::load(&frames[p]),
         None => Frame4::identity(),
     };
-    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
-        let slot = chain.trig_slot[k];
-        let sin_cos = (data.sin[slot], data.cos[slot]);
+    let (sin, cos) = same_length(&data.sin, &data.cos);
+    let bodies = chain.bodies.iter().zip(&chain.trig_slot);
+    for (k, (body, &slot)) in bodies.enumerate().skip(first) {
+        let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
             Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
             None => padded::pose_step::<A>(None, body, q, sin_cos),
@@ -1005,7 +1010,7 @@ fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first
         let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
         // The parent's frame stays in registers when it was just computed.
         f = match body.parent {
-            Some(p) if p + 1 == k && k > first => {
+            _ if body.follows_previous && k > first => {
                 padded::pose_step::<A>(Some(&f), body, q, sin_cos)
             }
             Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
@@ -1028,13 +1033,14 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     let n = chain.bodies.len();
     let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
     let slots = &chain.trig_slot[..n];
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
-    for (k, body) in chain.bodies.iter().enumerate() {
+    for (k, (body, &slot)) in chain.bodies.iter().zip(slots).enumerate() {
         // The previous body's state stays in registers; only branches read a parent from memory.
         // (One call per case, as in `poses_prefix`.)
-        let sin_cos = (data.sin[slots[k]], data.cos[slots[k]]);
+        let sin_cos = (sin[slot], cos[slot]);
         previous = match body.parent {
-            Some(p) if p + 1 == k => {
+            _ if body.follows_previous => {
                 padded::rates_step::<A, ACC>(Some(&previous), body, q, q_dot, q_ddot, sin_cos)
             }
             Some(p) => {

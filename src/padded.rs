@@ -94,11 +94,7 @@ impl<C: Col> Frame4<C> {
     #[inline(always)]
     pub(crate) fn to_transform(self) -> Transform {
         let mut t = Transform::IDENTITY;
-        let [r0, r1, r2, p] = self.0;
-        r0.store3(&mut t.r[0]);
-        r1.store3(&mut t.r[1]);
-        r2.store3(&mut t.r[2]);
-        p.store3(&mut t.p);
+        C::store_frame(self.0, t.entries_mut());
         t
     }
 }
@@ -843,6 +839,30 @@ mod tests {
         if crate::arith::isa() != crate::arith::Isa::Baseline {
             check_quarter_turns::<Fused>();
         }
+    }
+
+    /// Whole-vector stores put every entry where a transform keeps it, on each column type and
+    /// through the dispatched reader (the instruction set this machine runs).
+    #[test]
+    fn frames_leave_the_registers_entry_for_entry() {
+        let mut t = Transform::IDENTITY;
+        for (i, x) in t.entries_mut().iter_mut().enumerate() {
+            *x = (i + 1) as f64;
+        }
+        assert_eq!(t.r[1], [4.0, 5.0, 6.0]);
+        assert_eq!(t.p, [10.0, 11.0, 12.0]);
+        let out = |mut t: Transform| t.entries_mut().to_vec();
+        assert_eq!(
+            out(Frame4::<<Separate as Arith>::Col>::load(&stored(&t)).to_transform()),
+            out(t)
+        );
+        if crate::arith::isa() != crate::arith::Isa::Baseline {
+            assert_eq!(
+                out(Frame4::<<Fused as Arith>::Col>::load(&stored(&t)).to_transform()),
+                out(t)
+            );
+        }
+        assert_eq!(out(link_pose(&stored(&t), &Placement::Identity)), out(t));
     }
 
     #[test]

@@ -24,12 +24,17 @@ use std::ops::Mul;
 /// approx::assert_relative_eq!(c.rotation()[(1, 0)], 1.0);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Transform {
     /// Rotation columns: `r[j]` is column `j` of the rotation matrix.
     pub(crate) r: [[f64; 3]; 3],
     /// Translation (the origin of the child frame in the parent frame).
     pub(crate) p: [f64; 3],
 }
+
+// `repr(C)`: `r` then `p`, twelve `f64` without padding (what `entries_mut` relies on).
+const _: () = assert!(std::mem::size_of::<Transform>() == 12 * std::mem::size_of::<f64>());
+const _: () = assert!(std::mem::align_of::<Transform>() == std::mem::align_of::<f64>());
 
 /// A matrix handed to [`Transform::try_from_homogeneous`] that is not a rigid transform.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -77,6 +82,14 @@ impl Transform {
 
     /// Tolerance on `|RᵀR − I|` used when a file gives a transform as a matrix.
     pub const RIGID_TOLERANCE: f64 = 1e-9;
+
+    /// The twelve entries in memory order (the rotation columns, then the translation), for the
+    /// kernels' whole-vector stores.
+    pub(crate) fn entries_mut(&mut self) -> &mut [f64; 12] {
+        // SAFETY: `repr(C)` lays out `r` then `p`, twelve `f64` without padding and with the
+        // alignment of `f64` (both asserted above); the borrow of `self` covers the array's.
+        unsafe { &mut *std::ptr::from_mut(self).cast::<[f64; 12]>() }
+    }
 
     /// Builds a transform from a rotation matrix and a translation, without checking that the
     /// matrix is a rotation (see [`Transform::try_from_homogeneous`] for a checked version).
