@@ -498,6 +498,7 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
 /// approx::assert_relative_eq!(tip.translation().x, 9.0);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
+#[inline]
 pub fn forward_kinematics<'a>(
     chain: &'a Chain,
     data: &'a mut Data,
@@ -629,6 +630,7 @@ fn first_difference(a: &[f64], b: &[f64]) -> usize {
 ///
 /// # Panics
 /// If `data` was created for another chain, or `link` comes from another chain with more links.
+#[inline]
 pub fn forward_kinematics_to(
     chain: &Chain,
     data: &mut Data,
@@ -661,6 +663,7 @@ pub fn forward_kinematics_to(
 ///
 /// # Panics
 /// If `data` was created for another chain.
+#[inline]
 pub fn forward_velocities<'a>(
     chain: &'a Chain,
     data: &'a mut Data,
@@ -694,6 +697,7 @@ pub fn forward_velocities<'a>(
 ///
 /// # Panics
 /// If `data` was created for another chain.
+#[inline]
 pub fn forward_accelerations<'a>(
     chain: &'a Chain,
     data: &'a mut Data,
