@@ -71,6 +71,10 @@ enum Command {
         /// Random configurations (within the joint limits) to time and check.
         #[arg(long, default_value_t = 64)]
         configurations: usize,
+        /// The link that every method reads and the one-link methods evaluate up to (default:
+        /// the link farthest from the base).
+        #[arg(long, value_name = "NAME")]
+        link: Option<String>,
     },
 }
 
@@ -281,7 +285,8 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
             robot,
             level,
             configurations,
-        } => bench(&robot, level, configurations.max(1), out),
+            link,
+        } => bench(&robot, level, configurations.max(1), link.as_deref(), out),
         Command::Convert { robot, output } => {
             let chain = load(&robot)?;
             let text = crate::convert::to_urdf(&chain)?;
@@ -896,7 +901,13 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
 /// call evaluates.
 type Method<'a> = (String, Box<dyn FnMut() + 'a>, usize);
 
-fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<(), CliError> {
+fn bench(
+    path: &PathBuf,
+    level: Level,
+    n: usize,
+    link: Option<&str>,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     use crate::batch::{
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to,
@@ -911,7 +922,10 @@ fn bench(path: &PathBuf, level: Level, n: usize, out: &mut dyn Write) -> Result<
         .map(|q| q.iter().map(|x| 0.5 * x.sin()).collect())
         .collect();
     let all: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
-    let end = chain.end_link();
+    let end = match link {
+        Some(name) => chain.link_id(name)?,
+        None => chain.end_link(),
+    };
     let links = chain.links().len();
     // Every method has its own buffers, so that the methods can be timed in alternation.
     let data = || {

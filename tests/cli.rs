@@ -380,6 +380,20 @@ fn bench_prints_times_ratios_and_errors() {
         .unwrap();
     assert!(size * 8 >= 2 * kinechain::batch::PARALLEL_WORK, "{text}");
     assert_eq!(size % 4, 0, "whole copies of the 4 configurations: {text}");
+    // Another link than the farthest one, and a name the robot does not have.
+    let out = kinechain(&[
+        "bench",
+        "robots/panda.urdf",
+        "--configurations",
+        "2",
+        "--link",
+        "panda_hand_tcp",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("end link panda_hand_tcp only"), "{text}");
+    let m = error(&["bench", "robots/panda.urdf", "--link", "hand"]);
+    assert!(m.contains("no link named 'hand'"), "{m}");
     let out = kinechain(&[
         "bench",
         "robots/cylindrical.yaml",
