@@ -203,3 +203,90 @@ fn every_level_gives_the_same_poses() {
         }
     }
 }
+
+/// Fixed joints are folded into their neighbours when the chain is built: an arm with four fixed
+/// frames between each pair of joints (and after the last) compiles to one body per moving joint,
+/// the units the evaluation works in, like the same arm without them; every fixed frame is where
+/// the product of the placements from the base puts it, and reading it is the only work it adds.
+#[test]
+fn fixed_frames_are_folded_at_load_time() {
+    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    let placement = |i: usize| {
+        let x = i as f64;
+        Transform::from_xyz_rpy(
+            [0.1 + 0.01 * x, -0.02 * x, 0.05],
+            [0.3 - 0.1 * x, 0.2, 0.05 * x],
+        )
+    };
+    let mut builder = ChainBuilder::new("folded");
+    builder.link("base");
+    let mut parent = "base".to_string();
+    let mut fixed = Vec::new();
+    for j in 0..3 {
+        let child = format!("link{j}");
+        builder.link(child.clone()).joint(
+            JointSpec::new(
+                format!("j{j}"),
+                JointKind::Continuous,
+                parent,
+                child.clone(),
+            )
+            .with_origin(placement(j))
+            .with_axis([0.0, 1.0, 1.0]),
+        );
+        parent = child;
+        for f in 0..4 {
+            let child = format!("frame{j}_{f}");
+            builder.link(child.clone()).joint(
+                JointSpec::new(
+                    format!("fixed{j}_{f}"),
+                    JointKind::Fixed,
+                    parent,
+                    child.clone(),
+                )
+                .with_origin(placement(10 + 4 * j + f)),
+            );
+            fixed.push((child.clone(), 10 + 4 * j + f));
+            parent = child;
+        }
+    }
+    let chain = builder.build().unwrap();
+    assert_eq!(chain.joints().len(), 15);
+    assert_eq!(chain.moving_joint_count(), 3);
+    let q = [0.4, -1.1, 2.0];
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+    // The product of the placements and joint motions from the base, in the order of the file.
+    let mut expected = Transform::IDENTITY;
+    let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(0.0, 1.0, 1.0));
+    for j in 0..3 {
+        let turn = nalgebra::Rotation3::from_axis_angle(&axis, q[j]);
+        let motion = Transform::from_parts(turn.matrix(), &nalgebra::Vector3::zeros());
+        expected = expected * placement(j) * motion;
+        assert_close(
+            &poses.world_from_link(chain.link_id(&format!("link{j}")).unwrap()),
+            &expected,
+        );
+        for (name, i) in fixed
+            .iter()
+            .filter(|(n, _)| n.starts_with(&format!("frame{j}_")))
+        {
+            expected = expected * placement(*i);
+            assert_close(
+                &poses.world_from_link(chain.link_id(name).unwrap()),
+                &expected,
+            );
+        }
+    }
+}
+
+/// Entry by entry within 1e-14 (the fold multiplies the placements in another order than the
+/// product above).
+fn assert_close(got: &Transform, want: &Transform) {
+    let (g, w) = (got.to_rows(), want.to_rows());
+    for (rg, rw) in g.iter().zip(&w) {
+        for (a, b) in rg.iter().zip(rw) {
+            assert!((a - b).abs() <= 1e-14, "{g:?}\nwant {w:?}");
+        }
+    }
+}
