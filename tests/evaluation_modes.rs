@@ -259,8 +259,8 @@ fn fixed_frames_are_folded_at_load_time() {
     // The product of the placements and joint motions from the base, in the order of the file.
     let mut expected = Transform::IDENTITY;
     let axis = nalgebra::Unit::new_normalize(nalgebra::Vector3::new(0.0, 1.0, 1.0));
-    for j in 0..3 {
-        let turn = nalgebra::Rotation3::from_axis_angle(&axis, q[j]);
+    for (j, &angle) in q.iter().enumerate() {
+        let turn = nalgebra::Rotation3::from_axis_angle(&axis, angle);
         let motion = Transform::from_parts(turn.matrix(), &nalgebra::Vector3::zeros());
         expected = expected * placement(j) * motion;
         assert_close(
