@@ -403,8 +403,32 @@ fn detect() -> Isa {
 /// compiled for AVX-512 or `$generic::<Fused>(args)` in one compiled for AVX2 (both with FMA),
 /// whichever [`isa`] selects, and
 /// `$generic::<Separate>(args)` on baseline x86-64. `$generic` must be `#[inline(always)]` so that
-/// its body is compiled with the caller's target features.
+/// its body is compiled with the caller's target features. With `avx2` before `fn`, AVX-512
+/// machines run the AVX2 variant too (for code on 256-bit columns only, where the AVX-512 build
+/// brings no wider vectors; the two give the same bits).
 macro_rules! fma_dispatch {
+    (avx2 $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx2,fma")]
+                fn with_avx2($($arg: $ty),*) $(-> $ret)? {
+                    $generic::<$crate::arith::Fused>($($arg),*)
+                }
+                match $crate::arith::isa() {
+                    // SAFETY: `isa()` reports AVX-512 and AVX2 only when the CPU has AVX2 and FMA.
+                    $crate::arith::Isa::Avx512 | $crate::arith::Isa::Avx2 => return unsafe { with_avx2($($arg),*) },
+                    $crate::arith::Isa::Baseline => {}
+                }
+            }
+            #[inline(never)]
+            fn baseline($($arg: $ty),*) $(-> $ret)? {
+                $generic::<$crate::arith::Separate>($($arg),*)
+            }
+            baseline($($arg),*)
+        }
+    };
     ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
