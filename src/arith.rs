@@ -407,29 +407,10 @@ fn detect() -> Isa {
 /// machines run the AVX2 variant too (for code on 256-bit columns only, where the AVX-512 build
 /// brings no wider vectors; the two give the same bits).
 macro_rules! fma_dispatch {
-    (avx2 $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
-        $(#[$meta])*
-        $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[cfg(target_arch = "x86_64")]
-            {
-                #[target_feature(enable = "avx2,fma")]
-                fn with_avx2($($arg: $ty),*) $(-> $ret)? {
-                    $generic::<$crate::arith::Fused>($($arg),*)
-                }
-                match $crate::arith::isa() {
-                    // SAFETY: `isa()` reports AVX-512 and AVX2 only when the CPU has AVX2 and FMA.
-                    $crate::arith::Isa::Avx512 | $crate::arith::Isa::Avx2 => return unsafe { with_avx2($($arg),*) },
-                    $crate::arith::Isa::Baseline => {}
-                }
-            }
-            #[inline(never)]
-            fn baseline($($arg: $ty),*) $(-> $ret)? {
-                $generic::<$crate::arith::Separate>($($arg),*)
-            }
-            baseline($($arg),*)
-        }
+    (avx2 $($function:tt)*) => {
+        $crate::arith::fma_dispatch!(@wide false, $($function)*);
     };
-    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
+    (@wide $wide:literal, $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
             #[cfg(target_arch = "x86_64")]
@@ -444,9 +425,11 @@ macro_rules! fma_dispatch {
                 }
                 match $crate::arith::isa() {
                     // SAFETY: `isa()` reports these features only when the CPU has them.
-                    $crate::arith::Isa::Avx512 => return unsafe { with_avx512($($arg),*) },
-                    // SAFETY: as above.
-                    $crate::arith::Isa::Avx2 => return unsafe { with_avx2($($arg),*) },
+                    $crate::arith::Isa::Avx512 if $wide => return unsafe { with_avx512($($arg),*) },
+                    // SAFETY: as above (AVX-512 is reported only with AVX2 and FMA).
+                    $crate::arith::Isa::Avx512 | $crate::arith::Isa::Avx2 => {
+                        return unsafe { with_avx2($($arg),*) }
+                    }
                     $crate::arith::Isa::Baseline => {}
                 }
             }
@@ -457,6 +440,9 @@ macro_rules! fma_dispatch {
             }
             baseline($($arg),*)
         }
+    };
+    ($($function:tt)*) => {
+        $crate::arith::fma_dispatch!(@wide true, $($function)*);
     };
 }
 pub(crate) use fma_dispatch;
