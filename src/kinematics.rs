@@ -643,17 +643,16 @@ pub fn forward_kinematics_to(
         check_q(chain, q, data.limit_policy)?;
         return Ok(l.offset.to_transform());
     };
-    let mut pose = Transform::IDENTITY;
     let done = match kernel_check(chain, q, data.limit_policy) {
-        Some(limits) => poses_path_admitted(chain, data, q, body, &l.offset, limits, &mut pose),
+        Some(limits) => poses_path_admitted(chain, data, q, body, limits),
         None => false,
     };
     if !done {
         check_q(chain, q, data.limit_policy)?;
-        pose = poses_path(chain, data, q, body, &l.offset);
+        poses_path(chain, data, q, body);
     }
     data.poses_valid = false;
-    Ok(pose)
+    Ok(padded::link_pose(&data.world_from_body[body], &l.offset))
 }
 
 /// Computes poses, angular velocities and origin velocities of every link.
@@ -816,21 +815,18 @@ fn poses_all_admitted_generic<A: Arith>(
     admitted
 }
 
-/// [`poses_path_generic`] into `pose` if `q` passes `limits`, as in
-/// [`poses_all_admitted_generic`].
+/// [`poses_path_generic`] if `q` passes `limits`, as in [`poses_all_admitted_generic`].
 #[inline(always)]
 fn poses_path_admitted_generic<A: Arith>(
     chain: &Chain,
     data: &mut Data,
     q: &[f64],
     body: usize,
-    offset: &Placement,
     limits: Option<&DenseLimits>,
-    pose: &mut Transform,
 ) -> bool {
     let admitted = admitted::<A>(q, limits);
     if admitted {
-        *pose = poses_path_generic::<A>(chain, data, q, body, offset);
+        poses_path_generic::<A>(chain, data, q, body);
     }
     admitted
 }
@@ -879,16 +875,13 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
     f
 }
 
-/// The pose `world_from_body · offset` of a link on `body`, evaluating only the bodies on the
-/// path from the base to `body` (see [`padded::link_pose`]).
+/// The frames of the bodies on the path from the base to `body`, and of no other, into
+/// `data.world_from_body`. The caller reads the link's pose from the last one with
+/// [`padded::link_pose`], as every other way of reading a pose does: ending the kernel with that
+/// composition and store instead, in its AVX-512 build, made a one-link call 5–10 ns slower than a
+/// full evaluation and a read of the same link on Zen 4 (a Panda finger).
 #[inline(always)]
-fn poses_path_generic<A: Arith>(
-    chain: &Chain,
-    data: &mut Data,
-    q: &[f64],
-    body: usize,
-    offset: &Placement,
-) -> Transform {
+fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
     let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
@@ -923,8 +916,6 @@ fn poses_path_generic<A: Arith>(
         };
         f.store(&mut frames[k]);
     }
-    padded::place::<A>(&mut f.0, offset);
-    f.to_transform()
 }
 
 #[inline(always)]
@@ -1112,9 +1103,9 @@ fn accelerations_generic<A: Arith>(
 }
 
 fma_dispatch!(fn poses_all(chain: &Chain, data: &mut Data, q: &[f64]) => poses_all_generic);
-fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement) -> Transform => poses_path_generic);
+fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize) => poses_path_generic);
 fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: Option<&DenseLimits>) -> bool => poses_all_admitted_generic);
-fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, offset: &Placement, limits: Option<&DenseLimits>, pose: &mut Transform) -> bool => poses_path_admitted_generic);
+fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, limits: Option<&DenseLimits>) -> bool => poses_path_admitted_generic);
 fma_dispatch!(
     /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
     /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for
