@@ -218,36 +218,45 @@ fn fixed_frames_are_folded_at_load_time() {
             [0.3 - 0.1 * x, 0.2, 0.05 * x],
         )
     };
+    // A joint from the last link added to a new one (the axis is ignored for fixed joints).
+    fn attach(
+        builder: &mut ChainBuilder,
+        parent: &mut String,
+        kind: JointKind,
+        (joint, child): (String, String),
+        origin: Transform,
+    ) {
+        builder.link(child.clone()).joint(
+            JointSpec::new(joint, kind, parent.clone(), child.clone())
+                .with_origin(origin)
+                .with_axis([0.0, 1.0, 1.0]),
+        );
+        *parent = child;
+    }
     let mut builder = ChainBuilder::new("folded");
     builder.link("base");
     let mut parent = "base".to_string();
     let mut fixed = Vec::new();
     for j in 0..3 {
-        let child = format!("link{j}");
-        builder.link(child.clone()).joint(
-            JointSpec::new(
-                format!("j{j}"),
-                JointKind::Continuous,
-                parent,
-                child.clone(),
-            )
-            .with_origin(placement(j))
-            .with_axis([0.0, 1.0, 1.0]),
+        let names = (format!("j{j}"), format!("link{j}"));
+        attach(
+            &mut builder,
+            &mut parent,
+            JointKind::Continuous,
+            names,
+            placement(j),
         );
-        parent = child;
         for f in 0..4 {
-            let child = format!("frame{j}_{f}");
-            builder.link(child.clone()).joint(
-                JointSpec::new(
-                    format!("fixed{j}_{f}"),
-                    JointKind::Fixed,
-                    parent,
-                    child.clone(),
-                )
-                .with_origin(placement(10 + 4 * j + f)),
+            let i = 10 + 4 * j + f;
+            let names = (format!("fixed{j}_{f}"), format!("frame{j}_{f}"));
+            attach(
+                &mut builder,
+                &mut parent,
+                JointKind::Fixed,
+                names,
+                placement(i),
             );
-            fixed.push((child.clone(), 10 + 4 * j + f));
-            parent = child;
+            fixed.push((parent.clone(), i));
         }
     }
     let chain = builder.build().unwrap();
