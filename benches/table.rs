@@ -7,7 +7,8 @@
 //! Timing: each method evaluates the 22 reference configurations in a loop lasting at least
 //! 100 ms; the methods of a robot run in alternation for seven rounds (`measure::Interleaved`),
 //! so that they share the machine's conditions. The time is the median over the rounds, divided
-//! by the number of configurations; "× k" is the median of the per-round ratios to `k`.
+//! by the number of configurations; "× k" is the median of the per-round ratios to `k` (which
+//! runs on the URDF models, and on the others as `kinechain convert` writes them).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -28,8 +29,7 @@ struct Row {
     method: String,
     robot: String,
     ns: f64,
-    /// How many times faster than `k` (URDF models) and than the naive product (DH models) in
-    /// the same rounds.
+    /// How many times faster than `k` and than the naive product (DH models) in the same rounds.
     vs_k: Option<f64>,
     vs_naive: Option<f64>,
     position: f64,
@@ -154,17 +154,39 @@ fn rows_for(path: &Path) -> Vec<Row> {
         repeat: 16,
     });
 
-    // The k crate (URDF models).
-    if reference["model"]["kind"] == "urdf" {
-        let robot = k::Chain::<f64>::from_urdf_file(
-            path.with_file_name(reference["model"]["file"].as_str().unwrap()),
-        )
-        .unwrap();
+    // The k crate: on the URDF models, and on the others as `kinechain convert` writes them (the
+    // links keep their names and the joint vector its order; a cylindrical joint becomes two
+    // joints, so k's joint names are looked up in the written model). Not for a model URDF
+    // cannot express (a prismatic joint without limits).
+    let text = (reference["model"]["kind"] != "urdf")
+        .then(|| kinechain::convert::to_urdf(chain).ok())
+        .flatten();
+    let written = text.map(|text| {
+        let file = std::env::temp_dir().join(format!(
+            "kinechain-table-{}-{}.urdf",
+            std::process::id(),
+            robot.replace('/', "-")
+        ));
+        std::fs::write(&file, &text).unwrap();
+        (file, kinechain::Chain::from_urdf_str(&text).unwrap())
+    });
+    let urdf = match &written {
+        Some((file, named)) => Some((file.clone(), named)),
+        None => (reference["model"]["kind"] == "urdf").then(|| {
+            let file = path.with_file_name(reference["model"]["file"].as_str().unwrap());
+            (file, chain)
+        }),
+    };
+    if let Some((file, named)) = urdf {
+        let robot = k::Chain::<f64>::from_urdf_file(&file).unwrap();
+        if written.is_some() {
+            let _ = std::fs::remove_file(&file);
+        }
         let joint_names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
         let kq: Vec<Vec<f64>> = qs
             .iter()
             .map(|q| {
-                chain
+                named
                     .positions_by_name(joint_names.iter().map(String::as_str), q)
                     .unwrap()
             })
@@ -189,7 +211,11 @@ fn rows_for(path: &Path) -> Vec<Row> {
             })
             .collect();
         methods.push(Method {
-            label: "k 0.32",
+            label: if written.is_some() {
+                "k 0.32, written as URDF"
+            } else {
+                "k 0.32"
+            },
             poses,
             call: Box::new(move || {
                 for q in &kq {
@@ -281,7 +307,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
     let items: Vec<usize> = methods.iter().map(|m| m.repeat * n).collect();
     let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.call as _).collect();
     let timings = Interleaved::run(Duration::from_millis(100), 7, &mut calls).per_item(&items);
-    let k = methods.iter().position(|m| m.label == "k 0.32");
+    let k = methods.iter().position(|m| m.label.starts_with("k 0.32"));
     let naive = methods
         .iter()
         .position(|m| m.label == "naive nalgebra Matrix4");

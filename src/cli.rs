@@ -61,7 +61,8 @@ enum Command {
         ignore_limits: bool,
     },
     /// Time per configuration of each evaluation mode, and its error against a high-precision
-    /// evaluation of the same model.
+    /// evaluation of the same model; the `k` crate in the same rounds, on the robot file or (DH
+    /// tables, the axis form) on the URDF `convert` writes.
     Bench {
         /// Robot file (.yaml/.yml DH table or .urdf).
         robot: PathBuf,
@@ -1081,8 +1082,8 @@ fn bench(
                 all_links(Some(crate::Isa::Baseline)),
                 n,
             ));
-            if let Some(k) = k_method(path, chain, qs) {
-                methods.push(("k 0.32, update_transforms".into(), k, n));
+            if let Some((label, k)) = k_method(path, chain, qs) {
+                methods.push((label, k, n));
             }
         }
         Level::Vel | Level::Acc => {
@@ -1161,28 +1162,53 @@ fn bench(
     write_line(out, &text)
 }
 
-/// One call of the `k` crate evaluating every configuration of `qs`, on a URDF it can load
-/// (mimic joints in its vector).
+/// One call of the `k` crate evaluating every configuration of `qs`, with the label of its row:
+/// on the robot file itself for a URDF, otherwise (a DH table, the axis form) on the URDF that
+/// `kinechain convert` writes for it, whose joint vector is the original's (`tests/convert.rs`
+/// checks that `k`'s link poses on it agree with the original's). `None` when `k` cannot load
+/// the model (mimic joints are in its joint vector).
 fn k_method<'a>(
     path: &std::path::Path,
     chain: &Chain,
     qs: &[Vec<f64>],
-) -> Option<Box<dyn FnMut() + 'a>> {
+) -> Option<(String, Box<dyn FnMut() + 'a>)> {
     use std::hint::black_box;
-    if crate::io::Format::from_path(path) != Some(crate::io::Format::Urdf) {
+    let (robot, written, label) =
+        if crate::io::Format::from_path(path) == Some(crate::io::Format::Urdf) {
+            let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
+            (robot, None, "k 0.32, update_transforms")
+        } else {
+            let text = crate::convert::to_urdf(chain).ok()?;
+            let written = Chain::from_urdf_str(&text).ok()?;
+            // Through a file: `k` parses URDF with another version of `urdf-rs`.
+            let file =
+                std::env::temp_dir().join(format!("kinechain-bench-{}.urdf", std::process::id()));
+            std::fs::write(&file, &text).ok()?;
+            let robot = k::Chain::<f64>::from_urdf_file(&file);
+            let _ = std::fs::remove_file(&file);
+            let robot = robot.ok()?;
+            (
+                robot,
+                Some(written),
+                "k 0.32, update_transforms, written as URDF",
+            )
+        };
+    // Joint names are looked up in the model k loaded (a cylindrical joint is two URDF joints).
+    let named = written.as_ref().unwrap_or(chain);
+    if named.dof() != chain.dof() {
         return None;
     }
-    let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
     let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
     let kq: Vec<Vec<f64>> = qs
         .iter()
-        .map(|q| chain.positions_by_name(names.iter().map(String::as_str), q))
+        .map(|q| named.positions_by_name(names.iter().map(String::as_str), q))
         .collect::<Result<_, _>>()
         .ok()?;
-    Some(Box::new(move || {
+    let call: Box<dyn FnMut() + 'a> = Box::new(move || {
         for q in &kq {
             robot.set_joint_positions_unchecked(black_box(q));
             black_box(robot.update_transforms());
         }
-    }))
+    });
+    Some((label.to_string(), call))
 }

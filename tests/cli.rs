@@ -394,6 +394,22 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(text.contains("end link panda_hand_tcp only"), "{text}");
     let m = error(&["bench", "robots/panda.urdf", "--link", "hand"]);
     assert!(m.contains("no link named 'hand'"), "{m}");
+    // A DH table: `k` runs on the URDF `convert` writes (a cylindrical joint is two URDF joints).
+    for robot in ["robots/ur5.yaml", "robots/cylindrical.yaml"] {
+        let out = kinechain(&["bench", robot, "--configurations", "2"]);
+        assert!(out.status.success(), "{robot}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        let k_row = text
+            .lines()
+            .find(|l| l.starts_with("k 0.32, update_transforms, written as URDF"))
+            .unwrap_or_else(|| panic!("no k row for {robot}:\n{text}"));
+        assert!(k_row.ends_with("1.0x"), "{k_row}");
+        let all_links = text
+            .lines()
+            .find(|l| l.starts_with("kinechain, all links"))
+            .unwrap();
+        assert!(all_links.ends_with('x'), "no ratio against k: {all_links}");
+    }
     let out = kinechain(&[
         "bench",
         "robots/cylindrical.yaml",
