@@ -991,8 +991,13 @@ fn bench(
                 }),
                 n,
             ));
-            if chain.dof() > 0 {
-                let last = chain.dof() - 1;
+            if let Some(last) = last_variable_to(chain, end)
+                && let Some((joint, component)) = chain.variables().nth(last)
+            {
+                let moved = match component {
+                    Some(c) => format!("{} {c}", chain.joint(joint).name()),
+                    None => chain.joint(joint).name().to_string(),
+                };
                 let moving: Vec<Vec<f64>> = qs
                     .iter()
                     .map(|q| {
@@ -1003,7 +1008,7 @@ fn bench(
                     .collect();
                 let mut d = data();
                 methods.push((
-                    "kinechain, incremental (last joint moves)".into(),
+                    format!("kinechain, incremental ({moved} moves)"),
                     Box::new(move || {
                         for q in &moving {
                             black_box(
@@ -1160,6 +1165,27 @@ fn bench(
         position / (reach * f64::EPSILON)
     ));
     write_line(out, &text)
+}
+
+/// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that
+/// reads one (on an arm with a gripper and the tool as `link`, the arm's last joint, not the
+/// gripper's). `None` if no joint moves `link`.
+fn last_variable_to(chain: &Chain, link: LinkId) -> Option<usize> {
+    let mut body = chain.link(link).body;
+    while let Some(b) = body {
+        let motion = &chain.bodies[b].motion;
+        let read = [motion.theta, motion.d]
+            .into_iter()
+            .filter_map(|t| match t {
+                crate::joint::Term::Var { index, .. } => Some(index),
+                crate::joint::Term::Const(_) => None,
+            });
+        if let Some(last) = read.max() {
+            return Some(last);
+        }
+        body = chain.bodies[b].parent;
+    }
+    None
 }
 
 /// One call of the `k` crate evaluating every configuration of `qs`, with the label of its row:

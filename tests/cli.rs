@@ -355,6 +355,7 @@ fn bench_prints_times_ratios_and_errors() {
     let text = String::from_utf8(out.stdout).unwrap();
     for needle in [
         "kinechain, all links",
+        "incremental (panda_finger_joint1 moves)",
         "batch",
         "k 0.32",
         "ulp of the",
@@ -392,6 +393,9 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("end link panda_hand_tcp only"), "{text}");
+    // The incremental row moves the last joint on the link's path: the arm's seventh joint for
+    // the tool, the gripper's for the default end link (a finger, checked above).
+    assert!(text.contains("incremental (panda_joint7 moves)"), "{text}");
     let m = error(&["bench", "robots/panda.urdf", "--link", "hand"]);
     assert!(m.contains("no link named 'hand'"), "{m}");
     // A DH table: `k` runs on the URDF `convert` writes (a cylindrical joint is two URDF joints).
