@@ -851,8 +851,10 @@ pub struct Chain {
     /// `turning_before[k]`: the number of bodies before body `k` whose θ varies (`k` up to the
     /// number of bodies).
     pub(crate) turning_before: Vec<usize>,
-    /// For each entry of `q`, the first body whose θ or d reads it (`usize::MAX` if none).
-    pub(crate) first_body_of_variable: Vec<usize>,
+    /// For each entry `i` of `q`, the first body whose θ or d reads entry `i` or a later one
+    /// (`usize::MAX` if none): when entry `i` is the first to change, no body before this one
+    /// moves.
+    pub(crate) first_body_from: Vec<usize>,
     /// For each entry of `q`: (joint, component name for cylindrical joints).
     variables: Vec<(usize, Option<&'static str>)>,
     pub(crate) limit_checks: Vec<LimitCheck>,
@@ -864,6 +866,10 @@ pub struct Chain {
     /// The number of leading bodies that form a serial chain (body `k` hangs from `k − 1`):
     /// the part of any body's path that needs no index list.
     pub(crate) serial_run: usize,
+    /// The first body from which the bodies to the end are few enough for the scalar update of
+    /// the last bodies (`kinematics::poses_tail`): at most four, of which at most two turn. A
+    /// body index `k` qualifies exactly when `k ≥ tail_start` (both counts shrink as `k` grows).
+    pub(crate) tail_start: usize,
     /// [`Chain::end_link`].
     end_link: LinkId,
     reach: f64,
@@ -1497,13 +1503,16 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         .take_while(|(k, b)| b.parent == k.checked_sub(1))
         .count();
     let serial = serial_run == bodies.len();
-    let mut first_body_of_variable = vec![usize::MAX; variables.len()];
+    let mut first_body_from = vec![usize::MAX; variables.len()];
     for (k, b) in bodies.iter().enumerate() {
         for t in [b.motion.theta, b.motion.d] {
             if let Term::Var { index, .. } = t {
-                first_body_of_variable[index] = first_body_of_variable[index].min(k);
+                first_body_from[index] = first_body_from[index].min(k);
             }
         }
+    }
+    for i in (1..first_body_from.len()).rev() {
+        first_body_from[i - 1] = first_body_from[i - 1].min(first_body_from[i]);
     }
     // θ is gathered only for the bodies whose θ varies, in body order: a body's slot in `sin`/`cos`.
     let turning: Vec<&Body> = bodies
@@ -1524,6 +1533,10 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         }
     }
     turning_before.push(count);
+    let n = bodies.len();
+    let tail_start = (0..=n)
+        .find(|&k| n - k <= 4 && count - turning_before[k] <= 2)
+        .unwrap_or(n);
     let theta_gather = turning
         .chunks(crate::kernel::LANES)
         .map(|chunk| {
@@ -1602,12 +1615,13 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         theta_gather,
         trig_slot,
         turning_before,
-        first_body_of_variable,
+        first_body_from,
         dense_limits: DenseLimits::new(&limit_checks, variables.len()),
         variables,
         limit_checks,
         serial,
         serial_run,
+        tail_start,
         reach,
         warnings: spec.warnings.clone(),
         source: spec.clone(),
@@ -1726,6 +1740,29 @@ mod tests {
                 .iter()
                 .any(|b| b.parent.is_some() && !b.follows_previous)
         );
+        // The tables of the incremental update, against their definitions.
+        for chain in [&panda, &ur5, &tiago] {
+            let n = chain.bodies.len();
+            for k in 0..=n {
+                let few = n - k <= 4 && chain.turning_before[n] - chain.turning_before[k] <= 2;
+                assert_eq!(k >= chain.tail_start, few, "{} body {k}", chain.name());
+            }
+            for (i, &first) in chain.first_body_from.iter().enumerate() {
+                let reads = |b: &Body, j: usize| {
+                    [b.motion.theta, b.motion.d]
+                        .iter()
+                        .any(|t| matches!(t, Term::Var { index, .. } if *index == j))
+                };
+                let want = (0..n)
+                    .find(|&k| (i..chain.dof()).any(|j| reads(&chain.bodies[k], j)))
+                    .unwrap_or(usize::MAX);
+                assert_eq!(first, want, "{} entry {i}", chain.name());
+            }
+        }
+        // On the Panda, moving the sixth or seventh arm joint updates a tail (their bodies and
+        // the two fingers: four bodies, two turning); the fifth does not.
+        assert_eq!(panda.tail_start, 5);
+        assert_eq!(panda.first_body_from[6], 6);
     }
 
     #[test]

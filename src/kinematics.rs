@@ -560,10 +560,10 @@ pub fn forward_kinematics_incremental<'a>(
     Ok(Poses { chain, data })
 }
 
-/// The first body reading an entry of `q` that differs (bit for bit) from the last evaluation's,
-/// or `usize::MAX`, and the index of the first such entry. Only those entries are checked: the
-/// others were checked then, under the same limit policy (changing the policy invalidates the
-/// poses).
+/// The first body that reads an entry of `q` differing (bit for bit) from the last evaluation's
+/// or a later entry (`usize::MAX` when none differs), and the index of the first entry that
+/// differs. Only the entries from there on are checked: the others were checked then, under the
+/// same limit policy (changing the policy invalidates the poses).
 ///
 /// # Errors
 /// As [`check_q`].
@@ -571,32 +571,20 @@ fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<(usize, usize)
     if q.len() != chain.dof() {
         check_values(chain, q, "q")?;
     }
-    let enforce = data.limit_policy == LimitPolicy::Enforce;
     let start = first_difference(q, &data.last_q);
-    if start == q.len() {
+    let Some(&first) = chain.first_body_from.get(start) else {
         return Ok((usize::MAX, start));
-    }
-    let mut first = usize::MAX;
-    let mut ok = true;
-    for (i, (x, last)) in (start..).zip(q[start..].iter().zip(&data.last_q[start..])) {
-        if x.to_bits() != last.to_bits() {
-            first = first.min(chain.first_body_of_variable[i]);
-            ok &= match (enforce, &chain.dense_limits) {
-                (true, Some(limits)) => limits.admits(i, *x),
-                (true, None) => {
-                    x.is_finite()
-                        && chain
-                            .limit_checks
-                            .iter()
-                            .filter(|c| c.index == i)
-                            .all(|c| c.limits.contains(c.value(*x)))
-                }
-                (false, _) => x.is_finite(),
-            };
+    };
+    let rest = &q[start..];
+    let ok = match (data.limit_policy, &chain.dense_limits) {
+        (LimitPolicy::Ignore, _) => rest.iter().all(|x| x.is_finite()),
+        (LimitPolicy::Enforce, Some(limits)) => {
+            (start..).zip(rest).all(|(i, &x)| limits.admits(i, x))
         }
-    }
+        (LimitPolicy::Enforce, None) => false,
+    };
     if !ok {
-        // Names the entry at fault.
+        // Decides, and names the entry at fault.
         check_q(chain, q, data.limit_policy)?;
     }
     Ok((first, start))
@@ -985,12 +973,13 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     }
 }
 
-/// Whether the bodies from `first` on are few enough for [`poses_tail`]: at most four, of which
-/// at most two turn (a sliding or fixed-θ body needs no `sin`/`cos`). In a tree they may include
-/// bodies that did not move; recomputing one gives the same frame, bit for bit.
+/// Whether the bodies from `first` on are few enough for [`poses_tail`] ([`Chain`]'s
+/// `tail_start`: at most four, of which at most two turn; a sliding or fixed-θ body needs no
+/// `sin`/`cos`). In a tree they may include bodies that did not move; recomputing one gives the
+/// same frame, bit for bit.
+#[inline(always)]
 fn is_tail(chain: &Chain, first: usize) -> bool {
-    let n = chain.bodies.len();
-    n - first <= 4 && chain.turning_before[n] - chain.turning_before[first] <= 2
+    first >= chain.tail_start
 }
 
 /// Poses of the bodies from `first` on ([`is_tail`]), the bodies before `first` being up to
@@ -1199,7 +1188,7 @@ mod tests {
             for x in &mut q1[n - moved..] {
                 *x += 0.02;
             }
-            let first = chain.first_body_of_variable[n - moved];
+            let first = chain.first_body_from[n - moved];
             let mut data = unchecked(&chain);
             forward_kinematics(&chain, &mut data, &q0).expect("finite");
             let parent = chain.bodies[first].parent.expect("a moving parent");
