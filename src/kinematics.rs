@@ -921,7 +921,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
     let frames = &mut data.world_from_body;
     let mut f = Frame4::<A::Col>::identity();
     let mut previous_done = false;
-    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
+    for (k, body) in (first..).zip(&chain.bodies[first..]) {
         let dirty = body.parent.is_some_and(|p| p >= first && data.dirty[p])
             || changed(&body.motion.theta)
             || changed(&body.motion.d);
@@ -962,8 +962,8 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
         None => Frame4::identity(),
     };
     let (sin, cos) = same_length(&data.sin, &data.cos);
-    let bodies = chain.bodies.iter().zip(&chain.trig_slot);
-    for (k, (body, &slot)) in bodies.enumerate().skip(first) {
+    let bodies = chain.bodies[first..].iter().zip(&chain.trig_slot[first..]);
+    for (k, (body, &slot)) in (first..).zip(bodies) {
         let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
             Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
@@ -990,7 +990,9 @@ fn is_tail(chain: &Chain, first: usize) -> bool {
 fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
     let frames = &mut data.world_from_body;
     let mut f = Frame4::<A::Col>::identity();
-    for (k, body) in chain.bodies.iter().enumerate().skip(first) {
+    // (Not `enumerate().skip(first)`, here or in `poses_from` and `poses_incremental_generic`:
+    // it divides by the size of a body to count them.)
+    for (k, body) in (first..).zip(&chain.bodies[first..]) {
         let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
         // The parent's frame stays in registers when it was just computed.
         f = match body.parent {
