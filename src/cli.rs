@@ -1121,7 +1121,7 @@ fn bench(
                 }),
                 n,
             ));
-            methods.push(("kinechain, poses only".into(), all_links(None), n));
+            methods.push((POSES_ONLY.into(), all_links(None), n));
         }
     }
 
@@ -1160,12 +1160,23 @@ fn bench(
     text.push_str(
         "times: medians of 7 rounds, the methods run in alternation; \"vs k\": median of the ratios within a round\n",
     );
+    // With rates: their cost against poses alone, measured in the same rounds.
+    if let Some(poses) = methods.iter().position(|(m, _, _)| m == POSES_ONLY) {
+        let rates = methods[0].0.trim_start_matches("kinechain, ");
+        text.push_str(&format!(
+            "{rates}: {:.2}x the time of poses only (median of the ratios within a round)\n",
+            timings.ratio(0, poses)
+        ));
+    }
     text.push_str(&format!(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
     ));
     write_line(out, &text)
 }
+
+/// The row of `kinechain bench --level vel|acc` that times poses alone.
+const POSES_ONLY: &str = "kinechain, poses only";
 
 /// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that
 /// reads one (on an arm with a gripper and the tool as `link`, the arm's last joint, not the
