@@ -980,7 +980,7 @@ fn bench(
     let mut methods: Vec<Method<'_>> = Vec::new();
     match level {
         Level::Pose => {
-            methods.push(("kinechain, all links".into(), all_links(None), n));
+            methods.push((ALL_LINKS.into(), all_links(None), n));
             let mut d = data();
             methods.push((
                 format!("kinechain, end link {} only", chain.link(end).name()),
@@ -1160,13 +1160,20 @@ fn bench(
     text.push_str(
         "times: medians of 7 rounds, the methods run in alternation; \"vs k\": median of the ratios within a round\n",
     );
-    // With rates: their cost against poses alone, measured in the same rounds.
-    if let Some(poses) = methods.iter().position(|(m, _, _)| m == POSES_ONLY) {
-        let rates = methods[0].0.trim_start_matches("kinechain, ");
-        text.push_str(&format!(
-            "{rates}: {:.2}x the time of poses only (median of the ratios within a round)\n",
-            timings.ratio(0, poses)
-        ));
+    // The incremental update against a full evaluation, and rates against poses alone, measured
+    // in the same rounds.
+    let row = |label: &str| methods.iter().position(|(m, _, _)| m.starts_with(label));
+    for (part, whole, of) in [
+        ("kinechain, incremental", ALL_LINKS, "all links"),
+        ("kinechain, poses + velocities", POSES_ONLY, "poses only"),
+    ] {
+        if let (Some(p), Some(w)) = (row(part), row(whole)) {
+            text.push_str(&format!(
+                "{}: {:.2}x the time of {of} (median of the ratios within a round)\n",
+                methods[p].0.trim_start_matches("kinechain, "),
+                timings.ratio(p, w)
+            ));
+        }
     }
     text.push_str(&format!(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
@@ -1175,7 +1182,9 @@ fn bench(
     write_line(out, &text)
 }
 
-/// The row of `kinechain bench --level vel|acc` that times poses alone.
+/// The rows of `kinechain bench` that time a full evaluation of poses (`--level pose`) and poses
+/// alone (`--level vel|acc`).
+const ALL_LINKS: &str = "kinechain, all links";
 const POSES_ONLY: &str = "kinechain, poses only";
 
 /// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that

@@ -363,6 +363,14 @@ fn bench_prints_times_ratios_and_errors() {
     ] {
         assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
     }
+    // The incremental update against a full evaluation from the same rounds: a positive factor.
+    let factor: f64 = text
+        .split("incremental (panda_finger_joint1 moves): ")
+        .nth(1)
+        .and_then(|s| s.split('x').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no ratio to all links in:\n{text}"));
+    assert!(factor > 0.0, "{text}");
     // The error line reports a small error (under 8 ulp of the reach).
     let ulp: f64 = text
         .split(" ulp of the")
