@@ -364,13 +364,7 @@ fn bench_prints_times_ratios_and_errors() {
         assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
     }
     // The incremental update against a full evaluation from the same rounds: a positive factor.
-    let factor: f64 = text
-        .split("incremental (panda_finger_joint1 moves): ")
-        .nth(1)
-        .and_then(|s| s.split('x').next())
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no ratio to all links in:\n{text}"));
-    assert!(factor > 0.0, "{text}");
+    assert!(factor_after(&text, "incremental (panda_finger_joint1 moves): ") > 0.0);
     // The error line reports a small error (under 8 ulp of the reach).
     let ulp: f64 = text
         .split(" ulp of the")
@@ -433,13 +427,16 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     // The rates' cost against poses alone, from the same rounds: a positive factor.
-    let factor: f64 = text
-        .split("poses + velocities + accelerations: ")
+    assert!(factor_after(&text, "poses + velocities + accelerations: ") > 0.0);
+}
+
+/// The factor `kinechain bench` prints as `{label}{factor}x the time of …`.
+fn factor_after(text: &str, label: &str) -> f64 {
+    text.split(label)
         .nth(1)
         .and_then(|s| s.split('x').next())
         .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no ratio to poses in:\n{text}"));
-    assert!(factor > 0.0, "{text}");
+        .unwrap_or_else(|| panic!("no factor after '{label}' in:\n{text}"))
 }
 
 #[test]
