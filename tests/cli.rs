@@ -39,6 +39,17 @@ fn error(args: &[&str]) -> String {
     lines[0].to_string()
 }
 
+/// Standard output of a command that must succeed.
+fn ok_text(args: &[&str]) -> String {
+    let out = kinechain(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
 fn position(result: &Value, link: &str) -> [f64; 3] {
     let pose = &result["links"][link]["pose"];
     [0, 1, 2].map(|i| pose[i][3].as_f64().unwrap())
@@ -346,13 +357,7 @@ fn fk_rates_appear_only_when_asked_for() {
 
 #[test]
 fn bench_prints_times_ratios_and_errors() {
-    let out = kinechain(&["bench", "robots/panda.urdf", "--configurations", "4"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = ok_text(&["bench", "robots/panda.urdf", "--configurations", "4"]);
     for needle in [
         "kinechain, all links",
         "incremental (panda_finger_joint1 moves)",
@@ -384,7 +389,7 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(size * 8 >= 2 * kinechain::batch::PARALLEL_WORK, "{text}");
     assert_eq!(size % 4, 0, "whole copies of the 4 configurations: {text}");
     // Another link than the farthest one, and a name the robot does not have.
-    let out = kinechain(&[
+    let text = ok_text(&[
         "bench",
         "robots/panda.urdf",
         "--configurations",
@@ -392,8 +397,6 @@ fn bench_prints_times_ratios_and_errors() {
         "--link",
         "panda_hand_tcp",
     ]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("end link panda_hand_tcp only"), "{text}");
     // The incremental row moves the last joint on the link's path: the arm's seventh joint for
     // the tool, the gripper's for the default end link (a finger, checked above).
@@ -402,9 +405,7 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(m.contains("no link named 'hand'"), "{m}");
     // A DH table: `k` runs on the URDF `convert` writes (a cylindrical joint is two URDF joints).
     for robot in ["robots/ur5.yaml", "robots/cylindrical.yaml"] {
-        let out = kinechain(&["bench", robot, "--configurations", "2"]);
-        assert!(out.status.success(), "{robot}");
-        let text = String::from_utf8(out.stdout).unwrap();
+        let text = ok_text(&["bench", robot, "--configurations", "2"]);
         let k_row = text
             .lines()
             .find(|l| l.starts_with("k 0.32, update_transforms, written as URDF"))
@@ -416,7 +417,7 @@ fn bench_prints_times_ratios_and_errors() {
             .unwrap();
         assert!(all_links.ends_with('x'), "no ratio against k: {all_links}");
     }
-    let out = kinechain(&[
+    let text = ok_text(&[
         "bench",
         "robots/cylindrical.yaml",
         "--level",
@@ -424,8 +425,6 @@ fn bench_prints_times_ratios_and_errors() {
         "--configurations",
         "2",
     ]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
     // The rates' cost against poses alone, from the same rounds: a positive factor.
     assert!(factor_after(&text, "poses + velocities + accelerations: ") > 0.0);
 }
