@@ -1505,10 +1505,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     let serial = serial_run == bodies.len();
     let mut first_body_from = vec![usize::MAX; variables.len()];
     for (k, b) in bodies.iter().enumerate() {
-        for t in [b.motion.theta, b.motion.d] {
-            if let Term::Var { index, .. } = t {
-                first_body_from[index] = first_body_from[index].min(k);
-            }
+        for index in b.motion.variables() {
+            first_body_from[index] = first_body_from[index].min(k);
         }
     }
     for i in (1..first_body_from.len()).rev() {

@@ -1008,7 +1008,7 @@ fn bench(
                     .collect();
                 let mut d = data();
                 methods.push((
-                    format!("kinechain, incremental ({moved} moves)"),
+                    format!("{INCREMENTAL} ({moved} moves)"),
                     Box::new(move || {
                         for q in &moving {
                             black_box(
@@ -1097,11 +1097,10 @@ fn bench(
             let qd = &qd;
             methods.push((
                 if acc {
-                    "kinechain, poses + velocities + accelerations"
+                    format!("{WITH_RATES} + accelerations")
                 } else {
-                    "kinechain, poses + velocities"
-                }
-                .into(),
+                    WITH_RATES.to_string()
+                },
                 Box::new(move || {
                     for (q, v) in qs.iter().zip(qd) {
                         if acc {
@@ -1164,8 +1163,8 @@ fn bench(
     // in the same rounds.
     let row = |label: &str| methods.iter().position(|(m, _, _)| m.starts_with(label));
     for (part, whole, of) in [
-        ("kinechain, incremental", ALL_LINKS, "all links"),
-        ("kinechain, poses + velocities", POSES_ONLY, "poses only"),
+        (INCREMENTAL, ALL_LINKS, "all links"),
+        (WITH_RATES, POSES_ONLY, "poses only"),
     ] {
         if let (Some(p), Some(w)) = (row(part), row(whole)) {
             text.push_str(&format!(
@@ -1182,8 +1181,11 @@ fn bench(
     write_line(out, &text)
 }
 
-/// The rows of `kinechain bench` that time a full evaluation of poses (`--level pose`) and poses
-/// alone (`--level vel|acc`).
+/// Labels of `kinechain bench` rows (the first two as prefixes) that the line after the table
+/// compares: the incremental update with a full evaluation of poses (`--level pose`), and the
+/// evaluation with rates with poses alone (`--level vel|acc`).
+const INCREMENTAL: &str = "kinechain, incremental";
+const WITH_RATES: &str = "kinechain, poses + velocities";
 const ALL_LINKS: &str = "kinechain, all links";
 const POSES_ONLY: &str = "kinechain, poses only";
 
@@ -1193,14 +1195,7 @@ const POSES_ONLY: &str = "kinechain, poses only";
 fn last_variable_to(chain: &Chain, link: LinkId) -> Option<usize> {
     let mut body = chain.link(link).body;
     while let Some(b) = body {
-        let motion = &chain.bodies[b].motion;
-        let read = [motion.theta, motion.d]
-            .into_iter()
-            .filter_map(|t| match t {
-                crate::joint::Term::Var { index, .. } => Some(index),
-                crate::joint::Term::Const(_) => None,
-            });
-        if let Some(last) = read.max() {
+        if let Some(last) = chain.bodies[b].motion.variables().max() {
             return Some(last);
         }
         body = chain.bodies[b].parent;

@@ -182,6 +182,14 @@ impl Motion {
             const_sin_cos,
         }
     }
+
+    /// The entries of `q` that θ and d read (none, one or two).
+    pub(crate) fn variables(&self) -> impl Iterator<Item = usize> {
+        [self.theta, self.d].into_iter().filter_map(|t| match t {
+            Term::Var { index, .. } => Some(index),
+            Term::Const(_) => None,
+        })
+    }
 }
 
 /// The skew matrix `[v]x` of eq. (2.6): `[v]x u = v × u`.
