@@ -196,7 +196,7 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
     use kinechain::batch::{
         BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_par,
-        forward_kinematics_batch_to,
+        forward_kinematics_batch_to, single_precision,
     };
     let qs: Vec<f64> = configurations(chain, n, 2).concat();
     let mut data = BatchData::new(chain);
@@ -230,6 +230,32 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
             })
         });
     }
+    // The single-precision variant (looser: errors of a few f32 ulps), one thread.
+    let mut data32 = single_precision::BatchData::new(chain);
+    data32.set_limit_policy(LimitPolicy::Ignore);
+    group.bench_function("f32_1_thread", |b| {
+        b.iter(|| {
+            black_box(
+                single_precision::forward_kinematics_batch(chain, &mut data32, black_box(&qs))
+                    .unwrap()
+                    .len(),
+            )
+        })
+    });
+    group.bench_function("f32_end_link_1_thread", |b| {
+        b.iter(|| {
+            black_box(
+                single_precision::forward_kinematics_batch_to(
+                    chain,
+                    &mut data32,
+                    black_box(&qs),
+                    end,
+                )
+                .unwrap()
+                .len(),
+            )
+        })
+    });
     group.finish();
 }
 

@@ -15,7 +15,7 @@ mod common;
 mod naive;
 
 use common::*;
-use kinechain::batch::{BatchData, forward_kinematics_batch};
+use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision};
 use kinechain::measure::Interleaved;
 use kinechain::nalgebra::Matrix4;
 use kinechain::{Data, Isa, LimitPolicy, force_isa, forward_kinematics, isa};
@@ -147,6 +147,33 @@ fn rows_for(path: &Path) -> Vec<Row> {
         call: Box::new(move || {
             black_box(
                 forward_kinematics_batch(chain, &mut batch, black_box(&flat))
+                    .unwrap()
+                    .len(),
+            );
+        }),
+        repeat: 16,
+    });
+
+    // The single-precision batch (a looser variant, chosen explicitly): the same batches.
+    let flat32: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
+    let mut batch32 = single_precision::BatchData::new(chain);
+    batch32.set_limit_policy(LimitPolicy::Ignore);
+    let poses = {
+        let p = single_precision::forward_kinematics_batch(chain, &mut batch32, &flat32).unwrap();
+        (0..qs.len())
+            .map(|i| {
+                ids.iter()
+                    .map(|&l| p.world_from_link(i, l).to_rows())
+                    .collect()
+            })
+            .collect()
+    };
+    methods.push(Method {
+        label: "kinechain batch f32, 1 thread",
+        poses,
+        call: Box::new(move || {
+            black_box(
+                single_precision::forward_kinematics_batch(chain, &mut batch32, black_box(&flat32))
                     .unwrap()
                     .len(),
             );
@@ -343,9 +370,11 @@ fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
             .max(r.rotation / f64::EPSILON)
             .max(0.1)
     };
-    let (x_max, y_max) = rows.iter().fold((1.0_f64, 1.0_f64), |(x, y), r| {
-        (x.max(r.ns), y.max(ulps(r)))
-    });
+    let (x_min, x_max, y_max) = rows
+        .iter()
+        .fold((f64::INFINITY, 1.0_f64, 1.0_f64), |(lo, x, y), r| {
+            (lo.min(r.ns), x.max(r.ns), y.max(ulps(r)))
+        });
     let mut chart = ChartBuilder::on(&root)
         .caption(
             "Time per configuration against error (all link poses)",
@@ -355,7 +384,7 @@ fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
         .x_label_area_size(45)
         .y_label_area_size(60)
         .build_cartesian_2d(
-            (5.0..x_max * 2.0).log_scale(),
+            (x_min.min(5.0) / 1.5..x_max * 2.0).log_scale(),
             (0.1..y_max * 4.0).log_scale(),
         )?;
     chart
@@ -394,14 +423,21 @@ fn main() {
     for path in reference_files() {
         rows.extend(rows_for(&path));
     }
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let field = |name: &str| {
+        cpuinfo
+            .lines()
+            .find(|l| l.split(':').next().map(str::trim) == Some(name))
+            .and_then(|l| l.split(':').nth(1))
+            .map(|v| v.trim().to_string())
+    };
+    let cpu = match (field("model name"), field("cpu family"), field("model")) {
+        (Some(name), Some(family), Some(model)) => {
+            format!("{name} (CPU family {family}, model {model})")
+        }
+        (Some(name), ..) => name,
+        _ => "unknown CPU".into(),
+    };
     let mut table = format!(
         "Machine: {cpu}, {} threads, kernels: {}.\n\n| method | robot | ns/config | × k | × naive | max position error (m) | (ulp of reach) | max rotation error |\n|---|---|---:|---:|---:|---:|---:|---:|\n",
         std::thread::available_parallelism().map_or(1, |n| n.get()),

@@ -16,6 +16,8 @@ use crate::padded;
 use crate::transform::Transform;
 use rayon::prelude::*;
 
+pub mod single_precision;
+
 /// Work, in joint evaluations (configurations × moving joints on the evaluated path, fixed
 /// joints folded), below which [`forward_kinematics_batch_par`] and a parallel
 /// [`forward_kinematics_batch_to`] stay on the calling thread: waking rayon's pool and joining
@@ -92,20 +94,9 @@ impl BatchData {
             self.bodies == chain.bodies.len() && self.dof == chain.dof(),
             "kinechain: BatchData was created for another chain"
         );
-        let dof = chain.dof();
-        let n = qs.len().checked_div(dof).unwrap_or(0);
-        if dof == 0 || !qs.len().is_multiple_of(dof) {
-            return Err(BatchError {
-                index: n,
-                source: StateError::WrongLength {
-                    what: "q",
-                    expected: dof,
-                    got: if dof == 0 { qs.len() } else { qs.len() % dof },
-                },
-            });
-        }
+        let n = configurations(chain, qs)?;
         if check && !all_valid(chain, qs, self.limit_policy) {
-            self.first_error(chain, qs)?;
+            first_error(chain, qs, self.limit_policy)?;
         }
         self.len = n;
         Ok(n.div_ceil(LANES))
@@ -119,11 +110,35 @@ impl BatchData {
 
     /// The error for the first configuration of `qs` that [`check_q`] rejects (`Ok` if none).
     fn first_error(&self, chain: &Chain, qs: &[f64]) -> Result<(), BatchError> {
-        for (index, q) in qs.chunks_exact(chain.dof()).enumerate() {
-            check_q(chain, q, self.limit_policy).map_err(|source| BatchError { index, source })?;
-        }
-        Ok(())
+        first_error(chain, qs, self.limit_policy)
     }
+}
+
+/// The number of configurations in `qs` (rows of the chain's dof), or the error for a length
+/// that is not a multiple of it (the index given is that of the incomplete row).
+fn configurations(chain: &Chain, qs: &[f64]) -> Result<usize, BatchError> {
+    let dof = chain.dof();
+    let n = qs.len().checked_div(dof).unwrap_or(0);
+    if dof == 0 || !qs.len().is_multiple_of(dof) {
+        return Err(BatchError {
+            index: n,
+            source: StateError::WrongLength {
+                what: "q",
+                expected: dof,
+                got: if dof == 0 { qs.len() } else { qs.len() % dof },
+            },
+        });
+    }
+    Ok(n)
+}
+
+/// The error for the first configuration of `qs` that [`check_q`] rejects under `policy`
+/// (`Ok` if none).
+fn first_error(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> Result<(), BatchError> {
+    for (index, q) in qs.chunks_exact(chain.dof()).enumerate() {
+        check_q(chain, q, policy).map_err(|source| BatchError { index, source })?;
+    }
+    Ok(())
 }
 
 /// Link poses of every configuration of a batch.
@@ -154,7 +169,10 @@ impl BatchPoses<'_> {
     #[inline]
     pub fn world_from_link(&self, index: usize, link: LinkId) -> Transform {
         lane_pose(self.chain, self.data.len, link, index, |b| {
-            &self.data.frames[(index / LANES) * self.data.bodies + b]
+            lane_columns(
+                &self.data.frames[(index / LANES) * self.data.bodies + b],
+                index,
+            )
         })
     }
 }
@@ -251,31 +269,35 @@ pub fn forward_kinematics_batch_par<'a>(
     Ok(BatchPoses { chain, data })
 }
 
-/// The pose of `link` in configuration `index` of `len`, from `body_frames(b)`, the lanes holding
-/// the frame of the link's body `b`.
+/// The pose of `link` in configuration `index` of `len`, from `body_columns(b)`, the padded
+/// columns of the frame of the link's body `b` in that configuration.
 #[inline]
-fn lane_pose<'f>(
+fn lane_pose(
     chain: &Chain,
     len: usize,
     link: LinkId,
     index: usize,
-    body_frames: impl FnOnce(usize) -> &'f Frame<Lanes>,
+    body_columns: impl FnOnce(usize) -> [[f64; 4]; 4],
 ) -> Transform {
     assert!(index < len, "configuration {index} of {len}");
     let l = chain.link(link);
     let Some(b) = l.body else {
         return l.offset.to_transform();
     };
-    let f = body_frames(b);
+    padded::link_pose(&body_columns(b), &l.offset)
+}
+
+/// The padded columns of configuration `index`'s frame in `f`, the frames of its chunk.
+#[inline]
+fn lane_columns(f: &Frame<Lanes>, index: usize) -> [[f64; 4]; 4] {
     let lane = index % LANES;
     let column = |c: &[Lanes; 3]| [c[0].0[lane], c[1].0[lane], c[2].0[lane], 0.0];
-    let body = [
+    [
         column(&f.r[0]),
         column(&f.r[1]),
         column(&f.r[2]),
         column(&f.p),
-    ];
-    padded::link_pose(&body, &l.offset)
+    ]
 }
 
 /// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
@@ -384,7 +406,7 @@ impl BatchLinkPoses<'_> {
     #[inline]
     pub fn world_from_link(&self, index: usize) -> Transform {
         lane_pose(self.chain, self.data.len, self.link, index, |_| {
-            &self.data.link_frames[index / LANES]
+            lane_columns(&self.data.link_frames[index / LANES], index)
         })
     }
 }

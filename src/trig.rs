@@ -55,16 +55,7 @@ pub(crate) fn sin_cos<A: Arith>(x: f64) -> (f64, f64) {
 /// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT` (garbage beyond; the caller checks). No branches.
 #[inline(always)]
 pub(crate) fn sin_cos_reduced<A: Arith>(x: f64) -> (f64, f64) {
-    // k = round(x · 2/π), as a double and in the low bits of `kb`.
-    let kb = A::mul_add(x, FRAC_2_PI, ROUNDER);
-    let quadrant = kb.to_bits();
-    let k = kb - ROUNDER;
-    // r + tail = x − k π/2, with |tail| far below |r|.
-    let (r, tail) = if A::FUSED {
-        reduce_fused::<A>(x, k)
-    } else {
-        reduce_split(x, k)
-    };
+    let (r, tail, quadrant) = reduce::<A>(x);
 
     let z = r * r;
     let v = z * r;
@@ -97,6 +88,23 @@ pub(crate) fn sin_cos_reduced<A: Arith>(x: f64) -> (f64, f64) {
         f64::from_bits(s.to_bits() ^ sin_sign),
         f64::from_bits(c.to_bits() ^ cos_sign),
     )
+}
+
+/// `(r, tail, k)` with `r + tail = x − k π/2`, `|tail|` far below `|r| ≤ π/4`, and
+/// `k = round(x · 2/π)` in the low bits of the third value (`k mod 4` is the quadrant), for
+/// `|x| < REDUCTION_LIMIT`. Callers that need only `r` (rounded once) let the compiler drop the
+/// operations of the tail.
+#[inline(always)]
+pub(crate) fn reduce<A: Arith>(x: f64) -> (f64, f64, u64) {
+    // k = round(x · 2/π), as a double and in the low bits of `kb`.
+    let kb = A::mul_add(x, FRAC_2_PI, ROUNDER);
+    let k = kb - ROUNDER;
+    let (r, tail) = if A::FUSED {
+        reduce_fused::<A>(x, k)
+    } else {
+        reduce_split(x, k)
+    };
+    (r, tail, kb.to_bits())
 }
 
 /// `x − k π/2` as `(r, tail)` with one rounding per fused multiply–add: `x − k·PIO2_HI` is

@@ -1,0 +1,169 @@
+//! The single-precision batch: its errors against the 50-digit references on every instruction
+//! set, its checks (the same decisions and indices as the `f64` batch), and its one-link path.
+
+mod common;
+
+use common::*;
+use kinechain::batch::{self, single_precision as sp};
+use kinechain::{Chain, Isa, LimitPolicy, StateError, force_isa, isa};
+use std::sync::Mutex;
+
+/// Held by the tests of this file: one of them switches the instruction set (a global setting).
+static ISA: Mutex<()> = Mutex::new(());
+
+/// One unit in the last place of an `f32` near 1.
+const ULP32: f64 = f32::EPSILON as f64;
+
+/// Largest position error (in `f32` ulps of the reach) and rotation error (in `f32` ulps of 1)
+/// of the single-precision batch, all links and each link alone, over a reference file.
+fn errors(path: &std::path::Path) -> (f64, f64) {
+    let reference = read_json(path);
+    let exact = read_json(&hp_path(path));
+    let chain = reference_chain(path, &reference);
+    let reach = scale_of(&exact, "pose");
+    let samples = exact["samples"].as_array().unwrap();
+    let qs: Vec<f64> = samples
+        .iter()
+        .flat_map(|s| joint_vector(&chain, &s["q"]))
+        .collect();
+    let mut data = sp::BatchData::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut one = sp::BatchData::new(&chain);
+    one.set_limit_policy(LimitPolicy::Ignore);
+    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    let all = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
+    for name in samples[0]["links"].as_object().unwrap().keys() {
+        let link = chain.link_id(name).unwrap();
+        let alone = sp::forward_kinematics_batch_to(&chain, &mut one, &qs, link).unwrap();
+        for (i, sample) in samples.iter().enumerate() {
+            let got = all.world_from_link(i, link);
+            // The one-link path does the same operations on the path's bodies.
+            assert_eq!(alone.world_from_link(i), got, "{name}, sample {i}");
+            let (got, want) = (got.to_rows(), matrix4(&sample["links"][name]["pose"]));
+            for r in 0..3 {
+                position = position.max((got[r][3] - want[r][3]).abs());
+                for c in 0..3 {
+                    rotation = rotation.max((got[r][c] - want[r][c]).abs());
+                }
+            }
+        }
+    }
+    (position / (reach * ULP32), rotation / ULP32)
+}
+
+/// Within 16 `f32` ulps of the reach (positions) and of 1 (rotations) on every reference robot
+/// and every instruction set: the remainders of θ and the frames are rounded to `f32`, so errors
+/// of a few `f32` ulps are expected (measured: at most 2.4 and 3.8, on the baseline path), as 8 `f64` ulps bound the
+/// `f64` paths.
+#[test]
+fn reference_errors_are_a_few_f32_ulps() {
+    let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
+    let mut levels = vec![Isa::Baseline];
+    if isa() >= Isa::Avx2 {
+        levels.push(Isa::Avx2);
+    }
+    if isa() == Isa::Avx512 {
+        levels.push(Isa::Avx512);
+    }
+    for level in levels {
+        force_isa(Some(level));
+        for path in reference_files() {
+            let (position, rotation) = errors(&path);
+            assert!(
+                position <= 16.0 && rotation <= 16.0,
+                "{}, {level:?}: position {position:.2}, rotation {rotation:.2} f32 ulps",
+                path.display()
+            );
+        }
+    }
+    force_isa(None);
+}
+
+/// The same configurations are rejected, with the same index and error, as by the `f64` batch,
+/// whatever lane and chunk of sixteen the bad one falls in; the limits are checked before the
+/// values are rounded to `f32` (one `f64` ulp past a limit is rejected).
+#[test]
+fn checks_decide_as_the_f64_batch_does() {
+    let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let tool = chain.link_id("tool").unwrap();
+    let upper = chain
+        .joint(chain.joint_id("j2").unwrap())
+        .limits()
+        .first()
+        .copied()
+        .flatten()
+        .unwrap()
+        .upper;
+    let mut data = sp::BatchData::new(&chain);
+    let mut data64 = batch::BatchData::new(&chain);
+    for n in [1, 15, 16, 17, 40] {
+        for bad in 0..n {
+            for value in [f64::NAN, f64::INFINITY, upper.next_up(), upper] {
+                let mut qs = vec![0.1; 6 * n];
+                qs[6 * bad + 1] = value;
+                // Compared as text: a NaN in the error is not equal to itself.
+                let text = |r: Result<usize, batch::BatchError>| format!("{r:?}");
+                let want = text(
+                    batch::forward_kinematics_batch(&chain, &mut data64, &qs).map(|p| p.len()),
+                );
+                let all =
+                    text(sp::forward_kinematics_batch(&chain, &mut data, &qs).map(|p| p.len()));
+                assert_eq!(all, want, "{n} configurations, bad {bad}, {value}");
+                let one = text(
+                    sp::forward_kinematics_batch_to(&chain, &mut data, &qs, tool).map(|p| p.len()),
+                );
+                assert_eq!(one, want, "{n} configurations, bad {bad}, {value}");
+            }
+        }
+    }
+    let e = sp::forward_kinematics_batch(&chain, &mut data, &[0.0; 13]).unwrap_err();
+    assert!(matches!(e.source, StateError::WrongLength { .. }));
+    assert!(
+        sp::forward_kinematics_batch(&chain, &mut data, &[])
+            .unwrap()
+            .is_empty()
+    );
+    // Ignoring the limits still rejects non-finite values.
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut qs = vec![10.0; 6 * 20];
+    assert_eq!(
+        sp::forward_kinematics_batch(&chain, &mut data, &qs).map(|p| p.len()),
+        Ok(20)
+    );
+    qs[6 * 18 + 3] = f64::NAN;
+    let e = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap_err();
+    assert_eq!(e.index, 18);
+    assert!(matches!(e.source, StateError::NonFinite { index: 3, .. }));
+}
+
+/// Large joint angles are reduced in `f64`: a pose at θ and at θ + 2πk (k up to 10⁴) agree as
+/// closely as at small angles, where computing θ in `f32` would lose about 2⁻²⁴ |θ|.
+#[test]
+fn large_angles_are_as_accurate_as_small_ones() {
+    let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
+    let chain = Chain::from_file(robots_dir().join("ur5.yaml")).unwrap();
+    let tool = chain.link_id("tool0").unwrap();
+    let mut data = sp::BatchData::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data64 = batch::BatchData::new(&chain);
+    data64.set_limit_policy(LimitPolicy::Ignore);
+    let mut rng = rng(5);
+    let base: Vec<f64> = (0..64).flat_map(|_| random_q(&chain, &mut rng)).collect();
+    for turns in [0.0, 1.0, 100.0, 10_000.0] {
+        let qs: Vec<f64> = base
+            .iter()
+            .map(|q| q + turns * std::f64::consts::TAU)
+            .collect();
+        let exact = batch::forward_kinematics_batch(&chain, &mut data64, &qs).unwrap();
+        let single = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
+        for i in 0..single.len() {
+            let error = pose_error(
+                &single.world_from_link(i, tool),
+                &exact.world_from_link(i, tool).to_rows(),
+            );
+            // The reach of the UR5 is about 1 m; 16 f32 ulps.
+            assert!(error <= 16.0 * ULP32, "{turns} turns: {error:e}");
+        }
+    }
+}
