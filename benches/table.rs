@@ -18,7 +18,7 @@ use common::*;
 use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision};
 use kinechain::measure::Interleaved;
 use kinechain::nalgebra::Matrix4;
-use kinechain::{Data, Isa, LimitPolicy, force_isa, forward_kinematics, isa};
+use kinechain::{Data, Isa, LimitPolicy, LinkId, Transform, force_isa, forward_kinematics, isa};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -61,6 +61,36 @@ fn errors(exact: &serde_json::Value, names: &[String], poses: &[Vec<[[f64; 4]; 4
         }
     }
     (position, rotation)
+}
+
+/// A batch method: `evaluate(flat, keep)` evaluates the batch `flat` (the reference
+/// configurations repeated 16 times) and returns, when `keep`, the poses of the first copy.
+fn batch_method<'a>(
+    label: &'static str,
+    flat: Vec<f64>,
+    mut evaluate: impl FnMut(&[f64], bool) -> Vec<Vec<[[f64; 4]; 4]>> + 'a,
+) -> Method<'a> {
+    let poses = evaluate(&flat, true);
+    Method {
+        label,
+        poses,
+        call: Box::new(move || {
+            black_box(evaluate(black_box(&flat), false));
+        }),
+        repeat: 16,
+    }
+}
+
+/// The poses of links `ids` in configurations `0..n` read by `pose(i, link)` (nothing, without
+/// allocating, for `None`).
+fn batch_poses(
+    n: Option<usize>,
+    ids: &[LinkId],
+    pose: impl Fn(usize, LinkId) -> Transform,
+) -> Vec<Vec<[[f64; 4]; 4]>> {
+    (0..n.unwrap_or(0))
+        .map(|i| ids.iter().map(|&l| pose(i, l).to_rows()).collect())
+        .collect()
 }
 
 fn rows_for(path: &Path) -> Vec<Row> {
@@ -127,59 +157,34 @@ fn rows_for(path: &Path) -> Vec<Row> {
         });
     }
 
-    // kinechain, batches of 22 × 16 configurations.
+    // kinechain, batches of 22 × 16 configurations, in f64 and in the single-precision variant
+    // (looser, chosen explicitly).
     let flat: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
+    let ids = &ids;
     let mut batch = BatchData::new(chain);
     batch.set_limit_policy(LimitPolicy::Ignore);
-    let poses = {
-        let p = forward_kinematics_batch(chain, &mut batch, &flat).unwrap();
-        (0..qs.len())
-            .map(|i| {
-                ids.iter()
-                    .map(|&l| p.world_from_link(i, l).to_rows())
-                    .collect()
+    methods.push(batch_method(
+        "kinechain batch, 1 thread",
+        flat.clone(),
+        move |flat, keep| {
+            let p = forward_kinematics_batch(chain, &mut batch, flat).unwrap();
+            batch_poses(keep.then_some(qs.len()), ids, |i, l| {
+                p.world_from_link(i, l)
             })
-            .collect()
-    };
-    methods.push(Method {
-        label: "kinechain batch, 1 thread",
-        poses,
-        call: Box::new(move || {
-            black_box(
-                forward_kinematics_batch(chain, &mut batch, black_box(&flat))
-                    .unwrap()
-                    .len(),
-            );
-        }),
-        repeat: 16,
-    });
-
-    // The single-precision batch (a looser variant, chosen explicitly): the same batches.
-    let flat32: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
+        },
+    ));
     let mut batch32 = single_precision::BatchData::new(chain);
     batch32.set_limit_policy(LimitPolicy::Ignore);
-    let poses = {
-        let p = single_precision::forward_kinematics_batch(chain, &mut batch32, &flat32).unwrap();
-        (0..qs.len())
-            .map(|i| {
-                ids.iter()
-                    .map(|&l| p.world_from_link(i, l).to_rows())
-                    .collect()
+    methods.push(batch_method(
+        "kinechain batch f32, 1 thread",
+        flat,
+        move |flat, keep| {
+            let p = single_precision::forward_kinematics_batch(chain, &mut batch32, flat).unwrap();
+            batch_poses(keep.then_some(qs.len()), ids, |i, l| {
+                p.world_from_link(i, l)
             })
-            .collect()
-    };
-    methods.push(Method {
-        label: "kinechain batch f32, 1 thread",
-        poses,
-        call: Box::new(move || {
-            black_box(
-                single_precision::forward_kinematics_batch(chain, &mut batch32, black_box(&flat32))
-                    .unwrap()
-                    .len(),
-            );
-        }),
-        repeat: 16,
-    });
+        },
+    ));
 
     // The k crate: on the URDF models, and on the others as `kinechain convert` writes them (the
     // links keep their names and the joint vector its order; a cylindrical joint becomes two

@@ -16,7 +16,30 @@ use crate::padded;
 use crate::transform::Transform;
 use rayon::prelude::*;
 
+/// `len` and `is_empty` of result views whose `data` counts the batch's configurations.
+macro_rules! batch_len {
+    ($($view:ident),*) => {
+        $(
+            impl $view<'_> {
+                /// Number of configurations.
+                #[must_use]
+                pub fn len(&self) -> usize {
+                    self.data.len
+                }
+
+                /// True for an empty batch.
+                #[must_use]
+                pub fn is_empty(&self) -> bool {
+                    self.data.len == 0
+                }
+            }
+        )*
+    };
+}
+
 pub mod single_precision;
+
+batch_len!(BatchPoses, BatchLinkPoses);
 
 /// Work, in joint evaluations (configurations × moving joints on the evaluated path, fixed
 /// joints folded), below which [`forward_kinematics_batch_par`] and a parallel
@@ -149,18 +172,6 @@ pub struct BatchPoses<'a> {
 }
 
 impl BatchPoses<'_> {
-    /// Number of configurations.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.data.len
-    }
-
-    /// True for an empty batch.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.data.len == 0
-    }
-
     /// Pose of `link` in configuration `index`, world frame.
     ///
     /// # Panics
@@ -386,18 +397,6 @@ pub struct BatchLinkPoses<'a> {
 }
 
 impl BatchLinkPoses<'_> {
-    /// Number of configurations.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.data.len
-    }
-
-    /// True for an empty batch.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.data.len == 0
-    }
-
     /// The link's pose in configuration `index`, world frame.
     ///
     /// # Panics

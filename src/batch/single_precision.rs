@@ -318,6 +318,8 @@ pub fn forward_kinematics_batch_to<'a>(
     Ok(BatchLinkPoses { chain, data, link })
 }
 
+batch_len!(BatchPoses, BatchLinkPoses);
+
 /// Link poses of every configuration of a single-precision batch.
 #[derive(Clone, Copy, Debug)]
 pub struct BatchPoses<'a> {
@@ -326,18 +328,6 @@ pub struct BatchPoses<'a> {
 }
 
 impl BatchPoses<'_> {
-    /// Number of configurations.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.data.len
-    }
-
-    /// True for an empty batch.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.data.len == 0
-    }
-
     /// Pose of `link` in configuration `index`, world frame.
     ///
     /// # Panics
@@ -363,18 +353,6 @@ pub struct BatchLinkPoses<'a> {
 }
 
 impl BatchLinkPoses<'_> {
-    /// Number of configurations.
-    #[must_use]
-    pub fn len(&self) -> usize {
-        self.data.len
-    }
-
-    /// True for an empty batch.
-    #[must_use]
-    pub fn is_empty(&self) -> bool {
-        self.data.len == 0
-    }
-
     /// The link's pose in configuration `index`, world frame.
     ///
     /// # Panics
