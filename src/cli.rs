@@ -911,7 +911,7 @@ fn bench(
 ) -> Result<(), CliError> {
     use crate::batch::{
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
-        forward_kinematics_batch_to,
+        forward_kinematics_batch_to, single_precision,
     };
     use crate::kinematics::forward_kinematics_incremental;
     use std::hint::black_box;
@@ -940,20 +940,32 @@ fn bench(
         b
     };
 
-    // Errors of the single evaluation against the 256-bit evaluation of the same model.
-    let mut position: f64 = 0.0;
-    let mut rotation: f64 = 0.0;
+    let flat: Vec<f64> = qs.concat();
+    let single_data = || {
+        let mut b = single_precision::BatchData::new(chain);
+        b.set_limit_policy(LimitPolicy::Ignore);
+        b
+    };
+
+    // Errors of the single evaluation and of the single-precision batch against the 256-bit
+    // evaluation of the same model: (position, rotation) of each.
+    let mut errors = [(0.0_f64, 0.0_f64); 2];
     let mut d = data();
-    for q in qs.iter() {
+    let mut b32 = single_data();
+    let rough =
+        single_precision::forward_kinematics_batch(chain, &mut b32, &flat).map_err(|e| e.source)?;
+    for (i, q) in qs.iter().enumerate() {
         let exact = crate::reference::link_poses(chain, q);
         let poses = forward_kinematics(chain, &mut d, q)?;
         let ours: Vec<Transform> = all.iter().map(|&l| poses.world_from_link(l)).collect();
-        let (p, r) = crate::reference::max_errors(&ours, &exact);
-        position = position.max(p);
-        rotation = rotation.max(r);
+        let single: Vec<Transform> = all.iter().map(|&l| rough.world_from_link(i, l)).collect();
+        for (e, got) in errors.iter_mut().zip([ours, single]) {
+            let (p, r) = crate::reference::max_errors(&got, &exact);
+            *e = (e.0.max(p), e.1.max(r));
+        }
     }
+    let [(position, rotation), (position32, rotation32)] = errors;
 
-    let flat: Vec<f64> = qs.concat();
     // The multi-threaded rows evaluate the configurations `copies` times over in one batch: twice
     // the work from which the pool is used, counted on the end link's path.
     let mut end_path = Vec::new();
@@ -1027,6 +1039,18 @@ fn bench(
                 Box::new(move || {
                     black_box(
                         forward_kinematics_batch(chain, &mut b, black_box(flat))
+                            .ok()
+                            .map(|b| b.len()),
+                    );
+                }),
+                n,
+            ));
+            let mut b = single_data();
+            methods.push((
+                "kinechain, batch f32, 1 thread".into(),
+                Box::new(move || {
+                    black_box(
+                        single_precision::forward_kinematics_batch(chain, &mut b, black_box(flat))
                             .ok()
                             .map(|b| b.len()),
                     );
@@ -1178,6 +1202,13 @@ fn bench(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
     ));
+    if level == Level::Pose {
+        text.push_str(&format!(
+            "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
+            position32 / (reach * f64::from(f32::EPSILON)),
+            rotation32 / f64::from(f32::EPSILON)
+        ));
+    }
     write_line(out, &text)
 }
 

@@ -378,6 +378,16 @@ fn bench_prints_times_ratios_and_errors() {
         .and_then(|s| s.trim().parse().ok())
         .unwrap();
     assert!(ulp < 8.0, "{text}");
+    // The single-precision batch has its row and its error line, within the 16 f32 ulps of the
+    // reach that the reference tests allow.
+    assert!(text.contains("kinechain, batch f32, 1 thread"), "{text}");
+    let ulp32: f64 = text
+        .split(" f32 ulp of the reach")
+        .next()
+        .and_then(|s| s.rsplit('(').next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap();
+    assert!(ulp32 < 16.0, "{text}");
     // The two-thread rows name their batch, large enough for the pool: twice the threshold on the
     // path of the end link (a finger: seven arm joints and its own).
     let size: usize = text
