@@ -371,23 +371,11 @@ fn bench_prints_times_ratios_and_errors() {
     // The incremental update against a full evaluation from the same rounds: a positive factor.
     assert!(factor_after(&text, "incremental (panda_finger_joint1 moves): ") > 0.0);
     // The error line reports a small error (under 8 ulp of the reach).
-    let ulp: f64 = text
-        .split(" ulp of the")
-        .next()
-        .and_then(|s| s.rsplit('(').next())
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap();
-    assert!(ulp < 8.0, "{text}");
+    assert!(ulps_before(&text, " ulp of the") < 8.0, "{text}");
     // The single-precision batch has its row and its error line, within the 16 f32 ulps of the
     // reach that the reference tests allow.
     assert!(text.contains("kinechain, batch f32, 1 thread"), "{text}");
-    let ulp32: f64 = text
-        .split(" f32 ulp of the reach")
-        .next()
-        .and_then(|s| s.rsplit('(').next())
-        .and_then(|s| s.trim().parse().ok())
-        .unwrap();
-    assert!(ulp32 < 16.0, "{text}");
+    assert!(ulps_before(&text, " f32 ulp of the reach") < 16.0, "{text}");
     // The two-thread rows name their batch, large enough for the pool: twice the threshold on the
     // path of the end link (a finger: seven arm joints and its own).
     let size: usize = text
@@ -437,6 +425,15 @@ fn bench_prints_times_ratios_and_errors() {
     ]);
     // The rates' cost against poses alone, from the same rounds: a positive factor.
     assert!(factor_after(&text, "poses + velocities + accelerations: ") > 0.0);
+}
+
+/// The number in parentheses just before the first `marker` in `text` (`… (1.05 ulp of the …`).
+fn ulps_before(text: &str, marker: &str) -> f64 {
+    text.split(marker)
+        .next()
+        .and_then(|s| s.rsplit('(').next())
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no number before '{marker}' in:\n{text}"))
 }
 
 /// The factor `kinechain bench` prints as `{label}{factor}x the time of …`.
