@@ -242,6 +242,15 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
             )
         })
     });
+    group.bench_function("f32_all_threads", |b| {
+        b.iter(|| {
+            black_box(
+                single_precision::forward_kinematics_batch_par(chain, &mut data32, black_box(&qs))
+                    .unwrap()
+                    .len(),
+            )
+        })
+    });
     group.bench_function("f32_end_link_1_thread", |b| {
         b.iter(|| {
             black_box(
@@ -250,6 +259,7 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
                     &mut data32,
                     black_box(&qs),
                     end,
+                    false,
                 )
                 .unwrap()
                 .len(),

@@ -326,6 +326,32 @@ fn par_chunks_checked<T: Send>(
     eval: impl Fn(Option<LaneCheck<'_>>, &mut [Lanes], usize, T) -> bool + Sync + Send,
 ) -> bool {
     let dof = chain.dof();
+    par_chunks_checked_with(
+        chain,
+        policy,
+        qs,
+        per_item,
+        bodies,
+        outs,
+        || vec![Lanes::splat(0.0); per_item * dof],
+        |check, q_lanes: &mut Vec<Lanes>, c0, out| eval(check, q_lanes, c0, out),
+    )
+}
+
+/// [`par_chunks_checked`] with each task's scratch buffers made by `scratch` (once per task,
+/// not per item).
+#[allow(clippy::too_many_arguments)]
+fn par_chunks_checked_with<T: Send, S>(
+    chain: &Chain,
+    policy: LimitPolicy,
+    qs: &[f64],
+    per_item: usize,
+    bodies: usize,
+    outs: impl IndexedParallelIterator<Item = T>,
+    scratch: impl Fn() -> S + Sync + Send,
+    eval: impl Fn(Option<LaneCheck<'_>>, &mut S, usize, T) -> bool + Sync + Send,
+) -> bool {
+    let dof = chain.dof();
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
     // Items per task: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
@@ -333,16 +359,13 @@ fn par_chunks_checked<T: Send>(
     let per_task = TASK_WORK.div_ceil(per_item * LANES * bodies.max(1));
     outs.enumerate()
         .with_min_len(per_task)
-        .map_init(
-            || vec![Lanes::splat(0.0); per_item * dof],
-            |q_lanes, (i, out)| {
-                let group = &qs[i * rows..((i + 1) * rows).min(qs.len())];
-                if check.is_none() && !all_valid(chain, group, policy) {
-                    return false;
-                }
-                eval(check, q_lanes, i * per_item, out)
-            },
-        )
+        .map_init(scratch, |buffers, (i, out)| {
+            let group = &qs[i * rows..((i + 1) * rows).min(qs.len())];
+            if check.is_none() && !all_valid(chain, group, policy) {
+                return false;
+            }
+            eval(check, buffers, i * per_item, out)
+        })
         .reduce(|| true, |a, b| a & b)
 }
 

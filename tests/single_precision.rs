@@ -34,7 +34,7 @@ fn errors(path: &std::path::Path) -> (f64, f64) {
     let all = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
     for name in samples[0]["links"].as_object().unwrap().keys() {
         let link = chain.link_id(name).unwrap();
-        let alone = sp::forward_kinematics_batch_to(&chain, &mut one, &qs, link).unwrap();
+        let alone = sp::forward_kinematics_batch_to(&chain, &mut one, &qs, link, false).unwrap();
         for (i, sample) in samples.iter().enumerate() {
             let got = all.world_from_link(i, link);
             // The one-link path does the same operations on the path's bodies.
@@ -111,7 +111,8 @@ fn checks_decide_as_the_f64_batch_does() {
                     text(sp::forward_kinematics_batch(&chain, &mut data, &qs).map(|p| p.len()));
                 assert_eq!(all, want, "{n} configurations, bad {bad}, {value}");
                 let one = text(
-                    sp::forward_kinematics_batch_to(&chain, &mut data, &qs, tool).map(|p| p.len()),
+                    sp::forward_kinematics_batch_to(&chain, &mut data, &qs, tool, false)
+                        .map(|p| p.len()),
                 );
                 assert_eq!(one, want, "{n} configurations, bad {bad}, {value}");
             }
@@ -199,5 +200,56 @@ fn bundled_robots_agree_with_the_f64_batch() {
             }
         }
         assert!(worst <= 16.0 * ULP32, "{}: {worst:e}", path.display());
+    }
+}
+
+/// Large batches on rayon's pool: the same poses, bit for bit, as on one thread, and the same
+/// first bad configuration named, whatever task it falls in.
+#[test]
+fn parallel_batches_equal_the_single_threaded_batch() {
+    let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let tool = chain.link_id("tool").unwrap();
+    let mut rng = rng(17);
+    let n = 5003;
+    let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
+    let mut one = sp::BatchData::new(&chain);
+    let mut many = sp::BatchData::new(&chain);
+    let serial = sp::forward_kinematics_batch(&chain, &mut one, &qs).unwrap();
+    let parallel = sp::forward_kinematics_batch_par(&chain, &mut many, &qs).unwrap();
+    assert_eq!(parallel.len(), n);
+    let links: Vec<_> = chain
+        .links()
+        .iter()
+        .map(|l| chain.link_id(l.name()).unwrap())
+        .collect();
+    for i in (0..n).step_by(7).chain([n - 1]) {
+        for &link in &links {
+            assert_eq!(
+                parallel.world_from_link(i, link),
+                serial.world_from_link(i, link)
+            );
+        }
+    }
+    let mut tool_one = sp::BatchData::new(&chain);
+    let serial_tool =
+        sp::forward_kinematics_batch_to(&chain, &mut tool_one, &qs, tool, false).unwrap();
+    let parallel_tool =
+        sp::forward_kinematics_batch_to(&chain, &mut many, &qs, tool, true).unwrap();
+    for i in 0..n {
+        assert_eq!(
+            parallel_tool.world_from_link(i),
+            serial_tool.world_from_link(i)
+        );
+    }
+    let mut bad = qs.clone();
+    bad[6 * 4500 + 1] = f64::NAN;
+    bad[6 * 3001 + 4] = -10.0;
+    for e in [
+        sp::forward_kinematics_batch_par(&chain, &mut many, &bad).unwrap_err(),
+        sp::forward_kinematics_batch_to(&chain, &mut many, &bad, tool, true).unwrap_err(),
+    ] {
+        assert_eq!(e.index, 3001);
+        assert!(matches!(e.source, StateError::OutOfLimits { .. }));
     }
 }

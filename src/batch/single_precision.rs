@@ -1,5 +1,6 @@
 //! Batches in single precision: link poses of many configurations computed in `f32`, sixteen
-//! configurations per pass (one AVX-512 register, two AVX2 registers), for uses that need
+//! configurations per pass (one AVX-512 register, two AVX2 registers), on one thread or
+//! several, for uses that need
 //! throughput more than the last digits (sampling, collision checking, workspace maps).
 //!
 //! The same kernels as the `f64` batch ([`super`]) run on `f32` lanes, with two differences
@@ -26,7 +27,7 @@
 //! let mut data = BatchData::new(&chain);
 //! let tip = chain.link_id("link3")?;
 //! let qs = [0.0, 0.0, 0.0, 1.5707963267948966, 0.0, 0.0]; // two configurations
-//! let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip)?;
+//! let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip, false)?;
 //! let y = poses.world_from_link(1).translation().y;
 //! assert!((y - 9.0).abs() < 1e-5);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -35,7 +36,10 @@
 // Index loops over lanes are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
 
-use super::{BatchError, LaneCheck, configurations, first_error, lane_pose, transpose_chunk};
+use super::{
+    BatchError, LaneCheck, configurations, first_error, lane_pose, par_chunks_checked_with,
+    transpose_chunk, worth_parallel,
+};
 use crate::arith::{Arith, fma_dispatch};
 use crate::chain::{Body, Chain, LinkId};
 use crate::data::LimitPolicy;
@@ -44,6 +48,7 @@ use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
 use crate::kinematics::all_valid;
 use crate::transform::Transform;
 use crate::trig;
+use rayon::prelude::*;
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// Number of configurations evaluated together.
@@ -174,6 +179,25 @@ fn body_sin_cos<A: Arith>(body: &Body, q_lo: &[Lanes], q_hi: &[Lanes]) -> (F16, 
     }))
 }
 
+/// One chunk's joint values as transposed for the instruction set (`raw`), in `f64` lanes
+/// (`q64`: configurations 0–7, then 8–15, `dof` entries each) and in `f32` (`q32`).
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    raw: Vec<Lanes>,
+    q64: Vec<Lanes>,
+    q32: Vec<F16>,
+}
+
+impl Scratch {
+    fn new(dof: usize) -> Self {
+        Scratch {
+            raw: vec![Lanes::splat(0.0); 2 * dof],
+            q64: vec![Lanes::splat(0.0); 2 * dof],
+            q32: vec![F16::splat(0.0); dof],
+        }
+    }
+}
+
 /// Buffers for evaluating batches of configurations of one chain in single precision; grows to
 /// the largest batch seen and is reused.
 #[derive(Clone, Debug, Default)]
@@ -184,11 +208,7 @@ pub struct BatchData {
     /// the base to it.
     link_frames: Vec<Frame<F16>>,
     path: Vec<usize>,
-    /// One chunk's joint values as transposed for the instruction set, in `f64` lanes
-    /// (configurations 0–7, then 8–15, `dof` entries each) and in `f32`.
-    raw: Vec<Lanes>,
-    q64: Vec<Lanes>,
-    q32: Vec<F16>,
+    scratch: Scratch,
     len: usize,
     bodies: usize,
     dof: usize,
@@ -203,9 +223,7 @@ impl BatchData {
             frames: Vec::new(),
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
-            raw: vec![Lanes::splat(0.0); 2 * chain.dof()],
-            q64: vec![Lanes::splat(0.0); 2 * chain.dof()],
-            q32: vec![F16::splat(0.0); chain.dof()],
+            scratch: Scratch::new(chain.dof()),
             len: 0,
             bodies: chain.bodies.len(),
             dof: chain.dof(),
@@ -218,20 +236,22 @@ impl BatchData {
         self.limit_policy = policy;
     }
 
-    /// The number of chunks of `qs`, after checking its length (and its configurations when the
-    /// kernels cannot check them on their lanes).
+    /// The number of chunks of `qs`, after checking its length (and, on one thread, its
+    /// configurations when the kernels cannot check them on their lanes).
     fn prepare(
         &mut self,
         chain: &Chain,
         qs: &[f64],
         check: Option<LaneCheck<'_>>,
+        parallel: bool,
     ) -> Result<usize, BatchError> {
         assert!(
             self.bodies == chain.bodies.len() && self.dof == chain.dof(),
             "kinechain: BatchData was created for another chain"
         );
         let n = configurations(chain, qs)?;
-        if check.is_none() && !all_valid(chain, qs, self.limit_policy) {
+        // The parallel path's tasks check their own rows when the kernels cannot.
+        if check.is_none() && !parallel && !all_valid(chain, qs, self.limit_policy) {
             first_error(chain, qs, self.limit_policy)?;
         }
         self.len = n;
@@ -254,24 +274,65 @@ pub fn forward_kinematics_batch<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
+    all_links(chain, data, qs, false)
+}
+
+/// As [`forward_kinematics_batch`], with the chunks of sixteen configurations spread over the
+/// threads of rayon's global pool, as [`super::forward_kinematics_batch_par`] does (batches
+/// of fewer than [`super::PARALLEL_WORK`] joint evaluations run on the calling thread). Results
+/// are identical to the single-threaded call.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`] (the same configuration is named).
+///
+/// # Panics
+/// If `data` was created for another chain.
+pub fn forward_kinematics_batch_par<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+) -> Result<BatchPoses<'a>, BatchError> {
+    all_links(chain, data, qs, true)
+}
+
+fn all_links<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    parallel: bool,
+) -> Result<BatchPoses<'a>, BatchError> {
+    let parallel = parallel && worth_parallel(qs, chain.dof(), chain.bodies.len());
     let check = LaneCheck::of(chain, data.limit_policy);
-    let chunks = data.prepare(chain, qs, check)?;
+    let chunks = data.prepare(chain, qs, check, parallel)?;
     let bodies = chain.bodies.len().max(1);
     data.frames
         .resize(chunks * bodies, Frame::splat(&Transform::IDENTITY));
-    let mut all_ok = true;
-    for (c, frames) in data.frames.chunks_exact_mut(bodies).enumerate() {
-        all_ok &= chunk_poses(
+    let eval =
+        |check: Option<LaneCheck<'_>>, s: &mut Scratch, c: usize, frames: &mut [Frame<F16>]| {
+            chunk_poses(
+                chain, check, &mut s.raw, &mut s.q64, &mut s.q32, qs, c, frames,
+            )
+        };
+    let all_ok = if parallel {
+        let dof = chain.dof();
+        // Items of two eight-row chunks (one of sixteen configurations), as the f64 batch counts.
+        par_chunks_checked_with(
             chain,
-            check,
-            &mut data.raw,
-            &mut data.q64,
-            &mut data.q32,
+            data.limit_policy,
             qs,
-            c,
-            frames,
-        );
-    }
+            2,
+            bodies,
+            data.frames.par_chunks_mut(bodies),
+            || Scratch::new(dof),
+            |check, s, c0, frames| eval(check, s, c0 / 2, frames),
+        )
+    } else {
+        let mut all_ok = true;
+        for (c, frames) in data.frames.chunks_exact_mut(bodies).enumerate() {
+            all_ok &= eval(check, &mut data.scratch, c, frames);
+        }
+        all_ok
+    };
     if !all_ok {
         first_error(chain, qs, data.limit_policy)?;
     }
@@ -280,7 +341,8 @@ pub fn forward_kinematics_batch<'a>(
 
 /// The pose of one link for each configuration of `qs` (row-major), computed in `f32`: only the
 /// joints between the base and that link are evaluated, and only that link's pose is kept. On
-/// the calling thread.
+/// the calling thread, or with `parallel` over rayon's global pool (batches of fewer than
+/// [`super::PARALLEL_WORK`] joint evaluations always run on the calling thread).
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`].
@@ -292,26 +354,39 @@ pub fn forward_kinematics_batch_to<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
     link: LinkId,
+    parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
     chain.body_path(chain.link(link).body, &mut data.path);
+    let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
-    let chunks = data.prepare(chain, qs, check)?;
+    let chunks = data.prepare(chain, qs, check, parallel)?;
     data.link_frames
         .resize(chunks, Frame::splat(&Transform::IDENTITY));
-    let mut all_ok = true;
-    for (c, out) in data.link_frames.iter_mut().enumerate() {
-        all_ok &= chunk_path(
+    let path = &data.path;
+    let eval = |check: Option<LaneCheck<'_>>, s: &mut Scratch, c: usize, out: &mut Frame<F16>| {
+        chunk_path(
+            chain, check, path, &mut s.raw, &mut s.q64, &mut s.q32, qs, c, out,
+        )
+    };
+    let all_ok = if parallel {
+        let dof = chain.dof();
+        par_chunks_checked_with(
             chain,
-            check,
-            &data.path,
-            &mut data.raw,
-            &mut data.q64,
-            &mut data.q32,
+            data.limit_policy,
             qs,
-            c,
-            out,
-        );
-    }
+            2,
+            path.len(),
+            data.link_frames.par_iter_mut(),
+            || Scratch::new(dof),
+            |check, s, c0, out| eval(check, s, c0 / 2, out),
+        )
+    } else {
+        let mut all_ok = true;
+        for (c, out) in data.link_frames.iter_mut().enumerate() {
+            all_ok &= eval(check, &mut data.scratch, c, out);
+        }
+        all_ok
+    };
     if !all_ok {
         first_error(chain, qs, data.limit_policy)?;
     }
