@@ -272,6 +272,7 @@ pub fn forward_kinematics_batch_par<'a>(
         1,
         bodies,
         data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
+        || vec![Lanes::splat(0.0); chain.dof()],
         |check, q_lanes, c, frames| chunk_poses(chain, check, frames, q_lanes, qs, c),
     );
     if !all_ok {
@@ -311,37 +312,14 @@ fn lane_columns(f: &Frame<Lanes>, index: usize) -> [[f64; 4]; 4] {
     ]
 }
 
-/// Runs `eval(check, q_lanes, c0, out)` for each group of `per_item` chunks of `qs` (its
-/// first chunk `c0`) and its output `out` on rayon's pool (one pass over the batch and one
-/// fork–join), `bodies` being the bodies evaluated per configuration. Each group is checked by
-/// the kernel on its lanes, or, when the limits do not allow that, by its task before
-/// evaluation. False when some configuration is invalid.
-fn par_chunks_checked<T: Send>(
-    chain: &Chain,
-    policy: LimitPolicy,
-    qs: &[f64],
-    per_item: usize,
-    bodies: usize,
-    outs: impl IndexedParallelIterator<Item = T>,
-    eval: impl Fn(Option<LaneCheck<'_>>, &mut [Lanes], usize, T) -> bool + Sync + Send,
-) -> bool {
-    let dof = chain.dof();
-    par_chunks_checked_with(
-        chain,
-        policy,
-        qs,
-        per_item,
-        bodies,
-        outs,
-        || vec![Lanes::splat(0.0); per_item * dof],
-        |check, q_lanes: &mut Vec<Lanes>, c0, out| eval(check, q_lanes, c0, out),
-    )
-}
-
-/// [`par_chunks_checked`] with each task's scratch buffers made by `scratch` (once per task,
-/// not per item).
+/// Runs `eval(check, buffers, c0, out)` for each group of `per_item` chunks of `qs` (its
+/// first chunk `c0`, in chunks of [`LANES`]) and its output `out` on rayon's pool (one pass over
+/// the batch and one fork–join), `bodies` being the bodies evaluated per configuration and
+/// `buffers` each task's scratch, made by `scratch` once per task. Each group is checked by the
+/// kernel on its lanes, or, when the limits do not allow that, by its task before evaluation.
+/// False when some configuration is invalid.
 #[allow(clippy::too_many_arguments)]
-fn par_chunks_checked_with<T: Send, S>(
+fn par_chunks_checked<T: Send, S>(
     chain: &Chain,
     policy: LimitPolicy,
     qs: &[f64],
@@ -483,6 +461,7 @@ pub fn forward_kinematics_batch_to<'a>(
             per_item,
             path.len(),
             data.link_frames[..chunks].par_chunks_mut(per_item),
+            || vec![Lanes::splat(0.0); per_item * chain.dof()],
             |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
         );
         if !all_ok {

@@ -37,7 +37,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{
-    BatchError, LaneCheck, configurations, first_error, lane_pose, par_chunks_checked_with,
+    BatchError, LaneCheck, configurations, first_error, lane_pose, par_chunks_checked,
     transpose_chunk, worth_parallel,
 };
 use crate::arith::{Arith, fma_dispatch};
@@ -307,35 +307,21 @@ fn all_links<'a>(
     let bodies = chain.bodies.len().max(1);
     data.frames
         .resize(chunks * bodies, Frame::splat(&Transform::IDENTITY));
-    let eval =
-        |check: Option<LaneCheck<'_>>, s: &mut Scratch, c: usize, frames: &mut [Frame<F16>]| {
+    run_chunks(
+        chain,
+        qs,
+        data.limit_policy,
+        &mut data.scratch,
+        parallel,
+        bodies,
+        &mut data.frames,
+        bodies,
+        |check, s, c, frames| {
             chunk_poses(
                 chain, check, &mut s.raw, &mut s.q64, &mut s.q32, qs, c, frames,
             )
-        };
-    let all_ok = if parallel {
-        let dof = chain.dof();
-        // Items of two eight-row chunks (one of sixteen configurations), as the f64 batch counts.
-        par_chunks_checked_with(
-            chain,
-            data.limit_policy,
-            qs,
-            2,
-            bodies,
-            data.frames.par_chunks_mut(bodies),
-            || Scratch::new(dof),
-            |check, s, c0, frames| eval(check, s, c0 / 2, frames),
-        )
-    } else {
-        let mut all_ok = true;
-        for (c, frames) in data.frames.chunks_exact_mut(bodies).enumerate() {
-            all_ok &= eval(check, &mut data.scratch, c, frames);
-        }
-        all_ok
-    };
-    if !all_ok {
-        first_error(chain, qs, data.limit_policy)?;
-    }
+        },
+    )?;
     Ok(BatchPoses { chain, data })
 }
 
@@ -363,34 +349,75 @@ pub fn forward_kinematics_batch_to<'a>(
     data.link_frames
         .resize(chunks, Frame::splat(&Transform::IDENTITY));
     let path = &data.path;
-    let eval = |check: Option<LaneCheck<'_>>, s: &mut Scratch, c: usize, out: &mut Frame<F16>| {
-        chunk_path(
-            chain, check, path, &mut s.raw, &mut s.q64, &mut s.q32, qs, c, out,
-        )
-    };
+    run_chunks(
+        chain,
+        qs,
+        data.limit_policy,
+        &mut data.scratch,
+        parallel,
+        path.len(),
+        &mut data.link_frames,
+        1,
+        |check, s, c, out| {
+            chunk_path(
+                chain,
+                check,
+                path,
+                &mut s.raw,
+                &mut s.q64,
+                &mut s.q32,
+                qs,
+                c,
+                &mut out[0],
+            )
+        },
+    )?;
+    Ok(BatchLinkPoses { chain, data, link })
+}
+
+/// Runs `eval(check, scratch, c, out)` for every chunk `c` of sixteen configurations of `qs`,
+/// `out` its `width` frames of `outs`: on rayon's pool when `parallel` (each task with scratch
+/// buffers of its own; `bodies` evaluated per configuration, for the size of a task), else on the
+/// calling thread with `scratch`. The error of the first bad configuration if `eval` (or a task's
+/// check) rejects one.
+#[allow(clippy::too_many_arguments)]
+fn run_chunks(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    scratch: &mut Scratch,
+    parallel: bool,
+    bodies: usize,
+    outs: &mut [Frame<F16>],
+    width: usize,
+    eval: impl Fn(Option<LaneCheck<'_>>, &mut Scratch, usize, &mut [Frame<F16>]) -> bool + Sync + Send,
+) -> Result<(), BatchError> {
     let all_ok = if parallel {
         let dof = chain.dof();
-        par_chunks_checked_with(
+        // Items of two eight-row chunks (one of sixteen configurations), as the f64 batch counts.
+        par_chunks_checked(
             chain,
-            data.limit_policy,
+            policy,
             qs,
             2,
-            path.len(),
-            data.link_frames.par_iter_mut(),
+            bodies,
+            outs.par_chunks_mut(width),
             || Scratch::new(dof),
             |check, s, c0, out| eval(check, s, c0 / 2, out),
         )
     } else {
+        let check = LaneCheck::of(chain, policy);
         let mut all_ok = true;
-        for (c, out) in data.link_frames.iter_mut().enumerate() {
-            all_ok &= eval(check, &mut data.scratch, c, out);
+        for (c, out) in outs.chunks_exact_mut(width).enumerate() {
+            all_ok &= eval(check, scratch, c, out);
         }
         all_ok
     };
-    if !all_ok {
-        first_error(chain, qs, data.limit_policy)?;
+    if all_ok {
+        Ok(())
+    } else {
+        first_error(chain, qs, policy)
     }
-    Ok(BatchLinkPoses { chain, data, link })
 }
 
 batch_len!(BatchPoses, BatchLinkPoses);
