@@ -77,7 +77,12 @@ impl<C: Col> Frame4<C> {
 
     #[inline(always)]
     pub(crate) fn load(s: &Stored) -> Self {
-        Frame4(s.each_ref().map(C::load))
+        Frame4([
+            C::load(&s[0]),
+            C::load(&s[1]),
+            C::load(&s[2]),
+            C::load(&s[3]),
+        ])
     }
 
     /// Stores the columns whole (four stores instead of twelve entries).
@@ -131,7 +136,7 @@ fn combine<C: Col>(c: &[C; 4], u: [C; 3], base: C) -> C {
 /// [`combine`] with constant coefficients.
 #[inline(always)]
 fn combine_const<C: Col>(c: &[C; 4], u: [f64; 3], base: C) -> C {
-    combine(c, u.map(C::splat), base)
+    combine(c, [C::splat(u[0]), C::splat(u[1]), C::splat(u[2])], base)
 }
 
 /// Columns `i`, `j` turned by the angle with sine `s` and cosine `c` (see `kernel::plane`).
@@ -157,7 +162,11 @@ fn rotate_columns<A: Arith>(f: &mut [A::Col; 4], axis: &Axis, s: f64, c: f64) {
             let a = crate::kernel::rodrigues::<f64, A>(v, s, c);
             let old = *f;
             for j in 0..3 {
-                let [a0, a1, a2] = a[j].map(A::Col::splat);
+                let (a0, a1, a2) = (
+                    A::Col::splat(a[j][0]),
+                    A::Col::splat(a[j][1]),
+                    A::Col::splat(a[j][2]),
+                );
                 f[j] = A::Col::mul_add(
                     old[0],
                     a0,
@@ -305,7 +314,7 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
 /// given `(sin θ, cos θ)` when θ varies.
 #[inline(always)]
 pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
-    let mut f: [A::Col; 4] = std::array::from_fn(|j| A::Col::load(&body.pre4[j]));
+    let mut f = Frame4::<A::Col>::load(&body.pre4).0;
     let axis = A::Col::load(&body.axis4);
     apply_motion::<A>(&mut f, body, q, Some(axis), sin_cos);
     place::<A>(&mut f, &body.post);
@@ -316,16 +325,18 @@ pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64))
 #[inline(always)]
 pub(crate) fn compose<C: Col>(a: &Frame4<C>, b: &Frame4<C>) -> Frame4<C> {
     let zero = C::splat(0.0);
-    let u = |j: usize| {
-        let c: C = b.0[j];
-        [c.broadcast(0), c.broadcast(1), c.broadcast(2)]
-    };
     Frame4([
-        combine(&a.0, u(0), zero),
-        combine(&a.0, u(1), zero),
-        combine(&a.0, u(2), zero),
-        combine(&a.0, u(3), a.0[3]),
+        combine(&a.0, broadcasts(b.0[0]), zero),
+        combine(&a.0, broadcasts(b.0[1]), zero),
+        combine(&a.0, broadcasts(b.0[2]), zero),
+        combine(&a.0, broadcasts(b.0[3]), a.0[3]),
     ])
+}
+
+/// Each of the first three entries of `c` in every entry.
+#[inline(always)]
+fn broadcasts<C: Col>(c: C) -> [C; 3] {
+    [c.broadcast(0), c.broadcast(1), c.broadcast(2)]
 }
 
 /// The columns of `parent`, or of the world frame for `None`. (A function, not a closure: see
