@@ -75,6 +75,9 @@ impl<C: Col> Frame4<C> {
         ])
     }
 
+    // Arrays of vectors are written out here and below rather than built with `[T; N]::map`:
+    // inlined into a large dispatched function, `map` can compile to a call of its own that
+    // passes every vector through memory.
     #[inline(always)]
     pub(crate) fn load(s: &Stored) -> Self {
         Frame4([
