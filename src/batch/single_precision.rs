@@ -542,7 +542,9 @@ fn load_chunk<A: Arith>(
 }
 
 /// Every body's frame of chunk `c` of `qs`, written to `frames`. False if `check` rejects a
-/// configuration (the frames are then meaningless).
+/// configuration (the frames are then meaningless). The buffers of a [`Scratch`] are passed
+/// apart here and in [`chunk_path_generic`]: passed whole, with the same code inside, the Panda's
+/// batch took 9.3–9.5 ns per configuration instead of 10.1–10.5 (alternated `kinechain bench`).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn chunk_poses_generic<A: Arith>(
