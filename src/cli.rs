@@ -69,8 +69,9 @@ enum Command {
         /// What to compute: poses, poses and velocities, or poses, velocities and accelerations.
         #[arg(long, value_enum, default_value_t = Level::Pose)]
         level: Level,
-        /// Random configurations (within the joint limits) to time and check.
-        #[arg(long, default_value_t = 64)]
+        /// Random configurations (within the joint limits) to time and check; at least two, so
+        /// that the incremental row's updates move a joint.
+        #[arg(long, default_value_t = 64, value_parser = at_least_two)]
         configurations: usize,
         /// The link that every method reads and the one-link methods evaluate up to (default:
         /// the link farthest from the base).
@@ -287,7 +288,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
             level,
             configurations,
             link,
-        } => bench(&robot, level, configurations.max(1), link.as_deref(), out),
+        } => bench(&robot, level, configurations, link.as_deref(), out),
         Command::Convert { robot, output } => {
             let chain = load(&robot)?;
             let text = crate::convert::to_urdf(&chain)?;
@@ -896,6 +897,15 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
         qd: l.q_dot,
         qdd: l.q_ddot,
     })
+}
+
+/// `--configurations`: a whole number of at least two.
+fn at_least_two(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 2 => Ok(n),
+        Ok(_) => Err("at least 2 are needed (the incremental row moves between them)".into()),
+        Err(e) => Err(e.to_string()),
+    }
 }
 
 /// One timed method of `kinechain bench`: its label, one call, and how many configurations a

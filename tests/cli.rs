@@ -401,6 +401,9 @@ fn bench_prints_times_ratios_and_errors() {
     assert!(text.contains("incremental (panda_joint7 moves)"), "{text}");
     let m = error(&["bench", "robots/panda.urdf", "--link", "hand"]);
     assert!(m.contains("no link named 'hand'"), "{m}");
+    // One configuration would leave the incremental row timing updates that change nothing.
+    let m = error(&["bench", "robots/ur5.yaml", "--configurations", "1"]);
+    assert!(m.contains("at least 2"), "{m}");
     // A DH table: `k` runs on the URDF `convert` writes (a cylindrical joint is two URDF joints).
     for robot in ["robots/ur5.yaml", "robots/cylindrical.yaml"] {
         let text = ok_text(&["bench", robot, "--configurations", "2"]);
