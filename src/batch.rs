@@ -138,17 +138,24 @@ impl BatchData {
 }
 
 /// The number of configurations in `qs` (rows of the chain's dof), or the error for a length
-/// that is not a multiple of it (the index given is that of the incomplete row).
+/// that is not a multiple of it (the index given is that of the incomplete row) or for a chain
+/// without moving joints.
 fn configurations(chain: &Chain, qs: &[f64]) -> Result<usize, BatchError> {
     let dof = chain.dof();
-    let n = qs.len().checked_div(dof).unwrap_or(0);
-    if dof == 0 || !qs.len().is_multiple_of(dof) {
+    if dof == 0 {
+        return Err(BatchError {
+            index: 0,
+            source: StateError::NoDegreesOfFreedom,
+        });
+    }
+    let n = qs.len() / dof;
+    if !qs.len().is_multiple_of(dof) {
         return Err(BatchError {
             index: n,
             source: StateError::WrongLength {
                 what: "q",
                 expected: dof,
-                got: if dof == 0 { qs.len() } else { qs.len() % dof },
+                got: qs.len() % dof,
             },
         });
     }
@@ -193,8 +200,9 @@ impl BatchPoses<'_> {
 ///
 /// # Errors
 /// [`BatchError`] naming the first configuration that has a non-finite entry or (under
-/// [`LimitPolicy::Enforce`]) a value outside a joint's limits, or a `qs` whose length is not a
-/// multiple of the chain's dof. No result is returned then (the kernels check the entries as
+/// [`LimitPolicy::Enforce`]) a value outside a joint's limits, a `qs` whose length is not a
+/// multiple of the chain's dof, or a chain without moving joints
+/// ([`StateError::NoDegreesOfFreedom`]). No result is returned then (the kernels check the entries as
 /// they transpose them, so the batch may have been evaluated, without effect).
 ///
 /// # Panics

@@ -157,6 +157,9 @@ pub enum CliError {
     /// The robot cannot be written as URDF.
     #[error(transparent)]
     Convert(#[from] crate::convert::ConvertError),
+    /// `bench` on a chain without moving joints.
+    #[error("the chain has no moving joints: its poses are constant and there is nothing to time")]
+    NothingToTime,
     /// `--qdd` without `--qd`.
     #[error("--qdd needs --qd (accelerations depend on velocities)")]
     QddWithoutQd,
@@ -780,7 +783,9 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         // Pose-only lines (the common case) go through the batch kernel, 256 at a time; lines
         // with rates, or a run with --link/--point, go one by one. Results are written in line
         // order, and everything before a bad line is written before its error.
-        let batchable = links.is_empty() && points.is_empty();
+        // (A chain without moving joints has empty configurations, which a flat batch cannot
+        // count: its lines go one by one.)
+        let batchable = links.is_empty() && points.is_empty() && chain.dof() > 0;
         let mut pending: Vec<f64> = Vec::new();
         let mut batch = BatchData::new(&chain);
         batch.set_limit_policy(data.limit_policy());
@@ -927,6 +932,9 @@ fn bench(
     use std::hint::black_box;
 
     let chain = &load(path)?;
+    if chain.dof() == 0 {
+        return Err(CliError::NothingToTime);
+    }
     let qs = &crate::measure::configurations(chain, n, 0x6b69_6e65);
     let qd: Vec<Vec<f64>> = qs
         .iter()

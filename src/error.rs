@@ -336,6 +336,14 @@ pub enum StateError {
         /// The value given.
         value: f64,
     },
+    /// A batch for a chain without moving joints: its configurations have no entries, so a flat
+    /// batch cannot say how many it holds. Evaluate such a chain once, with
+    /// [`forward_kinematics`](crate::forward_kinematics).
+    #[error(
+        "the chain has no moving joints, so a batch cannot tell how many configurations it holds \
+         (evaluate it once with forward_kinematics)"
+    )]
+    NoDegreesOfFreedom,
     /// A joint value is outside the joint's limits.
     #[error("joint '{joint}'{} = {value} is outside its limits [{lower}, {upper}]{}", component_suffix(component), hint(*value, *lower, *upper))]
     OutOfLimits {

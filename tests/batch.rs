@@ -230,3 +230,40 @@ fn lane_checks_decide_as_check_q_does() {
     // Both outcomes occur under each policy's values.
     assert!(accepted >= 18 && rejected >= 18, "{accepted} / {rejected}");
 }
+
+/// A chain without moving joints has empty configurations, which a flat batch cannot count:
+/// every batch entry point refuses it with an error that says so, while a single evaluation
+/// works.
+#[test]
+fn batches_of_a_chain_without_moving_joints_are_refused() {
+    let chain = Chain::from_urdf_str(
+        r#"<robot name="fixed">
+             <link name="base"/><link name="tool"/>
+             <joint name="mount" type="fixed">
+               <parent link="base"/><child link="tool"/><origin xyz="0 0 1"/>
+             </joint>
+           </robot>"#,
+    )
+    .unwrap();
+    assert_eq!(chain.dof(), 0);
+    let tool = chain.link_id("tool").unwrap();
+    let mut batch = BatchData::new(&chain);
+    let mut batch32 = kinechain::batch::single_precision::BatchData::new(&chain);
+    for qs in [&[][..], &[0.0][..]] {
+        let errors = [
+            forward_kinematics_batch(&chain, &mut batch, qs).map(|_| ()),
+            forward_kinematics_batch_par(&chain, &mut batch, qs).map(|_| ()),
+            forward_kinematics_batch_to(&chain, &mut batch, qs, tool, false).map(|_| ()),
+            kinechain::batch::single_precision::forward_kinematics_batch(&chain, &mut batch32, qs)
+                .map(|_| ()),
+        ];
+        for e in errors {
+            let e = e.unwrap_err();
+            assert_eq!(e.source, StateError::NoDegreesOfFreedom, "{qs:?}");
+            assert!(e.source.to_string().contains("no moving joints"), "{e}");
+        }
+    }
+    let mut data = kinechain::Data::new(&chain);
+    let poses = kinechain::forward_kinematics(&chain, &mut data, &[]).unwrap();
+    assert_eq!(poses.world_from_link(tool).translation().z, 1.0);
+}

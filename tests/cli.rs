@@ -506,6 +506,37 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A chain without moving joints: `--batch` writes one result per line (the lines go one by one,
+/// not through the batch kernel, which cannot count empty configurations), and `bench` says
+/// there is nothing to time.
+#[test]
+fn a_chain_without_moving_joints_in_batch_and_bench() {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-fixed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = dir.join("fixed.urdf");
+    std::fs::write(
+        &robot,
+        r#"<robot name="fixed">
+             <link name="base"/><link name="tool"/>
+             <joint name="mount" type="fixed">
+               <parent link="base"/><child link="tool"/><origin xyz="0 0 1"/>
+             </joint>
+           </robot>"#,
+    )
+    .unwrap();
+    let batch = dir.join("three.jsonl");
+    std::fs::write(&batch, "{\"q\": []}\n\n{\"q\": []}\n{\"q\": []}\n").unwrap();
+    let (robot, batch) = (robot.to_str().unwrap(), batch.to_str().unwrap());
+    let lines = ok_json(&["fk", robot, "--batch", batch]);
+    assert_eq!(lines.len(), 3);
+    for v in &lines {
+        assert_eq!(position(v, "tool"), [0.0, 0.0, 1.0]);
+    }
+    let m = error(&["bench", robot]);
+    assert!(m.contains("no moving joints"), "{m}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Every `--orientation` kind on every reference robot and sample: each non-null output
 /// recomposes to the link's rotation matrix (the `matrix` output) within 1e-12, near gimbal
 /// lock included (the reference samples include the zero configuration and joint limits).

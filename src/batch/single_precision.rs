@@ -280,7 +280,7 @@ impl BatchData {
 /// # Errors
 /// As [`super::forward_kinematics_batch`]: [`BatchError`] naming the first configuration that
 /// has a non-finite entry or (under [`LimitPolicy::Enforce`]) a value outside a joint's limits,
-/// or a `qs` whose length is not a multiple of the chain's dof.
+/// a `qs` whose length is not a multiple of the chain's dof, or a chain without moving joints.
 ///
 /// # Panics
 /// If `data` was created for another chain.
