@@ -1220,6 +1220,21 @@ fn bench(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
     ));
+    if level != Level::Pose {
+        let names = ["ω", "v", "α", "a"];
+        let units = ["rad/s", "m/s", "rad/s²", "m/s²"];
+        let parts: Vec<String> = rate_errors(chain, qs, &qd, level == Level::Acc)?
+            .iter()
+            .zip(names.iter().zip(units))
+            .map(|((abs, ulps), (name, unit))| {
+                format!("{name} {abs:.2e} {unit} ({ulps:.2} ulp of the largest)")
+            })
+            .collect();
+        text.push_str(&format!(
+            "\nrate errors against the 256-bit evaluation: {}",
+            parts.join(", ")
+        ));
+    }
     if level == Level::Pose {
         text.push_str(&format!(
             "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
@@ -1228,6 +1243,61 @@ fn bench(
         ));
     }
     write_line(out, &text)
+}
+
+/// Errors of ω and v, and with `acc` of α and a, against the 256-bit evaluation of the same model, by the evaluation `bench` times, at the states it times (`q̈ = q̇`, or none
+/// without `acc`): the largest absolute error over links and
+/// configurations, and the largest in ulps of the configuration's largest component of that
+/// quantity (over all links).
+fn rate_errors(
+    chain: &Chain,
+    qs: &[Vec<f64>],
+    qd: &[Vec<f64>],
+    acc: bool,
+) -> Result<Vec<(f64, f64)>, CliError> {
+    let mut data = Data::new(chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut worst = vec![(0.0_f64, 0.0_f64); if acc { 4 } else { 2 }];
+    for (q, v) in qs.iter().zip(qd) {
+        let zero = vec![0.0; v.len()];
+        let qdd = if acc { v } else { &zero };
+        let exact = crate::reference::link_motion(chain, q, v, qdd);
+        // The evaluation `bench` times at this level.
+        let ours: Vec<[[f64; 3]; 4]> = if acc {
+            let got = forward_accelerations(chain, &mut data, q, v, qdd)?;
+            (0..exact.len())
+                .map(|l| {
+                    let (v, a) = (got.velocity(LinkId(l)), got.acceleration(LinkId(l)));
+                    [v.omega.into(), v.v.into(), a.alpha.into(), a.a.into()]
+                })
+                .collect()
+        } else {
+            let got = forward_velocities(chain, &mut data, q, v)?;
+            (0..exact.len())
+                .map(|l| {
+                    let v = got.velocity(LinkId(l));
+                    [v.omega.into(), v.v.into(), [0.0; 3], [0.0; 3]]
+                })
+                .collect()
+        };
+        let want: Vec<[[f64; 3]; 4]> = exact.iter().map(|m| [m.omega, m.v, m.alpha, m.a]).collect();
+        for (k, w) in worst.iter_mut().enumerate() {
+            let largest = want
+                .iter()
+                .flat_map(|m| m[k])
+                .fold(0.0_f64, |m, x| m.max(x.abs()));
+            let error = ours
+                .iter()
+                .zip(&want)
+                .flat_map(|(o, e)| (0..3).map(move |c| (o[k][c] - e[k][c]).abs()))
+                .fold(0.0_f64, f64::max);
+            w.0 = w.0.max(error);
+            if largest > 0.0 {
+                w.1 = w.1.max(error / (largest * f64::EPSILON));
+            }
+        }
+    }
+    Ok(worst)
 }
 
 /// Labels of `kinechain bench` rows (the first two as prefixes) that the line after the table

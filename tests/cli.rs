@@ -428,6 +428,28 @@ fn bench_prints_times_ratios_and_errors() {
     ]);
     // The rates' cost against poses alone, from the same rounds: a positive factor.
     assert!(factor_after(&text, "poses + velocities + accelerations: ") > 0.0);
+    // The rates' errors against the 256-bit evaluation, each within 8 ulps of the largest value
+    // of its quantity: ω, v, α and a here, ω and v at `--level vel`.
+    for (level, count) in [("acc", 4), ("vel", 2)] {
+        let text = ok_text(&[
+            "bench",
+            "robots/puma560.yaml",
+            "--level",
+            level,
+            "--configurations",
+            "2",
+        ]);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("rate errors against the 256-bit evaluation: "))
+            .unwrap_or_else(|| panic!("no rate errors at --level {level}:\n{text}"));
+        let parts: Vec<&str> = line.split(" ulp of the largest").collect();
+        assert_eq!(parts.len(), count + 1, "{line}");
+        for part in &parts[..count] {
+            let ulps: f64 = part.rsplit('(').next().unwrap().trim().parse().unwrap();
+            assert!((0.0..8.0).contains(&ulps), "{line}");
+        }
+    }
 }
 
 /// The number in parentheses just before the first `marker` in `text` (`… (1.05 ulp of the …`).
