@@ -126,8 +126,8 @@ struct FkArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
     format: OutputFormat,
-    /// How to print each link's orientation (JSON output): the pose matrix, or the position and
-    /// one set of orientation coordinates (null where undefined).
+    /// How to print each link's orientation: the pose matrix, or the position and one set of
+    /// orientation coordinates (null, or `undefined` in a table, where undefined).
     #[arg(long, value_enum, default_value_t = Orientation::Matrix)]
     orientation: Orientation,
 }
@@ -615,51 +615,60 @@ enum Orientation {
     Rodrigues,
 }
 
+/// The coordinates of `a` that a non-matrix `--orientation` names, in the order the README gives
+/// (quaternion `w x y z`, `roll pitch yaw`, `phi theta psi`, the axis then the angle, `γ1 γ2 γ3`);
+/// `None` where the representation is undefined (a singularity).
+fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<Vec<f64>> {
+    use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
+    match kind {
+        Orientation::Matrix => Some(a.transpose().iter().copied().collect()),
+        Orientation::Quat => {
+            let e = EulerParameters::from_matrix(a);
+            Some(vec![e.e0, e.e1, e.e2, e.e3])
+        }
+        Orientation::Rpy => Rpy::from_matrix(a)
+            .ok()
+            .map(|r| vec![r.roll, r.pitch, r.yaw]),
+        Orientation::Zxz => EulerZxz::from_matrix(a)
+            .ok()
+            .map(|e| vec![e.phi, e.theta, e.psi]),
+        Orientation::AxisAngle => AxisAngle::from_matrix(a)
+            .ok()
+            .map(|x| vec![x.axis.x, x.axis.y, x.axis.z, x.angle]),
+        Orientation::Rodrigues => RodriguezParameters::from_matrix(a)
+            .ok()
+            .map(|g| g.0.iter().copied().collect()),
+    }
+}
+
 /// The `"position"` and orientation members of a link for a non-matrix `--orientation`; the
 /// orientation is `null` where the representation is undefined (a singularity).
 fn orientation_json(m: &mut Map<String, Value>, pose: &Transform, kind: Orientation) {
-    use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
-    let a = pose.rotation();
-    let (key, value) = match kind {
-        Orientation::Matrix => {
-            m.insert("pose".into(), json!(pose.to_rows()));
-            return;
-        }
-        Orientation::Quat => {
-            let e = EulerParameters::from_matrix(&a);
-            (
-                "quaternion",
-                json!({"w": e.e0, "x": e.e1, "y": e.e2, "z": e.e3}),
-            )
-        }
-        Orientation::Rpy => (
-            "rpy",
-            Rpy::from_matrix(&a).map_or(
-                Value::Null,
-                |r| json!({"roll": r.roll, "pitch": r.pitch, "yaw": r.yaw}),
-            ),
-        ),
-        Orientation::Zxz => (
-            "euler_zxz",
-            EulerZxz::from_matrix(&a).map_or(
-                Value::Null,
-                |e| json!({"phi": e.phi, "theta": e.theta, "psi": e.psi}),
-            ),
-        ),
-        Orientation::AxisAngle => (
-            "axis_angle",
-            AxisAngle::from_matrix(&a).map_or(
-                Value::Null,
-                |x| json!({"axis": vec_json(&x.axis), "angle": x.angle}),
-            ),
-        ),
-        Orientation::Rodrigues => (
-            "rodrigues",
-            RodriguezParameters::from_matrix(&a).map_or(Value::Null, |g| vec_json(&g.0)),
-        ),
-    };
+    if kind == Orientation::Matrix {
+        m.insert("pose".into(), json!(pose.to_rows()));
+        return;
+    }
+    let value = orientation_values(&pose.rotation(), kind).map_or(Value::Null, |v| match kind {
+        Orientation::Quat => json!({"w": v[0], "x": v[1], "y": v[2], "z": v[3]}),
+        Orientation::Rpy => json!({"roll": v[0], "pitch": v[1], "yaw": v[2]}),
+        Orientation::Zxz => json!({"phi": v[0], "theta": v[1], "psi": v[2]}),
+        Orientation::AxisAngle => json!({"axis": [v[0], v[1], v[2]], "angle": v[3]}),
+        Orientation::Matrix | Orientation::Rodrigues => json!(v),
+    });
     m.insert("position".into(), vec_json(&pose.translation()));
-    m.insert(key.into(), value);
+    m.insert(orientation_key(kind).into(), value);
+}
+
+/// The JSON member (and table column) of a non-matrix `--orientation`.
+fn orientation_key(kind: Orientation) -> &'static str {
+    match kind {
+        Orientation::Matrix => "rotation",
+        Orientation::Quat => "quaternion",
+        Orientation::Rpy => "rpy",
+        Orientation::Zxz => "euler_zxz",
+        Orientation::AxisAngle => "axis_angle",
+        Orientation::Rodrigues => "rodrigues",
+    }
 }
 
 fn results_json(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> Value {
@@ -680,35 +689,54 @@ fn results_json(chain: &Chain, results: &[LinkResult], orientation: Orientation)
     json!({ "links": links })
 }
 
-fn results_table(chain: &Chain, results: &[LinkResult]) -> String {
+/// `fk --format table`: one row per link, its position and its orientation in the coordinates
+/// `--orientation` names (`undefined` at a singularity of the representation), then its rates.
+fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> String {
     let width = results
         .iter()
         .map(|(l, ..)| chain.link(*l).name().len())
         .max()
         .unwrap_or(4)
         .max(4);
+    let header = match orientation {
+        Orientation::Matrix => "rotation (rows)",
+        Orientation::Quat => "quaternion (w x y z)",
+        Orientation::Rpy => "rpy (roll pitch yaw)",
+        Orientation::Zxz => "euler_zxz (phi theta psi)",
+        Orientation::AxisAngle => "axis_angle (x y z; angle)",
+        Orientation::Rodrigues => "rodrigues (γ1 γ2 γ3)",
+    };
     let mut text = format!(
-        "{:<width$} {:>12} {:>12} {:>12}   rotation (rows)\n",
+        "{:<width$} {:>12} {:>12} {:>12}   {header}\n",
         "link", "x", "y", "z"
     );
+    // A matrix's rows, and the axis before its angle, are separated by `;`.
+    let group = match orientation {
+        Orientation::Matrix | Orientation::AxisAngle => 3,
+        _ => 4,
+    };
+    let values = |v: Vec<f64>| {
+        let parts: Vec<String> = v
+            .chunks(group)
+            .map(|c| {
+                c.iter()
+                    .map(|x| format!("{x:.6}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .collect();
+        format!("[{}]", parts.join("; "))
+    };
     for (l, pose, vel, acc) in results {
         let p = pose.translation();
-        let r = pose.rotation();
+        let r = orientation_values(&pose.rotation(), orientation)
+            .map_or_else(|| "undefined".to_string(), values);
         text.push_str(&format!(
-            "{:<width$} {:>12.6} {:>12.6} {:>12.6}   [{:.6} {:.6} {:.6}; {:.6} {:.6} {:.6}; {:.6} {:.6} {:.6}]\n",
+            "{:<width$} {:>12.6} {:>12.6} {:>12.6}   {r}\n",
             chain.link(*l).name(),
             p.x,
             p.y,
             p.z,
-            r[(0, 0)],
-            r[(0, 1)],
-            r[(0, 2)],
-            r[(1, 0)],
-            r[(1, 1)],
-            r[(1, 2)],
-            r[(2, 0)],
-            r[(2, 1)],
-            r[(2, 2)]
         ));
         let row = |label: &str, v: &nalgebra::Vector3<f64>| {
             format!(
@@ -767,7 +795,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     value.to_string()
                 }
                 OutputFormat::Table => {
-                    let mut text = results_table(&chain, &results);
+                    let mut text = results_table(&chain, &results, args.orientation);
                     text.push_str(&points_table(&chain, &points, &point_results));
                     text
                 }
@@ -803,7 +831,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     OutputFormat::Json => {
                         results_json(&chain, &results, args.orientation).to_string()
                     }
-                    OutputFormat::Table => results_table(&chain, &results),
+                    OutputFormat::Table => results_table(&chain, &results, args.orientation),
                 };
                 write_line(out, &text)?;
             }

@@ -559,6 +559,83 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `--format table` prints the coordinates `--orientation` names, the same values as the JSON
+/// output (to the six decimals shown), and `undefined` where JSON has `null`.
+#[test]
+fn tables_print_the_orientation_asked_for() {
+    let q = "[0.3, -0.5, -1.2, 0.1, -0.7, 2.9]";
+    for (kind, header, key) in [
+        ("quat", "quaternion (w x y z)", "quaternion"),
+        ("rpy", "rpy (roll pitch yaw)", "rpy"),
+        ("zxz", "euler_zxz (phi theta psi)", "euler_zxz"),
+        ("axis-angle", "axis_angle (x y z; angle)", "axis_angle"),
+        ("rodrigues", "rodrigues (γ1 γ2 γ3)", "rodrigues"),
+    ] {
+        let args = ["fk", "robots/puma560.yaml", "--q", q, "--orientation", kind];
+        let json = &ok_json(&args)[0];
+        let table = ok_text(&[&args[..], &["--format", "table"]].concat());
+        let mut lines = table.lines();
+        assert!(lines.next().unwrap().ends_with(header), "{table}");
+        for line in lines {
+            let link = line.split_whitespace().next().unwrap();
+            let want = &json["links"][link][key];
+            let shown = line.split("   ").last().unwrap().trim();
+            if want.is_null() {
+                assert_eq!(shown, "undefined", "{kind} {link}");
+                continue;
+            }
+            let values: Vec<f64> = match want {
+                Value::Array(v) => v.iter().map(|x| x.as_f64().unwrap()).collect(),
+                _ => match kind {
+                    "quat" => ["w", "x", "y", "z"]
+                        .map(|k| want[k].as_f64().unwrap())
+                        .to_vec(),
+                    "rpy" => ["roll", "pitch", "yaw"]
+                        .map(|k| want[k].as_f64().unwrap())
+                        .to_vec(),
+                    "zxz" => ["phi", "theta", "psi"]
+                        .map(|k| want[k].as_f64().unwrap())
+                        .to_vec(),
+                    _ => {
+                        let axis = want["axis"].as_array().unwrap().iter();
+                        let mut v: Vec<f64> = axis.map(|x| x.as_f64().unwrap()).collect();
+                        v.push(want["angle"].as_f64().unwrap());
+                        v
+                    }
+                },
+            };
+            let printed: Vec<f64> = shown
+                .trim_matches(['[', ']'])
+                .split([' ', ';'])
+                .filter(|s| !s.is_empty())
+                .map(|s| s.parse().unwrap())
+                .collect();
+            assert_eq!(printed.len(), values.len(), "{kind} {link}: {shown}");
+            for (p, v) in printed.iter().zip(&values) {
+                assert!(
+                    (p - v).abs() <= 5e-7,
+                    "{kind} {link}: {shown} against {want}"
+                );
+            }
+        }
+    }
+    // The base link's axis is undefined (the identity).
+    let table = ok_text(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--q",
+        q,
+        "--orientation",
+        "axis-angle",
+        "--format",
+        "table",
+    ]);
+    assert!(
+        table.lines().nth(1).unwrap().ends_with("undefined"),
+        "{table}"
+    );
+}
+
 /// Every `--orientation` kind on every reference robot and sample: each non-null output
 /// recomposes to the link's rotation matrix (the `matrix` output) within 1e-12, near gimbal
 /// lock included (the reference samples include the zero configuration and joint limits).
