@@ -157,6 +157,17 @@ pub enum CliError {
     /// The robot cannot be written as URDF.
     #[error(transparent)]
     Convert(#[from] crate::convert::ConvertError),
+    /// A result overflowed (finite joint values so large that a position, velocity or
+    /// acceleration exceeds the `f64` range), which JSON could not print.
+    #[error(
+        "{what} of {place} overflows f64 (not finite): the joint values or rates are too large"
+    )]
+    NotFinite {
+        /// The quantity (`pose`, `omega`, `v`, `alpha`, `a`, `velocity`, `acceleration`).
+        what: &'static str,
+        /// `link 'NAME'` or `point NAME (x, y, z)`.
+        place: String,
+    },
     /// `bench` on a chain without moving joints.
     #[error("the chain has no moving joints: its poses are constant and there is nothing to time")]
     NothingToTime,
@@ -545,10 +556,10 @@ fn evaluate(
 
 fn points_table(chain: &Chain, points: &[Point], results: &[PointResult]) -> String {
     let mut text = String::new();
-    let v3 = |v: &Vector3<f64>| format!("({:.6}, {:.6}, {:.6})", v.x, v.y, v.z);
+    let v3 = |v: &Vector3<f64>| format!("({}, {}, {})", fixed(v.x), fixed(v.y), fixed(v.z));
     for (p, r) in points.iter().zip(results) {
         text.push_str(&format!(
-            "\npoint {} ({}, {}, {}): position {}",
+            "\npoint {} ({:?}, {:?}, {:?}): position {}",
             chain.link(p.link).name(),
             p.u.x,
             p.u.y,
@@ -689,6 +700,80 @@ fn results_json(chain: &Chain, results: &[LinkResult], orientation: Orientation)
     json!({ "links": links })
 }
 
+/// The error for the first result that is not finite (a value too large for `f64`, which JSON
+/// cannot print): every pose, rate and point result of one configuration.
+fn check_finite(
+    chain: &Chain,
+    results: &[LinkResult],
+    points: &[Point],
+    point_results: &[PointResult],
+) -> Result<(), CliError> {
+    let finite = |v: &Vector3<f64>| v.iter().all(|x| x.is_finite());
+    for (l, pose, vel, acc) in results {
+        let parts = [
+            (
+                "pose",
+                pose.to_rows().iter().flatten().all(|x| x.is_finite()),
+            ),
+            ("omega", vel.is_none_or(|v| finite(&v.omega))),
+            ("v", vel.is_none_or(|v| finite(&v.v))),
+            ("alpha", acc.is_none_or(|a| finite(&a.alpha))),
+            ("a", acc.is_none_or(|a| finite(&a.a))),
+        ];
+        if let Some(&(what, _)) = parts.iter().find(|(_, ok)| !ok) {
+            return Err(CliError::NotFinite {
+                what,
+                place: format!("link '{}'", chain.link(*l).name()),
+            });
+        }
+    }
+    for (p, r) in points.iter().zip(point_results) {
+        let acceleration = r.acceleration.as_ref();
+        let parts = [
+            ("position", finite(&r.position)),
+            ("velocity", r.velocity.as_ref().is_none_or(finite)),
+            (
+                "acceleration",
+                acceleration.is_none_or(|(a, parts)| {
+                    finite(a)
+                        && [
+                            parts.origin,
+                            parts.tangential,
+                            parts.normal,
+                            parts.coriolis,
+                            parts.local,
+                        ]
+                        .iter()
+                        .all(finite)
+                }),
+            ),
+        ];
+        if let Some(&(what, _)) = parts.iter().find(|(_, ok)| !ok) {
+            return Err(CliError::NotFinite {
+                what,
+                place: format!(
+                    "point {} ({:?}, {:?}, {:?})",
+                    chain.link(p.link).name(),
+                    p.u.x,
+                    p.u.y,
+                    p.u.z
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A number for a table: six decimals, or six significant digits after the first in exponent
+/// form from 10⁹ on (where six decimals would print hundreds of digits for a large value).
+fn fixed(x: f64) -> String {
+    if x.abs() < 1e9 {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.6e}")
+    }
+}
+
 /// `fk --format table`: one row per link, its position and its orientation in the coordinates
 /// `--orientation` names (`undefined` at a singularity of the representation), then its rates.
 fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> String {
@@ -718,12 +803,7 @@ fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation
     let values = |v: Vec<f64>| {
         let parts: Vec<String> = v
             .chunks(group)
-            .map(|c| {
-                c.iter()
-                    .map(|x| format!("{x:.6}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            })
+            .map(|c| c.iter().map(|&x| fixed(x)).collect::<Vec<_>>().join(" "))
             .collect();
         format!("[{}]", parts.join("; "))
     };
@@ -732,16 +812,19 @@ fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation
         let r = orientation_values(&pose.rotation(), orientation)
             .map_or_else(|| "undefined".to_string(), values);
         text.push_str(&format!(
-            "{:<width$} {:>12.6} {:>12.6} {:>12.6}   {r}\n",
+            "{:<width$} {:>12} {:>12} {:>12}   {r}\n",
             chain.link(*l).name(),
-            p.x,
-            p.y,
-            p.z,
+            fixed(p.x),
+            fixed(p.y),
+            fixed(p.z),
         ));
         let row = |label: &str, v: &nalgebra::Vector3<f64>| {
             format!(
-                "{:>width$} {:>12.6} {:>12.6} {:>12.6}\n",
-                label, v.x, v.y, v.z
+                "{:>width$} {:>12} {:>12} {:>12}\n",
+                label,
+                fixed(v.x),
+                fixed(v.y),
+                fixed(v.z)
             )
         };
         if let Some(v) = vel {
@@ -786,6 +869,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 &mut results,
                 &mut point_results,
             )?;
+            check_finite(&chain, &results, &points, &point_results)?;
             let text = match args.format {
                 OutputFormat::Json => {
                     let mut value = results_json(&chain, &results, args.orientation);
@@ -815,36 +899,52 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         // count: its lines go one by one.)
         let batchable = links.is_empty() && points.is_empty() && chain.dof() > 0;
         let mut pending: Vec<f64> = Vec::new();
+        // The 1-based line number of each pending configuration.
+        let mut pending_lines: Vec<usize> = Vec::new();
         let mut batch = BatchData::new(&chain);
         batch.set_limit_policy(data.limit_policy());
-        let mut flush = |out: &mut dyn Write, pending: &mut Vec<f64>| -> Result<(), CliError> {
+        let at = |line: usize, source: CliError| CliError::BatchLine {
+            path: path.clone(),
+            line,
+            source: Box::new(source),
+        };
+        // Writes the pending configurations' results; returns how many failed (written as error
+        // objects under --keep-going; without it, the first failure is the error).
+        let mut flush = |out: &mut dyn Write,
+                         pending: &mut Vec<f64>,
+                         lines: &mut Vec<usize>|
+         -> Result<usize, CliError> {
             if pending.is_empty() {
-                return Ok(());
+                return Ok(0);
             }
             let poses = forward_kinematics_batch(&chain, &mut batch, pending)
-                .map_err(|e| CliError::State(e.source))?;
-            for i in 0..poses.len() {
+                .map_err(|e| at(lines[e.index], CliError::State(e.source)))?;
+            let mut failed = 0;
+            for (i, &line) in lines.iter().enumerate() {
                 let results: Vec<LinkResult> = (0..chain.links().len())
                     .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
                     .collect();
-                let text = match args.format {
-                    OutputFormat::Json => {
-                        results_json(&chain, &results, args.orientation).to_string()
+                let text = match check_finite(&chain, &results, &[], &[]) {
+                    Ok(()) => match args.format {
+                        OutputFormat::Json => {
+                            results_json(&chain, &results, args.orientation).to_string()
+                        }
+                        OutputFormat::Table => results_table(&chain, &results, args.orientation),
+                    },
+                    Err(e) if args.keep_going => {
+                        failed += 1;
+                        error_json(line, &e)
                     }
-                    OutputFormat::Table => results_table(&chain, &results, args.orientation),
+                    Err(e) => return Err(at(line, e)),
                 };
                 write_line(out, &text)?;
             }
             pending.clear();
-            Ok(())
+            lines.clear();
+            Ok(failed)
         };
         let mut failed_lines = 0usize;
         for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-            let at = |source: CliError| CliError::BatchLine {
-                path: path.clone(),
-                line: i + 1,
-                source: Box::new(source),
-            };
             let result = line
                 .map_err(|source| CliError::Io {
                     context: "cannot read line".into(),
@@ -858,18 +958,19 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     if batchable && c.qd.is_none() && c.qdd.is_none() {
                         check_q(&chain, &c.q, data.limit_policy())?;
                         pending.extend_from_slice(&c.q);
+                        pending_lines.push(i + 1);
                         return Ok(None);
                     }
                     Ok(Some(c))
                 });
             match result {
                 Ok(None) => {
-                    if pending.len() >= 256 * chain.dof().max(1) {
-                        flush(out, &mut pending)?;
+                    if pending_lines.len() >= 256 {
+                        failed_lines += flush(out, &mut pending, &mut pending_lines)?;
                     }
                 }
                 Ok(Some(c)) => {
-                    flush(out, &mut pending)?;
+                    failed_lines += flush(out, &mut pending, &mut pending_lines)?;
                     match emit(out, &c, &mut data) {
                         Ok(()) => {}
                         Err(e @ CliError::Io { .. }) => return Err(e),
@@ -877,20 +978,20 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                             failed_lines += 1;
                             write_line(out, &error_json(i + 1, &e))?;
                         }
-                        Err(e) => return Err(at(e)),
+                        Err(e) => return Err(at(i + 1, e)),
                     }
                 }
                 Err(e) => {
-                    flush(out, &mut pending)?;
+                    failed_lines += flush(out, &mut pending, &mut pending_lines)?;
                     if !args.keep_going {
-                        return Err(at(e));
+                        return Err(at(i + 1, e));
                     }
                     failed_lines += 1;
                     write_line(out, &error_json(i + 1, &e))?;
                 }
             }
         }
-        flush(out, &mut pending)?;
+        failed_lines += flush(out, &mut pending, &mut pending_lines)?;
         if failed_lines > 0 {
             return Err(CliError::BatchFailures {
                 path: path.clone(),

@@ -559,6 +559,75 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Results too large for `f64` (finite joint values whose sum overflows) are errors naming the
+/// link or point and the quantity, not `null` in the JSON; in a batch, the line's error.
+/// Large finite values print in a table in exponent form.
+#[test]
+fn results_that_overflow_are_errors() {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-overflow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let robot = dir.join("slides.yaml");
+    std::fs::write(
+        &robot,
+        "name: slides\nconvention: standard\njoints:\n\
+         - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
+         - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let robot = robot.to_str().unwrap();
+    let m = error(&["fk", robot, "--q", "[1e308, 1e308]"]);
+    assert!(m.contains("pose of link 'link2' overflows"), "{m}");
+    let m = error(&["fk", robot, "--q", "[1, 1]", "--qd", "[1e308, 1e308]"]);
+    assert!(m.contains("v of link 'link2' overflows"), "{m}");
+    let m = error(&[
+        "fk",
+        robot,
+        "--q",
+        "[1e308, 0]",
+        "--point",
+        "link2:0,0,1e308",
+    ]);
+    assert!(
+        m.contains("position of point link2 (0.0, 0.0, 1e308) overflows"),
+        "{m}"
+    );
+    // One term at the edge of the range is fine, and a table shows it in exponent form.
+    let v = &ok_json(&["fk", robot, "--q", "[1e308, 0]"])[0];
+    assert_eq!(position(v, "link2")[2], 1e308);
+    let table = ok_text(&["fk", robot, "--q", "[1e308, 0]", "--format", "table"]);
+    assert!(table.contains(" 1.000000e308 "), "{table}");
+    assert!(table.lines().all(|l| l.len() < 200), "{table}");
+
+    let batch = dir.join("lines.jsonl");
+    std::fs::write(
+        &batch,
+        "{\"q\": [1, 2]}\n{\"q\": [1e308, 1e308]}\n{\"q\": [3, 4]}\n",
+    )
+    .unwrap();
+    let batch = batch.to_str().unwrap();
+    let out = kinechain(&["fk", robot, "--batch", batch, "--keep-going"]);
+    assert!(!out.status.success());
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    assert_eq!(position(&lines[0], "link2")[2], 3.0);
+    assert_eq!(lines[1]["line"], 2);
+    assert!(lines[1]["error"].as_str().unwrap().contains("overflows"));
+    assert_eq!(position(&lines[2], "link2")[2], 7.0);
+    let out = kinechain(&["fk", robot, "--batch", batch]);
+    assert!(!out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1);
+    assert!(
+        String::from_utf8(out.stderr)
+            .unwrap()
+            .contains("line 2: pose of link 'link2'")
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `--format table` prints the coordinates `--orientation` names, the same values as the JSON
 /// output (to the six decimals shown), and `undefined` where JSON has `null`.
 #[test]
