@@ -481,6 +481,10 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
 
 /// Computes the pose of every link at `q`.
 ///
+/// The inputs are checked, the results are not: finite values large enough to overflow (two
+/// sliding joints at 10³⁰⁸ m along one axis, with limits absent or ignored) give infinite
+/// entries, as IEEE arithmetic does. This holds for every evaluation function.
+///
 /// # Errors
 /// [`StateError`] if `q` has the wrong length, a non-finite entry, or (under the data's
 /// [`LimitPolicy::Enforce`]) a value outside a joint's limits.
