@@ -559,6 +559,48 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A reader that stops early (`kinechain fk … | head -1`) ends the run quietly: exit 0 and
+/// nothing on stderr, rather than an error about the broken pipe.
+#[test]
+fn a_closed_output_pipe_ends_the_run_quietly() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-pipe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let batch = dir.join("many.jsonl");
+    // About 2 MB of output, far beyond a pipe's buffer.
+    let lines: String = (0..5000)
+        .map(|i| format!("{{\"q\": [{}, 0, 0]}}\n", 0.001 * f64::from(i)))
+        .collect();
+    std::fs::write(&batch, lines).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args([
+            "fk",
+            "robots/planar3.yaml",
+            "--batch",
+            batch.to_str().unwrap(),
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("{\"links\""), "{first}");
+    // The reader is dropped here, closing the pipe.
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Results too large for `f64` (finite joint values whose sum overflows) are errors naming the
 /// link or point and the quantity, not `null` in the JSON; in a batch, the line's error.
 /// Large finite values print in a table in exponent form.
