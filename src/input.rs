@@ -6,11 +6,20 @@ use crate::chain::Chain;
 use crate::joint::JointKind;
 use serde_json::Value;
 
+/// How [`InputError::ListEntry`] describes its entry.
+fn list_entry(entry: &str) -> String {
+    if entry.is_empty() {
+        "empty entry in the list".to_string()
+    } else {
+        format!("'{entry}' is not a number")
+    }
+}
+
 /// A joint-space vector given as text or JSON could not be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum InputError {
-    /// The text is not valid JSON (nor a comma-separated list of numbers).
+    /// The text starts as JSON (`[` or `{`) but is not valid JSON.
     #[error("{what}: not valid JSON ({message})")]
     Json {
         /// `q`, `qd` or `qdd`.
@@ -35,6 +44,16 @@ pub enum InputError {
         expected: usize,
         /// Entries given.
         got: usize,
+    },
+    /// An entry of a comma- or space-separated list is empty or not a number.
+    #[error("{what}[{index}]: {}", list_entry(entry))]
+    ListEntry {
+        /// `q`, `qd` or `qdd`.
+        what: &'static str,
+        /// Position in the list.
+        index: usize,
+        /// The entry as given (trimmed; empty for `1,,2`).
+        entry: String,
     },
     /// An entry is not a number.
     #[error("{what}[{index}]: expected a number, found {found}")]
@@ -208,16 +227,21 @@ pub fn joint_vector_from_str(
         })?;
         return joint_vector_from_json(chain, &value, what);
     }
-    let tokens: Vec<&str> = trimmed
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|t| !t.is_empty())
-        .collect();
+    // Entries separated by commas (each one number, spaces around it allowed), or by spaces
+    // alone; an empty entry (`1,,2`, a trailing comma) is an error, not skipped.
+    let tokens: Vec<&str> = if trimmed.contains(',') {
+        trimmed.split(',').map(str::trim).collect()
+    } else {
+        trimmed.split_whitespace().collect()
+    };
     let values = tokens
         .iter()
-        .map(|t| {
-            t.parse::<f64>().map_err(|_| InputError::Json {
+        .enumerate()
+        .map(|(index, t)| {
+            t.parse::<f64>().map_err(|_| InputError::ListEntry {
                 what,
-                message: format!("'{t}' is not a number"),
+                index,
+                entry: (*t).to_string(),
             })
         })
         .collect::<Result<Vec<f64>, _>>()?;

@@ -329,10 +329,35 @@ fn json_vectors() {
         joint_vector_from_str(&chain, "[0.5, 1", "q").unwrap_err(),
         InputError::Json { .. }
     ));
-    assert!(matches!(
+    assert_eq!(
         joint_vector_from_str(&chain, "0.5, abc", "q").unwrap_err(),
-        InputError::Json { .. }
-    ));
+        InputError::ListEntry {
+            what: "q",
+            index: 1,
+            entry: "abc".into()
+        }
+    );
+    // An empty entry is an error, not skipped: `0.5,,1` is not `[0.5, 1]`, nor is `0.5, 1,`.
+    for (text, index) in [("0.5,,1", 1), ("0.5, 1,", 2), (",0.5, 1", 0)] {
+        let e = joint_vector_from_str(&chain, text, "q").unwrap_err();
+        assert_eq!(
+            e,
+            InputError::ListEntry {
+                what: "q",
+                index,
+                entry: String::new()
+            },
+            "{text}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!("q[{index}]: empty entry in the list")
+        );
+    }
+    assert_eq!(
+        joint_vector_from_str(&chain, "0.5 -1e-3", "q").unwrap(),
+        vec![0.5, -1e-3]
+    );
     assert_eq!(
         joint_vector_from_str(&chain, " 0.5 , -1e-3 ", "q").unwrap(),
         vec![0.5, -1e-3]
