@@ -671,18 +671,19 @@ fn orientation_json(m: &mut Map<String, Value>, pose: &Transform, kind: Orientat
         Orientation::Matrix | Orientation::Rodrigues => json!(v),
     });
     m.insert("position".into(), vec_json(&pose.translation()));
-    m.insert(orientation_key(kind).into(), value);
+    m.insert(orientation_labels(kind).0.into(), value);
 }
 
-/// The JSON member (and table column) of a non-matrix `--orientation`.
-fn orientation_key(kind: Orientation) -> &'static str {
+/// The name of an `--orientation`'s coordinates (the JSON member; for the matrix, the table's
+/// column) and what they are, in order (the table's column header).
+fn orientation_labels(kind: Orientation) -> (&'static str, &'static str) {
     match kind {
-        Orientation::Matrix => "rotation",
-        Orientation::Quat => "quaternion",
-        Orientation::Rpy => "rpy",
-        Orientation::Zxz => "euler_zxz",
-        Orientation::AxisAngle => "axis_angle",
-        Orientation::Rodrigues => "rodrigues",
+        Orientation::Matrix => ("rotation", "rows"),
+        Orientation::Quat => ("quaternion", "w x y z"),
+        Orientation::Rpy => ("rpy", "roll pitch yaw"),
+        Orientation::Zxz => ("euler_zxz", "phi theta psi"),
+        Orientation::AxisAngle => ("axis_angle", "x y z; angle"),
+        Orientation::Rodrigues => ("rodrigues", "γ1 γ2 γ3"),
     }
 }
 
@@ -787,16 +788,9 @@ fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation
         .max()
         .unwrap_or(4)
         .max(4);
-    let header = match orientation {
-        Orientation::Matrix => "rotation (rows)",
-        Orientation::Quat => "quaternion (w x y z)",
-        Orientation::Rpy => "rpy (roll pitch yaw)",
-        Orientation::Zxz => "euler_zxz (phi theta psi)",
-        Orientation::AxisAngle => "axis_angle (x y z; angle)",
-        Orientation::Rodrigues => "rodrigues (γ1 γ2 γ3)",
-    };
+    let (name, coordinates) = orientation_labels(orientation);
     let mut text = format!(
-        "{:<width$} {:>12} {:>12} {:>12}   {header}\n",
+        "{:<width$} {:>12} {:>12} {:>12}   {name} ({coordinates})\n",
         "link", "x", "y", "z"
     );
     // A matrix's rows, and the axis before its angle, are separated by `;`.
