@@ -63,9 +63,10 @@ fn xyz_rpy(t: &Transform) -> ([f64; 3], [f64; 3]) {
 
 fn pose(t: &Transform) -> urdf_rs::Pose {
     let (xyz, rpy) = xyz_rpy(t);
+    // `+ 0.0` turns −0 into 0, which the file would otherwise show as `-0`.
     urdf_rs::Pose {
-        xyz: urdf_rs::Vec3(xyz),
-        rpy: urdf_rs::Vec3(rpy),
+        xyz: urdf_rs::Vec3(xyz.map(|x| x + 0.0)),
+        rpy: urdf_rs::Vec3(rpy.map(|x| x + 0.0)),
     }
 }
 

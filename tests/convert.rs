@@ -38,6 +38,14 @@ fn converted_robots_agree_with_the_original_in_kinechain_and_k() {
     ] {
         let (original, urdf, path) = converted(name);
         assert_eq!(urdf.dof(), original.dof(), "{name}");
+        // Origins are written without negative zeros (`rpy="0 -0 0"`).
+        let text = std::fs::read_to_string(&path).unwrap();
+        for origin in text.lines().filter(|l| l.contains("<origin")) {
+            assert!(
+                !origin.contains("\"-0 ") && !origin.contains(" -0 ") && !origin.contains(" -0\""),
+                "{name}: {origin}"
+            );
+        }
         let k_robot = k::Chain::<f64>::from_urdf_file(&path)
             .unwrap_or_else(|e| panic!("k cannot load {name}: {e}"));
         let (mut a, mut b) = (Data::new(&original), Data::new(&urdf));
