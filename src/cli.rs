@@ -91,8 +91,8 @@ enum Level {
 struct FkArgs {
     /// Robot file (.yaml/.yml DH table or .urdf).
     robot: PathBuf,
-    /// Joint positions: JSON array in q order, JSON object keyed by joint name, or a
-    /// comma-separated list.
+    /// Joint positions: JSON array in q order, JSON object keyed by joint name, or a list
+    /// separated by commas or spaces.
     #[arg(
         long,
         allow_hyphen_values = true,
