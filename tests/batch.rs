@@ -236,15 +236,7 @@ fn lane_checks_decide_as_check_q_does() {
 /// works.
 #[test]
 fn batches_of_a_chain_without_moving_joints_are_refused() {
-    let chain = Chain::from_urdf_str(
-        r#"<robot name="fixed">
-             <link name="base"/><link name="tool"/>
-             <joint name="mount" type="fixed">
-               <parent link="base"/><child link="tool"/><origin xyz="0 0 1"/>
-             </joint>
-           </robot>"#,
-    )
-    .unwrap();
+    let chain = Chain::from_urdf_str(FIXED_ONLY_URDF).unwrap();
     assert_eq!(chain.dof(), 0);
     let tool = chain.link_id("tool").unwrap();
     let mut batch = BatchData::new(&chain);

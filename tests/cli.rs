@@ -536,16 +536,7 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
     let dir = std::env::temp_dir().join(format!("kinechain-cli-fixed-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let robot = dir.join("fixed.urdf");
-    std::fs::write(
-        &robot,
-        r#"<robot name="fixed">
-             <link name="base"/><link name="tool"/>
-             <joint name="mount" type="fixed">
-               <parent link="base"/><child link="tool"/><origin xyz="0 0 1"/>
-             </joint>
-           </robot>"#,
-    )
-    .unwrap();
+    std::fs::write(&robot, common::FIXED_ONLY_URDF).unwrap();
     let batch = dir.join("three.jsonl");
     std::fs::write(&batch, "{\"q\": []}\n\n{\"q\": []}\n{\"q\": []}\n").unwrap();
     let (robot, batch) = (robot.to_str().unwrap(), batch.to_str().unwrap());

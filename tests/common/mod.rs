@@ -10,6 +10,14 @@ use rand::Rng;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
+/// A robot without moving joints: a base and a tool 1 m above it on a fixed joint.
+pub const FIXED_ONLY_URDF: &str = r#"<robot name="fixed">
+  <link name="base"/><link name="tool"/>
+  <joint name="mount" type="fixed">
+    <parent link="base"/><child link="tool"/><origin xyz="0 0 1"/>
+  </joint>
+</robot>"#;
+
 /// Root of the copied reference data.
 pub fn reference_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/reference")
