@@ -21,7 +21,20 @@ fn ok_json(args: &[&str]) -> Vec<Value> {
         "{args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    String::from_utf8(out.stdout)
+    json_lines(out.stdout)
+}
+
+/// A directory of this test process for the files a test writes (`tag` tells the tests
+/// apart, which run in parallel); the test removes it at the end.
+fn scratch_dir(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("kinechain-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Each line of a command's output, parsed as JSON.
+fn json_lines(stdout: Vec<u8>) -> Vec<Value> {
+    String::from_utf8(stdout)
         .unwrap()
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
@@ -160,8 +173,7 @@ fn fk_link_prints_only_the_named_links() {
 
 #[test]
 fn fk_batch_writes_one_line_per_configuration() {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("files");
     let batch = dir.join("batch.jsonl");
     let mut f = std::fs::File::create(&batch).unwrap();
     writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
@@ -472,8 +484,7 @@ fn factor_after(text: &str, label: &str) -> f64 {
 
 #[test]
 fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-batch-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("batch");
     let batch = dir.join("many.jsonl");
     let mut f = std::fs::File::create(&batch).unwrap();
     // 600 lines: poses in several kernel batches, with a rate line and two bad lines inside.
@@ -502,11 +513,7 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
         stderr.starts_with("error: ") && stderr.contains("2 line(s) failed"),
         "{stderr}"
     );
-    let lines: Vec<Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines: Vec<Value> = json_lines(out.stdout);
     assert_eq!(lines.len(), 600);
     for (i, v) in lines.iter().enumerate() {
         match i {
@@ -533,8 +540,7 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
 /// there is nothing to time.
 #[test]
 fn a_chain_without_moving_joints_in_batch_and_bench() {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-fixed-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("fixed");
     let robot = dir.join("fixed.urdf");
     std::fs::write(&robot, common::FIXED_ONLY_URDF).unwrap();
     let batch = dir.join("three.jsonl");
@@ -556,8 +562,7 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
 fn a_closed_output_pipe_ends_the_run_quietly() {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-pipe-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("pipe");
     let batch = dir.join("many.jsonl");
     // About 2 MB of output, far beyond a pipe's buffer.
     let lines: String = (0..5000)
@@ -597,8 +602,7 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
 /// Large finite values print in a table in exponent form.
 #[test]
 fn results_that_overflow_are_errors() {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-overflow-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("overflow");
     let robot = dir.join("slides.yaml");
     std::fs::write(
         &robot,
@@ -640,11 +644,7 @@ fn results_that_overflow_are_errors() {
     let batch = batch.to_str().unwrap();
     let out = kinechain(&["fk", robot, "--batch", batch, "--keep-going"]);
     assert!(!out.status.success());
-    let lines: Vec<Value> = String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines: Vec<Value> = json_lines(out.stdout);
     assert_eq!(lines.len(), 3);
     assert_eq!(position(&lines[0], "link2")[2], 3.0);
     assert_eq!(lines[1]["line"], 2);
@@ -745,8 +745,7 @@ fn tables_print_the_orientation_asked_for() {
 fn orientation_kinds_recompose_on_the_reference_robots() {
     use kinechain::nalgebra::{Matrix3, Unit, Vector3};
     use kinechain::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-orient-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("orient");
     let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
     let v3 = |v: &Value| {
         Vector3::new(
@@ -864,8 +863,7 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
 
 #[test]
 fn convert_and_render_write_files() {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-convert-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch_dir("convert");
     let urdf = dir.join("puma.urdf");
     let out = kinechain(&[
         "convert",
