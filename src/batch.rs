@@ -202,8 +202,8 @@ impl BatchPoses<'_> {
 /// [`BatchError`] naming the first configuration that has a non-finite entry or (under
 /// [`LimitPolicy::Enforce`]) a value outside a joint's limits, a `qs` whose length is not a
 /// multiple of the chain's dof, or a chain without moving joints
-/// ([`StateError::NoDegreesOfFreedom`]). No result is returned then (the kernels check the entries as
-/// they transpose them, so the batch may have been evaluated, without effect).
+/// ([`StateError::NoDegreesOfFreedom`]). No result is returned then (the kernels check the
+/// entries as they transpose them, so the batch may have been evaluated, without effect).
 ///
 /// # Panics
 /// If `data` was created for another chain.

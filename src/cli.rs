@@ -458,6 +458,20 @@ struct PointResult {
     acceleration: Option<(Vector3<f64>, AccelerationParts)>,
 }
 
+impl Point {
+    /// `point LINK (x, y, z)`, the coordinates as given.
+    fn label(&self, chain: &Chain) -> String {
+        let u = &self.u;
+        format!(
+            "point {} ({:?}, {:?}, {:?})",
+            chain.link(self.link).name(),
+            u.x,
+            u.y,
+            u.z
+        )
+    }
+}
+
 fn parse_point(chain: &Chain, text: &str) -> Result<Point, CliError> {
     let bad = || CliError::Point(text.to_string());
     let (link, coords) = text.rsplit_once(':').ok_or_else(bad)?;
@@ -563,11 +577,8 @@ fn points_table(chain: &Chain, points: &[Point], results: &[PointResult]) -> Str
     let v3 = |v: &Vector3<f64>| format!("({}, {}, {})", fixed(v.x), fixed(v.y), fixed(v.z));
     for (p, r) in points.iter().zip(results) {
         text.push_str(&format!(
-            "\npoint {} ({:?}, {:?}, {:?}): position {}",
-            chain.link(p.link).name(),
-            p.u.x,
-            p.u.y,
-            p.u.z,
+            "\n{}: position {}",
+            p.label(chain),
             v3(&r.position)
         ));
         if let Some(v) = &r.velocity {
@@ -630,9 +641,9 @@ enum Orientation {
     Rodrigues,
 }
 
-/// The coordinates of `a` that a non-matrix `--orientation` names, in the order the README gives
-/// (quaternion `w x y z`, `roll pitch yaw`, `phi theta psi`, the axis then the angle, `γ1 γ2 γ3`);
-/// `None` where the representation is undefined (a singularity).
+/// The coordinates of `a` that `--orientation` names, in the order the README gives (the matrix
+/// row by row, quaternion `w x y z`, `roll pitch yaw`, `phi theta psi`, the axis then the angle,
+/// `γ1 γ2 γ3`); `None` where the representation is undefined (a singularity).
 fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<Vec<f64>> {
     use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
     match kind {
@@ -756,13 +767,7 @@ fn check_finite(
         if let Some(&(what, _)) = parts.iter().find(|(_, ok)| !ok) {
             return Err(CliError::NotFinite {
                 what,
-                place: format!(
-                    "point {} ({:?}, {:?}, {:?})",
-                    chain.link(p.link).name(),
-                    p.u.x,
-                    p.u.y,
-                    p.u.z
-                ),
+                place: p.label(chain),
             });
         }
     }
@@ -915,8 +920,11 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             if pending.is_empty() {
                 return Ok(0);
             }
-            let poses = forward_kinematics_batch(&chain, &mut batch, pending)
-                .map_err(|e| at(lines[e.index], CliError::State(e.source)))?;
+            let poses = forward_kinematics_batch(&chain, &mut batch, pending).map_err(|e| {
+                // (Each line was checked as it was read, so this is not expected.)
+                let line = lines.get(e.index).or(lines.last()).copied().unwrap_or(0);
+                at(line, CliError::State(e.source))
+            })?;
             let mut failed = 0;
             for (i, &line) in lines.iter().enumerate() {
                 let results: Vec<LinkResult> = (0..chain.links().len())
@@ -1361,8 +1369,7 @@ fn bench(
             "\nrate errors against the 256-bit evaluation: {}",
             parts.join(", ")
         ));
-    }
-    if level == Level::Pose {
+    } else {
         text.push_str(&format!(
             "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
             position32 / (reach * f64::from(f32::EPSILON)),
@@ -1372,10 +1379,10 @@ fn bench(
     write_line(out, &text)
 }
 
-/// Errors of ω and v, and with `acc` of α and a, against the 256-bit evaluation of the same model, by the evaluation `bench` times, at the states it times (`q̈ = q̇`, or none
-/// without `acc`): the largest absolute error over links and
-/// configurations, and the largest in ulps of the configuration's largest component of that
-/// quantity (over all links).
+/// Errors of ω and v, and with `acc` of α and a, against the 256-bit evaluation of the same
+/// model, by the evaluation `bench` times and at the states it times (`q̈ = q̇`, or none without
+/// `acc`): the largest absolute error over links and configurations, and the largest in ulps of
+/// the configuration's largest component of that quantity (over all links).
 fn rate_errors(
     chain: &Chain,
     qs: &[Vec<f64>],
@@ -1385,8 +1392,8 @@ fn rate_errors(
     let mut data = Data::new(chain);
     data.set_limit_policy(LimitPolicy::Ignore);
     let mut worst = vec![(0.0_f64, 0.0_f64); if acc { 4 } else { 2 }];
+    let zero = vec![0.0; chain.dof()];
     for (q, v) in qs.iter().zip(qd) {
-        let zero = vec![0.0; v.len()];
         let qdd = if acc { v } else { &zero };
         let exact = crate::reference::link_motion(chain, q, v, qdd);
         // The evaluation `bench` times at this level.
