@@ -1414,21 +1414,9 @@ fn rate_errors(
                 })
                 .collect()
         };
-        let want: Vec<[[f64; 3]; 4]> = exact.iter().map(|m| [m.omega, m.v, m.alpha, m.a]).collect();
-        for (k, w) in worst.iter_mut().enumerate() {
-            let largest = want
-                .iter()
-                .flat_map(|m| m[k])
-                .fold(0.0_f64, |m, x| m.max(x.abs()));
-            let error = ours
-                .iter()
-                .zip(&want)
-                .flat_map(|(o, e)| (0..3).map(move |c| (o[k][c] - e[k][c]).abs()))
-                .fold(0.0_f64, f64::max);
-            w.0 = w.0.max(error);
-            if largest > 0.0 {
-                w.1 = w.1.max(error / (largest * f64::EPSILON));
-            }
+        let errors = crate::reference::max_rate_errors(&ours, &exact);
+        for (w, e) in worst.iter_mut().zip(errors) {
+            *w = (w.0.max(e.0), w.1.max(e.1));
         }
     }
     Ok(worst)

@@ -161,6 +161,30 @@ pub fn max_errors(poses: &[Transform], reference: &[Transform]) -> (f64, f64) {
     (position, rotation)
 }
 
+/// For each of ω, v, α and a, in that order: the largest difference between `got` (one entry per
+/// link, the four vectors in that order) and [`link_motion`]'s `exact`, over links and
+/// components, and that difference in ulps of the quantity's largest component in `exact` over
+/// all links.
+#[must_use]
+pub fn max_rate_errors(got: &[[[f64; 3]; 4]], exact: &[LinkMotion]) -> [(f64, f64); 4] {
+    let want: Vec<[[f64; 3]; 4]> = exact.iter().map(|m| [m.omega, m.v, m.alpha, m.a]).collect();
+    std::array::from_fn(|k| {
+        let largest = want
+            .iter()
+            .flat_map(|m| m[k])
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        let error = got
+            .iter()
+            .zip(&want)
+            .flat_map(|(g, w)| (0..3).map(move |c| (g[k][c] - w[k][c]).abs()))
+            .fold(0.0_f64, f64::max);
+        (
+            error,
+            error / (largest.max(f64::MIN_POSITIVE) * f64::EPSILON),
+        )
+    })
+}
+
 /// Pose, angular velocity, origin velocity, angular acceleration and classical origin
 /// acceleration of one link, world frame.
 #[derive(Clone, Copy, Debug, PartialEq)]

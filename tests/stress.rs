@@ -14,7 +14,7 @@ mod common;
 
 use common::*;
 use kinechain::nalgebra::Vector3;
-use kinechain::reference::{LinkMotion, link_motion};
+use kinechain::reference::{LinkMotion, link_motion, max_rate_errors};
 use kinechain::{
     Chain, ChainBuilder, Data, LimitPolicy, Transform, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental,
@@ -109,15 +109,8 @@ fn measure(chain: &Chain, seed: u64, q_scale: f64) -> Errors {
     let reach = exact
         .iter()
         .fold(1e-300_f64, |m, l| m.max(vmax(&l.pose.translation().into())));
-    let scale =
-        |f: fn(&LinkMotion) -> [f64; 3]| exact.iter().fold(1e-300_f64, |m, l| m.max(vmax(&f(l))));
-    let (sw, sv, sal, sa) = (
-        scale(|l| l.omega),
-        scale(|l| l.v),
-        scale(|l| l.alpha),
-        scale(|l| l.a),
-    );
     let mut e = Errors::default();
+    let mut rates = Vec::with_capacity(exact.len());
     for (i, want) in exact.iter().enumerate() {
         let id = chain.link_id(chain.links()[i].name()).unwrap();
         let pose = acc.world_from_link(id);
@@ -130,14 +123,11 @@ fn measure(chain: &Chain, seed: u64, q_scale: f64) -> Errors {
         }
         e.orthonormality = e.orthonormality.max(pose.orthonormality_error() / EPS);
         let (v, a) = (acc.velocity(id), acc.acceleration(id));
-        let d = |x: Vector3<f64>, y: [f64; 3], s: f64| {
-            (0..3).map(|k| (x[k] - y[k]).abs()).fold(0.0, f64::max) / (s * EPS)
-        };
-        e.omega = e.omega.max(d(v.omega, want.omega, sw));
-        e.v = e.v.max(d(v.v, want.v, sv));
-        e.alpha = e.alpha.max(d(a.alpha, want.alpha, sal));
-        e.a = e.a.max(d(a.a, want.a, sa));
+        rates.push([v.omega.into(), v.v.into(), a.alpha.into(), a.a.into()]);
     }
+    // Each rate in ulps of its largest component over the links.
+    let [omega, v, alpha, a] = max_rate_errors(&rates, &exact).map(|(_, ulps)| ulps);
+    (e.omega, e.v, e.alpha, e.a) = (omega, v, alpha, a);
     e
 }
 
