@@ -199,6 +199,34 @@ fn yaml_keys_that_do_not_belong() {
     assert!(matches!(problem, FieldProblem::Shape { .. }));
 }
 
+/// A `deg(..)`/`rad(..)` conversion in a length (or a prismatic joint's limits, or a tool's
+/// position) is refused like a unit tag, rather than read as the angle's radians in metres; an
+/// expression without a unit (`pi/2`) is a plain number.
+#[test]
+fn yaml_angle_conversions_in_lengths() {
+    let text = |a: &str, limits: &str, tool: &str| {
+        format!(
+            "convention: standard\ntool: {{xyz: [0, 0, {tool}]}}\njoints:\n  - {{name: j1, type: prismatic, a: {a}, alpha: 0, d: 0, theta: 0, limits: [0, {limits}]}}\n"
+        )
+    };
+    for (a, limits, tool, at) in [
+        ("deg(90)", "1", "0", "a"),
+        ("1", "rad(1)", "0", "limits"),
+        ("1", "1", "deg(1)", "tool.xyz"),
+    ] {
+        let e = Chain::from_dh_yaml_str(&text(a, limits, tool)).unwrap_err();
+        let (_, f, problem) = field(&e);
+        assert_eq!(f, at, "{problem}");
+        assert!(matches!(problem, FieldProblem::Shape { .. }), "{problem}");
+        assert!(problem.to_string().contains("deg(..)/rad(..)"), "{problem}");
+    }
+    let chain = Chain::from_dh_yaml_str(&text("pi/2", "pi", "0")).unwrap();
+    let mut data = kinechain::Data::new(&chain);
+    let poses = kinechain::forward_kinematics(&chain, &mut data, &[0.0]).unwrap();
+    let link1 = poses.world_from_link(chain.link_id("link1").unwrap());
+    assert_eq!(link1.translation().x, std::f64::consts::FRAC_PI_2);
+}
+
 #[test]
 fn yaml_unknown_values_and_tags() {
     for file in [

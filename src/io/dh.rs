@@ -17,7 +17,7 @@ use crate::joint::{JointKind, Limits};
 use crate::transform::Transform;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
-use serde_saphyr::{Spanned, Tagged};
+use serde_saphyr::{Location, Spanned, Tagged};
 use std::f64::consts::TAU;
 
 #[derive(Debug, Deserialize)]
@@ -94,10 +94,10 @@ struct RawJoint {
     limits: Option<RawLimits>,
 }
 
-/// A number that is not an angle: unit tags are refused.
+/// A number that is not an angle: unit tags and `deg(..)`/`rad(..)` conversions are refused.
 #[derive(Debug, Deserialize)]
 #[serde(transparent)]
-struct Plain(Tagged<f64>);
+struct Plain(Spanned<Tagged<f64>>);
 
 /// An angle: a number in `angle_unit`, a `!degrees`/`!radians` tagged value, or an expression.
 #[derive(Debug, Deserialize)]
@@ -192,18 +192,31 @@ impl Reader<'_> {
         }
     }
 
+    /// The source text of a scalar value (empty if its span is unknown).
+    fn text(&self, at: &Location) -> &str {
+        let span = at.span();
+        span.byte_offset()
+            .zip(span.byte_len())
+            .and_then(|(o, l)| self.source.get(o as usize..(o + l) as usize))
+            .unwrap_or("")
+            .trim()
+    }
+
     fn plain(&self, field: &str, x: &Plain) -> Result<f64, LoadErrorKind> {
-        if let Some(tag) = &x.0.1
-            && UNIT_TAGS.contains(&tag.as_str())
+        let Tagged(value, tag) = &x.0.value;
+        let text = self.text(&x.0.referenced);
+        if tag.as_deref().is_some_and(|t| UNIT_TAGS.contains(&t))
+            || text.contains("deg(")
+            || text.contains("rad(")
         {
             return Err(self.problem(
                 field,
                 FieldProblem::Shape {
-                    expected: "a length or plain number (a !degrees/!radians tag does not belong here)",
+                    expected: "a length or plain number (angle units, a !degrees/!radians tag or a deg(..)/rad(..) conversion, do not belong here)",
                 },
             ));
         }
-        self.finite(field, x.0.0)
+        self.finite(field, *value)
     }
 
     /// An angle in radians. A `!degrees`/`!radians` tag or a `deg(..)`/`rad(..)` expression
@@ -214,13 +227,7 @@ impl Reader<'_> {
         if tag.as_deref().is_some_and(|t| UNIT_TAGS.contains(&t)) {
             return Ok(value);
         }
-        let span = x.0.referenced.span();
-        let text = span
-            .byte_offset()
-            .zip(span.byte_len())
-            .and_then(|(o, l)| self.source.get(o as usize..(o + l) as usize))
-            .unwrap_or("")
-            .trim();
+        let text = self.text(&x.0.referenced);
         let plain = !text.is_empty()
             && text
                 .chars()
@@ -247,7 +254,7 @@ impl Reader<'_> {
             if angular {
                 self.angle("limits", x)
             } else {
-                self.plain("limits", &Plain(Tagged(x.0.value.0, x.0.value.1.clone())))
+                self.plain("limits", &Plain(x.0.clone()))
             }
         };
         let (lower, upper) = (read(&values[0])?, read(&values[1])?);
