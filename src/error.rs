@@ -65,7 +65,12 @@ pub enum LoadErrorKind {
     },
     /// The YAML parser or the schema rejected the file (syntax error, unknown or missing key,
     /// wrong type, resource limit).
-    #[error("{}{}{message}", location_prefix(*line, *column), joint_prefix(joint.as_deref()))]
+    #[error(
+        "{}{}{}{message}",
+        location_prefix(*line, *column),
+        joint_prefix(joint.as_deref()),
+        field.as_deref().map(|f| format!("{f}: ")).unwrap_or_default()
+    )]
     Yaml {
         /// 1-based line of the problem, when known.
         line: Option<u64>,
@@ -73,6 +78,9 @@ pub enum LoadErrorKind {
         column: Option<u64>,
         /// The joint whose entry holds the problem, when known.
         joint: Option<String>,
+        /// The field whose value holds the problem (`a`, `origin.xyz`, `base.rpy`), when known
+        /// and not already named by the message.
+        field: Option<String>,
         /// The parser's description.
         message: String,
     },

@@ -56,6 +56,14 @@ fn yaml(e: &LoadError) -> (Option<&str>, Option<u64>, &str) {
     }
 }
 
+/// The field a parser error names, if any.
+fn yaml_field(e: &LoadError) -> Option<&str> {
+    match e.kind() {
+        LoadErrorKind::Yaml { field, .. } => field.as_deref(),
+        other => panic!("expected a YAML error, got {other:?}"),
+    }
+}
+
 fn model(e: &LoadError) -> &ModelError {
     match e.kind() {
         LoadErrorKind::Model(m) => m,
@@ -78,6 +86,64 @@ fn yaml_unknown_keys_name_the_key_and_the_joint() {
     assert!(msg.contains("`convension`"), "{msg}");
 }
 
+/// A parser error names the joint and the field whose value holds it, in block and flow style
+/// and in nested frames, but not a key the message names itself, nor the first key of a mapping
+/// when the error is the mapping's (a missing key).
+#[test]
+fn yaml_parser_errors_name_the_field() {
+    let cases = [
+        (
+            "convention: standard\njoints:\n  - name: j1\n    type: revolute\n    a: 1\n    alpha: 0\n    d: 1.5 m\n    theta: 0\n",
+            Some("j1"),
+            Some("d"),
+        ),
+        (
+            "convention: standard\njoints:\n  - {name: j1, type: revolute, a: 1, alpha: [0], d: 0, theta: 0}\n",
+            Some("j1"),
+            Some("alpha"),
+        ),
+        (
+            "convention: standard\njoints:\n  - {type: revolute, a: 1, alpha: 0, d: 0, theta: \"x\"}\n",
+            Some("#1"),
+            Some("theta"),
+        ),
+        (
+            "convention: axis\njoints:\n  - {name: j1, type: revolute, axis: [0, 0, 1], origin: {xyz: [0, 0, 1 m]}}\n",
+            Some("j1"),
+            Some("origin.xyz"),
+        ),
+        (
+            "convention: standard\nbase: {rpy: [0, 0, one]}\njoints: []\n",
+            None,
+            Some("base.rpy"),
+        ),
+        (
+            "convention: standard\nangle_unit: grad\njoints: []\n",
+            None,
+            Some("angle_unit"),
+        ),
+        (
+            "convention: standard\njoints:\n  - name: j1\n    type: revolute\n    a: 1\n    d: 0\n    theta: 0\n    alhpa: 0\n",
+            Some("j1"),
+            None,
+        ),
+        ("joints: []\n", None, None),
+        (
+            "convention: standard\njoints:\n  - name: j1\n    type: revolute\n    a: 1\n    a: 2\n",
+            Some("j1"),
+            None,
+        ),
+    ];
+    for (text, joint, field) in cases {
+        let e = Chain::from_dh_yaml_str(text).unwrap_err();
+        assert_eq!(
+            (yaml(&e).0, yaml_field(&e)),
+            (joint, field),
+            "{text}: {e:?}"
+        );
+    }
+}
+
 #[test]
 fn yaml_missing_and_mistyped_fields() {
     let e = load("yaml/missing_field.yaml");
@@ -90,6 +156,8 @@ fn yaml_missing_and_mistyped_fields() {
 
     let e = load("yaml/wrong_type.yaml");
     assert_eq!(yaml(&e).0, Some("j1"));
+    assert_eq!(yaml_field(&e), Some("a"));
+    assert!(e.kind().to_string().contains("joint 'j1': a: "), "{e:?}");
 
     let e = load("yaml/axis_without_origin.yaml");
     let (joint, name, problem) = field(&e);
@@ -120,6 +188,7 @@ fn yaml_bad_axes() {
     let (joint, _, msg) = yaml(&e);
     assert_eq!(joint, Some("j1"));
     assert!(msg.contains("invalid length"), "{msg}");
+    assert_eq!(yaml_field(&e), Some("axis"));
 }
 
 #[test]
@@ -245,6 +314,7 @@ fn yaml_unknown_values_and_tags() {
     let (joint, _, msg) = yaml(&e);
     assert_eq!(joint, Some("j1"));
     assert!(msg.contains("!foo"), "{msg}");
+    assert_eq!(yaml_field(&e), Some("alpha"));
 
     let e = load("yaml/ambiguous_angle.yaml");
     assert!(matches!(field(&e).2, FieldProblem::AmbiguousAngle { .. }));

@@ -154,15 +154,75 @@ impl<'de> Deserialize<'de> for RawLimits {
     }
 }
 
-/// Just enough structure to find which joint entry a parser error falls in.
-#[derive(Deserialize)]
-struct LenientRobot {
-    joints: Option<Vec<Spanned<LenientJoint>>>,
+/// A YAML document read leniently (any shape, any scalar) with the location of every key and
+/// value: enough to find the joint entry and the field a parser error falls in.
+enum Node {
+    Map(Vec<(Spanned<Node>, Spanned<Node>)>),
+    Seq(Vec<Spanned<Node>>),
+    /// A scalar's text (numbers and booleans as written by `Display`).
+    Scalar(String),
 }
 
-#[derive(Deserialize)]
-struct LenientJoint {
-    name: Option<String>,
+impl<'de> Deserialize<'de> for Node {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct NodeVisitor;
+        impl<'de> Visitor<'de> for NodeVisitor {
+            type Value = Node;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("any YAML value")
+            }
+
+            fn visit_bool<E: de::Error>(self, v: bool) -> Result<Node, E> {
+                Ok(Node::Scalar(v.to_string()))
+            }
+
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Node, E> {
+                Ok(Node::Scalar(v.to_string()))
+            }
+
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Node, E> {
+                Ok(Node::Scalar(v.to_string()))
+            }
+
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Node, E> {
+                Ok(Node::Scalar(v.to_string()))
+            }
+
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Node, E> {
+                Ok(Node::Scalar(v.to_string()))
+            }
+
+            fn visit_unit<E: de::Error>(self) -> Result<Node, E> {
+                Ok(Node::Scalar(String::new()))
+            }
+
+            fn visit_none<E: de::Error>(self) -> Result<Node, E> {
+                Ok(Node::Scalar(String::new()))
+            }
+
+            fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<Node, D::Error> {
+                Node::deserialize(d)
+            }
+
+            fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<Node, S::Error> {
+                let mut items = Vec::new();
+                while let Some(item) = seq.next_element()? {
+                    items.push(item);
+                }
+                Ok(Node::Seq(items))
+            }
+
+            fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<Node, M::Error> {
+                let mut entries = Vec::new();
+                while let Some(entry) = map.next_entry()? {
+                    entries.push(entry);
+                }
+                Ok(Node::Map(entries))
+            }
+        }
+        deserializer.deserialize_any(NodeVisitor)
+    }
 }
 
 const UNIT_TAGS: [&str; 2] = ["!degrees", "!radians"];
@@ -457,44 +517,100 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     Ok(b)
 }
 
-/// Turns a parser error into [`LoadErrorKind::Yaml`], naming the joint entry it falls in.
+/// Turns a parser error into [`LoadErrorKind::Yaml`], naming the joint entry and the field it
+/// falls in.
 fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
     let location = e.location();
     let (line, column) = (location.map(|l| l.line()), location.map(|l| l.column()));
-    let joint = line.zip(column).and_then(|(l, c)| joint_at(source, l, c));
     let mut message = e.without_snippet().to_string();
     // The parser appends its own " at line L, column C"; the location is reported separately.
     if let Some(i) = message.rfind(" at line ") {
         message.truncate(i);
     }
+    // Advice on the parser's options means nothing to the file's author.
+    if let Some(i) = message.find(", set DuplicateKeyPolicy") {
+        message.truncate(i);
+    }
+    let (joint, field) = line
+        .zip(column)
+        .map_or((None, None), |at| locate(source, at, &message));
     LoadErrorKind::Yaml {
         line,
         column,
         joint,
+        field,
         message,
     }
 }
 
-/// The name of the joint entry that holds (line, column), if the file parses leniently.
-fn joint_at(source: &str, line: u64, column: u64) -> Option<String> {
-    let lenient: LenientRobot = serde_saphyr::from_str_with_options(
+/// The joint entry (its name, or `#n` for the n-th entry without one) and the field (`a`,
+/// `origin.xyz`, `base.rpy`) that hold the position `at` (line, column) of the parser's
+/// `message`, if the file parses leniently.
+///
+/// The parser places errors in a scalar on the value, and errors in a sequence or mapping (a
+/// wrong length, an unknown or duplicate key) on its key. A position on a map's first key is
+/// also where the map begins, and a missing key is reported there, so that key is not named;
+/// nor is a key the message names itself.
+fn locate(source: &str, at: (u64, u64), message: &str) -> (Option<String>, Option<String>) {
+    let Ok(root) = serde_saphyr::from_str_with_options::<Spanned<Node>>(
         source,
-        serde_saphyr::options! { angle_conversions: true },
-    )
-    .ok()?;
-    let joints = lenient.joints?;
-    let starts: Vec<(u64, u64)> = joints
-        .iter()
-        .map(|j| (j.referenced.line(), j.referenced.column()))
-        .collect();
-    let i = starts.iter().rposition(|&start| start <= (line, column))?;
-    // After the last entry, only positions indented at least as deep belong to it.
-    if i + 1 == starts.len() && line > starts[i].0 && column < starts[i].1 {
-        return None;
+        serde_saphyr::options! {
+            angle_conversions: true,
+            // Every entry, so that a repeated key is found where it is repeated.
+            duplicate_keys: serde_saphyr::DuplicateKeyPolicy::PassThrough,
+        },
+    ) else {
+        return (None, None);
+    };
+    let start = |n: &Spanned<Node>| (n.referenced.line(), n.referenced.column());
+    let (mut joint, mut path) = (None, Vec::new());
+    let mut node = &root;
+    loop {
+        match &node.value {
+            Node::Map(entries) => {
+                let Some(i) = entries.iter().rposition(|(k, _)| start(k) <= at) else {
+                    break;
+                };
+                let (key, value) = &entries[i];
+                let Node::Scalar(name) = &key.value else {
+                    break;
+                };
+                if at < start(value) {
+                    let named = message.contains(&format!("`{name}`"))
+                        || message.contains(&format!("key: {name}"));
+                    if i > 0 && at == start(key) && !named {
+                        path.push(name.clone());
+                    }
+                    break;
+                }
+                path.push(name.clone());
+                node = value;
+            }
+            Node::Seq(items) => {
+                let Some(i) = items.iter().rposition(|item| start(item) <= at) else {
+                    break;
+                };
+                if joint.is_none() && path == ["joints"] {
+                    let name = match &items[i].value {
+                        Node::Map(entries) => {
+                            entries
+                                .iter()
+                                .find_map(|(k, v)| match (&k.value, &v.value) {
+                                    (Node::Scalar(k), Node::Scalar(name)) if k == "name" => {
+                                        Some(name.clone())
+                                    }
+                                    _ => None,
+                                })
+                        }
+                        _ => None,
+                    };
+                    joint = Some(name.unwrap_or_else(|| format!("#{}", i + 1)));
+                    path.clear();
+                }
+                node = &items[i];
+            }
+            Node::Scalar(_) => break,
+        }
     }
-    joints[i]
-        .value
-        .name
-        .clone()
-        .or_else(|| Some(format!("#{}", i + 1)))
+    (joint, (!path.is_empty()).then(|| path.join(".")))
 }
