@@ -73,9 +73,9 @@ pub enum LoadErrorKind {
     )]
     Yaml {
         /// 1-based line of the problem, when known.
-        line: Option<u64>,
+        line: Option<u32>,
         /// 1-based column of the problem, when known.
-        column: Option<u64>,
+        column: Option<u32>,
         /// The joint whose entry holds the problem, when known.
         joint: Option<String>,
         /// The field whose value holds the problem (`a`, `origin.xyz`, `base.rpy`), when known
@@ -105,7 +105,7 @@ pub enum LoadErrorKind {
     Model(#[from] ModelError),
 }
 
-fn location_prefix(line: Option<u64>, column: Option<u64>) -> String {
+fn location_prefix(line: Option<u32>, column: Option<u32>) -> String {
     match (line, column) {
         (Some(l), Some(c)) => format!("line {l} column {c}: "),
         (Some(l), None) => format!("line {l}: "),

@@ -44,7 +44,7 @@ fn field(e: &LoadError) -> (Option<&str>, &str, &FieldProblem) {
     }
 }
 
-fn yaml(e: &LoadError) -> (Option<&str>, Option<u64>, &str) {
+fn yaml(e: &LoadError) -> (Option<&str>, Option<u32>, &str) {
     match e.kind() {
         LoadErrorKind::Yaml {
             joint,

@@ -521,7 +521,11 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
 /// falls in.
 fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
     let location = e.location();
-    let (line, column) = (location.map(|l| l.line()), location.map(|l| l.column()));
+    // (Files are at most `MAX_FILE_BYTES` long, so lines and columns fit in 32 bits.)
+    let (line, column) = (
+        location.and_then(|l| u32::try_from(l.line()).ok()),
+        location.and_then(|l| u32::try_from(l.column()).ok()),
+    );
     let mut message = e.without_snippet().to_string();
     // The parser appends its own " at line L, column C"; the location is reported separately.
     if let Some(i) = message.rfind(" at line ") {
@@ -551,7 +555,7 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
 /// wrong length, an unknown or duplicate key) on its key. A position on a map's first key is
 /// also where the map begins, and a missing key is reported there, so that key is not named;
 /// nor is a key the message names itself.
-fn locate(source: &str, at: (u64, u64), message: &str) -> (Option<String>, Option<String>) {
+fn locate(source: &str, at: (u32, u32), message: &str) -> (Option<String>, Option<String>) {
     let Ok(root) = serde_saphyr::from_str_with_options::<Spanned<Node>>(
         source,
         serde_saphyr::options! {
@@ -562,7 +566,10 @@ fn locate(source: &str, at: (u64, u64), message: &str) -> (Option<String>, Optio
     ) else {
         return (None, None);
     };
-    let start = |n: &Spanned<Node>| (n.referenced.line(), n.referenced.column());
+    let start = |n: &Spanned<Node>| {
+        let at = |x: u64| u32::try_from(x).unwrap_or(u32::MAX);
+        (at(n.referenced.line()), at(n.referenced.column()))
+    };
     let (mut joint, mut path) = (None, Vec::new());
     let mut node = &root;
     loop {
