@@ -439,6 +439,32 @@ fn urdf_limits() {
     ));
 }
 
+/// A `<limit>` without `lower`/`upper` is [0, 0] in URDF: the joint loads as the format says,
+/// with a warning that it cannot move; a joint with a range draws none.
+#[test]
+fn urdf_limits_that_allow_no_motion_draw_a_warning() {
+    let urdf = |limit: &str| {
+        format!(
+            r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j1" type="prismatic"><parent link="a"/><child link="b"/>{limit}</joint></robot>"#
+        )
+    };
+    let chain = Chain::from_urdf_str(&urdf(r#"<limit effort="1" velocity="1"/>"#)).unwrap();
+    assert_eq!(chain.warnings().len(), 1);
+    assert!(
+        chain.warnings()[0].contains("joint 'j1'") && chain.warnings()[0].contains("no motion"),
+        "{:?}",
+        chain.warnings()
+    );
+    let q = [0.1];
+    let mut data = kinechain::Data::new(&chain);
+    assert!(kinechain::forward_kinematics(&chain, &mut data, &q).is_err());
+    let chain = Chain::from_urdf_str(&urdf(
+        r#"<limit lower="0" upper="0.1" effort="1" velocity="1"/>"#,
+    ))
+    .unwrap();
+    assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
+}
+
 #[test]
 fn urdf_duplicates_syntax_and_empty() {
     assert_eq!(

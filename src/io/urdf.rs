@@ -84,6 +84,12 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
                     },
                 ));
             }
+            if l.lower == l.upper {
+                b.warn(format!(
+                    "joint '{}': limit [{}, {}] allows no motion (URDF reads a missing lower or upper as 0); values other than {} are refused unless limits are ignored",
+                    j.name, l.lower, l.upper, l.lower
+                ));
+            }
             spec.limits[0] = Some(Limits {
                 lower: l.lower,
                 upper: l.upper,
