@@ -152,7 +152,7 @@ impl EulerParameters {
         .normalized()
     }
 
-    /// Scaled to unit norm (eq. 2.11).
+    /// Scaled to unit norm (eq. 2.11). The zero vector has no direction: its entries become NaN.
     #[must_use]
     pub fn normalized(&self) -> Self {
         let n = self.as_vector().norm();
