@@ -70,8 +70,9 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Level::Pose)]
         level: Level,
         /// Random configurations (within the joint limits) to time and check; at least two, so
-        /// that the incremental row's updates move a joint.
-        #[arg(long, default_value_t = 64, value_parser = at_least_two)]
+        /// that the incremental row's updates move a joint, and at most 65536 (each is checked
+        /// against a 256-bit evaluation, and the batch rows keep every link's frame).
+        #[arg(long, default_value_t = 64, value_parser = configuration_count)]
         configurations: usize,
         /// The link that every method reads and the one-link methods evaluate up to (default:
         /// the link farthest from the base).
@@ -1039,11 +1040,19 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
     })
 }
 
-/// `--configurations`: a whole number of at least two.
-fn at_least_two(s: &str) -> Result<usize, String> {
+/// The most configurations `bench` takes.
+const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
+
+/// `--configurations`: a whole number from 2 to [`MAX_BENCH_CONFIGURATIONS`].
+fn configuration_count(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
-        Ok(n) if n >= 2 => Ok(n),
-        Ok(_) => Err("at least 2 are needed (the incremental row moves between them)".into()),
+        Ok(n) if n < 2 => {
+            Err("at least 2 are needed (the incremental row moves between them)".into())
+        }
+        Ok(n) if n > MAX_BENCH_CONFIGURATIONS => Err(format!(
+            "at most {MAX_BENCH_CONFIGURATIONS} (each is checked against a 256-bit evaluation, and the batch rows keep every link's frame)"
+        )),
+        Ok(n) => Ok(n),
         Err(e) => Err(e.to_string()),
     }
 }

@@ -416,6 +416,14 @@ fn bench_prints_times_ratios_and_errors() {
     // One configuration would leave the incremental row timing updates that change nothing.
     let m = error(&["bench", "robots/ur5.yaml", "--configurations", "1"]);
     assert!(m.contains("at least 2"), "{m}");
+    // Too many is refused before anything is allocated (it used to abort out of memory).
+    let m = error(&[
+        "bench",
+        "robots/ur5.yaml",
+        "--configurations",
+        "100000000000",
+    ]);
+    assert!(m.contains("at most 65536"), "{m}");
     // A DH table: `k` runs on the URDF `convert` writes (a cylindrical joint is two URDF joints).
     for robot in ["robots/ur5.yaml", "robots/cylindrical.yaml"] {
         let text = ok_text(&["bench", robot, "--configurations", "2"]);
