@@ -4,7 +4,9 @@
 
 use crate::chain::Chain;
 use crate::joint::JointKind;
+use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
+use std::cell::RefCell;
 
 /// How [`InputError::ListEntry`] describes its entry.
 fn list_entry(entry: &str) -> String {
@@ -94,6 +96,21 @@ pub enum InputError {
     /// A batch line is not a JSON object with a `q` member (and optionally `qd`, `qdd`).
     #[error("{0}")]
     BatchLine(&'static str),
+    /// A batch line has a member other than `q`, `qd` and `qdd`.
+    #[error("unknown member \"{name}\" (a line may have only \"q\", \"qd\" and \"qdd\")")]
+    UnknownMember {
+        /// The member's name.
+        name: String,
+    },
+    /// A JSON object names a member twice (a joint in a vector keyed by joint name, or `q` on a
+    /// batch line): which of the two was meant is not guessed.
+    #[error("{what}: member \"{name}\" is given twice")]
+    DuplicateMember {
+        /// `q`, `qd`, `qdd`, or `line` for a batch line.
+        what: &'static str,
+        /// The member's name.
+        name: String,
+    },
     /// A joint's value has the wrong shape (a number for a cylindrical joint, or a list for a
     /// one-coordinate joint).
     #[error("{what}: joint '{name}' takes {expected}")]
@@ -221,10 +238,7 @@ pub fn joint_vector_from_str(
 ) -> Result<Vec<f64>, InputError> {
     let trimmed = text.trim();
     if trimmed.starts_with('[') || trimmed.starts_with('{') {
-        let value: Value = serde_json::from_str(trimmed).map_err(|e| InputError::Json {
-            what,
-            message: e.to_string(),
-        })?;
+        let value = parse_json(trimmed, what)?;
         return joint_vector_from_json(chain, &value, what);
     }
     // Entries separated by commas (each one number, spaces around it allowed), or by spaces
@@ -273,24 +287,24 @@ pub struct BatchLine {
 /// [`InputError`]: not JSON, not an object, an unknown or missing member, or a vector that
 /// [`joint_vector_from_json`] refuses.
 pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputError> {
-    let value: Value = serde_json::from_str(line).map_err(|e| InputError::Json {
-        what: "line",
-        message: e.to_string(),
-    })?;
+    let value = parse_json(line, "line")?;
     let Value::Object(map) = value else {
         return Err(InputError::BatchLine(
             "expected a JSON object {\"q\": ..} on each line",
         ));
     };
-    if map
+    if let Some(name) = map
         .keys()
-        .any(|k| !matches!(k.as_str(), "q" | "qd" | "qdd"))
+        .find(|k| !matches!(k.as_str(), "q" | "qd" | "qdd"))
     {
-        return Err(InputError::BatchLine(
-            "unknown member (a line may have only \"q\", \"qd\" and \"qdd\")",
-        ));
+        return Err(InputError::UnknownMember { name: name.clone() });
     }
     let q = map.get("q").ok_or(InputError::BatchLine("missing \"q\""))?;
+    if map.contains_key("qdd") && !map.contains_key("qd") {
+        return Err(InputError::BatchLine(
+            "\"qdd\" needs \"qd\" (accelerations depend on velocities)",
+        ));
+    }
     Ok(BatchLine {
         q: joint_vector_from_json(chain, q, "q")?,
         q_dot: map
@@ -302,4 +316,88 @@ pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputErr
             .map(|v| joint_vector_from_json(chain, v, "qdd"))
             .transpose()?,
     })
+}
+
+/// Parses JSON text, refusing an object that names a member twice (`serde_json::Value` would
+/// keep the last silently).
+fn parse_json(text: &str, what: &'static str) -> Result<Value, InputError> {
+    let duplicate = RefCell::new(None);
+    let mut de = serde_json::Deserializer::from_str(text);
+    let value = UniqueMembers(&duplicate)
+        .deserialize(&mut de)
+        .and_then(|v| de.end().map(|()| v))
+        .map_err(|e| InputError::Json {
+            what,
+            message: e.to_string(),
+        })?;
+    match duplicate.into_inner() {
+        Some(name) => Err(InputError::DuplicateMember { what, name }),
+        None => Ok(value),
+    }
+}
+
+/// Reads a JSON value as [`Value`] does, noting in its cell the first member name an object
+/// repeats.
+#[derive(Clone, Copy)]
+struct UniqueMembers<'a>(&'a RefCell<Option<String>>);
+
+impl<'de> DeserializeSeed<'de> for UniqueMembers<'_> {
+    type Value = Value;
+
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<Value, D::Error> {
+        deserializer.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for UniqueMembers<'_> {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E: de::Error>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_str<E: de::Error>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_string()))
+    }
+
+    fn visit_unit<E: de::Error>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_seq<S: SeqAccess<'de>>(self, mut seq: S) -> Result<Value, S::Error> {
+        let mut items = Vec::new();
+        while let Some(item) = seq.next_element_seed(self)? {
+            items.push(item);
+        }
+        Ok(Value::Array(items))
+    }
+
+    fn visit_map<M: MapAccess<'de>>(self, mut map: M) -> Result<Value, M::Error> {
+        let mut members = serde_json::Map::new();
+        while let Some(name) = map.next_key::<String>()? {
+            let value = map.next_value_seed(self)?;
+            if members.contains_key(&name) {
+                self.0.borrow_mut().get_or_insert(name);
+            } else {
+                members.insert(name, value);
+            }
+        }
+        Ok(Value::Object(members))
+    }
 }

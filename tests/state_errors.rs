@@ -4,7 +4,9 @@
 mod common;
 
 use common::limit_probes;
-use kinechain::input::{InputError, joint_vector_from_json, joint_vector_from_str};
+use kinechain::input::{
+    BatchLine, InputError, joint_vector_from_json, joint_vector_from_str, parse_batch_line,
+};
 use kinechain::{
     Chain, Data, LimitPolicy, StateError, forward_accelerations, forward_kinematics,
     forward_kinematics_to, forward_velocities,
@@ -362,6 +364,59 @@ fn json_vectors() {
         joint_vector_from_str(&chain, " 0.5 , -1e-3 ", "q").unwrap(),
         vec![0.5, -1e-3]
     );
+    // A joint named twice is refused, not read as the last value given.
+    assert_eq!(
+        joint_vector_from_str(&chain, r#"{"joint": [0.5, 1], "joint": [0.6, 1]}"#, "qd")
+            .unwrap_err(),
+        InputError::DuplicateMember {
+            what: "qd",
+            name: "joint".into()
+        }
+    );
+}
+
+/// Batch lines: every member named once, none unknown (and named in the error), `qdd` only with
+/// `qd`; an exact read of each number.
+#[test]
+fn batch_lines() {
+    let chain = robot("planar3.yaml");
+    let line = |text: &str| parse_batch_line(&chain, text);
+    assert_eq!(
+        line(r#"{"q": [0.1, 0.2, 0.30000000000000004], "qd": [0, 0, 1e-320]}"#).unwrap(),
+        BatchLine {
+            q: vec![0.1, 0.2, 0.30000000000000004],
+            q_dot: Some(vec![0.0, 0.0, 1e-320]),
+            q_ddot: None,
+        }
+    );
+    assert_eq!(
+        line(r#"{"q": [0, 0, 0], "q": [1, 1, 1]}"#).unwrap_err(),
+        InputError::DuplicateMember {
+            what: "line",
+            name: "q".into()
+        }
+    );
+    assert_eq!(
+        line(r#"{"q": {"j1": 0, "j2": 0, "j3": 0, "j2": 1}}"#).unwrap_err(),
+        InputError::DuplicateMember {
+            what: "line",
+            name: "j2".into()
+        }
+    );
+    let e = line(r#"{"q": [0, 0, 0], "qdot": [0, 0, 0]}"#).unwrap_err();
+    assert_eq!(
+        e,
+        InputError::UnknownMember {
+            name: "qdot".into()
+        }
+    );
+    assert!(e.to_string().contains(r#""qdot""#), "{e}");
+    let e = line(r#"{"q": [0, 0, 0], "qdd": [0, 0, 0]}"#).unwrap_err();
+    assert!(e.to_string().contains(r#""qdd" needs "qd""#), "{e}");
+    assert!(matches!(
+        line(r#"{"q": [0, 0, 0]} {"q": [0, 0, 0]}"#).unwrap_err(),
+        InputError::Json { what: "line", .. }
+    ));
 }
 
 #[test]
