@@ -9,6 +9,9 @@
 //! revolute joint `<joint>` and a prismatic joint `<joint>_d` on the same axis through a massless
 //! link `<joint>_theta` (its two entries of `q` keep their order). A root placement becomes a fixed
 //! joint from a new root link. Limits are carried over; mimic joints keep their mimic element.
+//!
+//! The model holds kinematics only: links are written with a zero (massless) inertial, and a
+//! `<limit>`'s required effort and velocity as 0.
 
 use crate::chain::{Chain, JointSpec};
 use crate::joint::{JointKind, Limits, normalize_axis};
