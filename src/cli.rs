@@ -388,7 +388,12 @@ fn info(chain: &Chain, format: OutputFormat, out: &mut dyn Write) -> Result<(), 
             write_line(out, &value.to_string())
         }
         OutputFormat::Table => {
-            let mut text = format!("{}: {} degrees of freedom\n", chain.name(), chain.dof());
+            let mut text = format!(
+                "{}: {} degree{} of freedom\n",
+                chain.name(),
+                chain.dof(),
+                if chain.dof() == 1 { "" } else { "s" }
+            );
             text.push_str(&format!(
                 "{:>4}  {:<28} {:<12} {}\n",
                 "q", "joint", "type", "limits"

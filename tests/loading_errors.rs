@@ -437,6 +437,21 @@ fn urdf_limits() {
         field(&e),
         (Some("ja"), "limit", FieldProblem::ReversedLimits { .. })
     ));
+    // An infinite bound is refused, as in a DH table (it printed as null, and `convert` wrote
+    // the joint without bounds, which URDF reads back as [0, 0]).
+    for (lower, upper) in [("-inf", "1"), ("-1", "1e400"), ("nan", "1")] {
+        let text = format!(
+            r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j1" type="revolute"><parent link="a"/><child link="b"/><limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/></joint></robot>"#
+        );
+        let e = Chain::from_urdf_str(&text).unwrap_err();
+        assert!(
+            matches!(
+                field(&e),
+                (Some("j1"), "limit", FieldProblem::NonFinite { .. })
+            ),
+            "{lower} {upper}: {e:?}"
+        );
+    }
 }
 
 /// A `<limit>` without `lower`/`upper` is [0, 0] in URDF: the joint loads as the format says,

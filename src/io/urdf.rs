@@ -72,9 +72,9 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
                     },
                 ));
             }
-            if l.lower.is_nan() || l.upper.is_nan() {
-                return Err(field("limit", FieldProblem::NonFinite { value: f64::NAN }));
-            }
+            // (An infinite bound is refused as in DH tables: a joint without bounds is
+            // `continuous`, and JSON output could not print it.)
+            finite("limit", &[l.lower, l.upper])?;
             if l.lower > l.upper {
                 return Err(field(
                     "limit",
