@@ -531,9 +531,11 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
     if let Some(i) = message.rfind(" at line ") {
         message.truncate(i);
     }
-    // Advice on the parser's options means nothing to the file's author.
-    if let Some(i) = message.find(", set DuplicateKeyPolicy") {
-        message.truncate(i);
+    // Advice on the parser's functions and options means nothing to the file's author.
+    for advice in [", set DuplicateKeyPolicy", "; use from_str_multiple"] {
+        if let Some(i) = message.find(advice) {
+            message.truncate(i);
+        }
     }
     let (joint, field) = line
         .zip(column)
