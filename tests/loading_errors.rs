@@ -501,6 +501,18 @@ fn urdf_duplicates_syntax_and_empty() {
         load("urdf/empty.urdf").kind(),
         LoadErrorKind::Empty
     ));
+    // The parser's messages in the file's terms: a file cut short says so, and the
+    // deserializer's "custom: " prefix is dropped.
+    let urdf = |text: &str| match Chain::from_urdf_str(text).unwrap_err().kind() {
+        LoadErrorKind::Urdf { message } => message.clone(),
+        other => panic!("expected a URDF error, got {other:?}"),
+    };
+    let cut = urdf(r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j""#);
+    assert!(cut.contains("not a complete XML document"), "{cut}");
+    let untyped = urdf(
+        r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j"><parent link="a"/><child link="b"/></joint></robot>"#,
+    );
+    assert_eq!(untyped, "missing field `type`");
 }
 
 #[test]

@@ -15,7 +15,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     check_depth(source)?;
     check_vector_attributes(source)?;
     let robot = urdf_rs::read_from_string(source).map_err(|e| LoadErrorKind::Urdf {
-        message: e.to_string(),
+        message: parser_message(&e.to_string()),
     })?;
     let mut b = ChainBuilder::new(robot.name.clone());
     for link in &robot.links {
@@ -103,6 +103,17 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         b.joint(spec);
     }
     Ok(b)
+}
+
+/// The XML parser's message in the file author's terms: without the deserializer's `custom: `
+/// prefix, and saying what "No elements found" means.
+fn parser_message(message: &str) -> String {
+    match message.strip_prefix("custom: ").unwrap_or(message) {
+        "No elements found" => {
+            "not a complete XML document (no root element, or the file ends inside one)".into()
+        }
+        m => m.to_string(),
+    }
 }
 
 /// The tags of an XML text, skipping comments, CDATA sections, declarations and processing
