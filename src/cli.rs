@@ -189,6 +189,20 @@ pub enum CliError {
         #[source]
         source: Box<CliError>,
     },
+    /// A batch line is longer than any configuration of the chain could need.
+    #[error(
+        "the line is longer than {limit} bytes (the most a configuration of this chain needs is far less); is this a batch file?"
+    )]
+    LineTooLong {
+        /// The cap, in bytes.
+        limit: usize,
+    },
+    /// A batch line is not UTF-8 text.
+    #[error("byte {byte} of the line is not UTF-8 text")]
+    NotUtf8 {
+        /// 1-based position of the first byte that is not.
+        byte: usize,
+    },
     /// Some batch lines failed under `--keep-going`.
     #[error("{}: {count} line(s) failed (see the error objects in the output)", path.display())]
     BatchFailures {
@@ -956,25 +970,36 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             Ok(failed)
         };
         let mut failed_lines = 0usize;
-        for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-            let result = line
-                .map_err(|source| CliError::Io {
+        let mut reader = std::io::BufReader::new(file);
+        let limit = batch_line_limit(chain.dof());
+        let mut bytes = Vec::new();
+        for i in 0.. {
+            let result = match read_capped_line(&mut reader, &mut bytes, limit) {
+                Ok(CappedLine::End) => break,
+                Ok(CappedLine::Line) => {
+                    String::from_utf8(std::mem::take(&mut bytes)).map_err(|e| CliError::NotUtf8 {
+                        byte: e.utf8_error().valid_up_to() + 1,
+                    })
+                }
+                Ok(CappedLine::TooLong) => Err(CliError::LineTooLong { limit }),
+                Err(source) => Err(CliError::Io {
                     context: "cannot read line".into(),
                     source,
-                })
-                .and_then(|line| {
-                    if line.trim().is_empty() {
-                        return Ok(None);
-                    }
-                    let c = batch_configuration(&chain, &line)?;
-                    if batchable && c.qd.is_none() && c.qdd.is_none() {
-                        check_q(&chain, &c.q, data.limit_policy())?;
-                        pending.extend_from_slice(&c.q);
-                        pending_lines.push(i + 1);
-                        return Ok(None);
-                    }
-                    Ok(Some(c))
-                });
+                }),
+            };
+            let result = result.and_then(|line| {
+                if line.trim().is_empty() {
+                    return Ok(None);
+                }
+                let c = batch_configuration(&chain, &line)?;
+                if batchable && c.qd.is_none() && c.qdd.is_none() {
+                    check_q(&chain, &c.q, data.limit_policy())?;
+                    pending.extend_from_slice(&c.q);
+                    pending_lines.push(i + 1);
+                    return Ok(None);
+                }
+                Ok(Some(c))
+            });
             match result {
                 Ok(None) => {
                     if pending_lines.len() >= 256 {
@@ -1031,6 +1056,74 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
 }
 
 /// The output line standing in for a failed batch line under `--keep-going`.
+/// The longest batch line read, in bytes: 1 MiB, plus 1 KiB per degree of freedom (a line names
+/// at most three numbers per joint, or three members named after it).
+fn batch_line_limit(dof: usize) -> usize {
+    (1 << 20) + dof.saturating_mul(1 << 10)
+}
+
+/// What [`read_capped_line`] read.
+#[derive(Debug, PartialEq)]
+enum CappedLine {
+    /// A line (without its end) is in the buffer.
+    Line,
+    /// The line was longer than the cap; the rest of it was skipped.
+    TooLong,
+    /// The input is exhausted.
+    End,
+}
+
+/// Reads one line of at most `limit` bytes into `buf` (cleared first; `\n` and a `\r` before it
+/// dropped). A longer line is skipped to its end without being kept, so one huge line costs no
+/// more memory than the cap.
+fn read_capped_line(
+    reader: &mut impl BufRead,
+    buf: &mut Vec<u8>,
+    limit: usize,
+) -> std::io::Result<CappedLine> {
+    buf.clear();
+    let mut too_long = false;
+    let mut any = false;
+    loop {
+        let available = match reader.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if available.is_empty() {
+            break;
+        }
+        any = true;
+        let (chunk, done) = match available.iter().position(|&b| b == b'\n') {
+            Some(end) => (&available[..end], Some(end + 1)),
+            None => (available, None),
+        };
+        if !too_long {
+            if buf.len() + chunk.len() > limit {
+                too_long = true;
+                buf.clear();
+            } else {
+                buf.extend_from_slice(chunk);
+            }
+        }
+        let used = done.unwrap_or(chunk.len());
+        reader.consume(used);
+        if done.is_some() {
+            break;
+        }
+    }
+    if too_long {
+        return Ok(CappedLine::TooLong);
+    }
+    if !any {
+        return Ok(CappedLine::End);
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    Ok(CappedLine::Line)
+}
+
 fn error_json(line: usize, e: &CliError) -> String {
     json!({ "line": line, "error": error_chain(e) }).to_string()
 }

@@ -543,6 +543,49 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Batch lines are read with a cap on their length (1 MiB plus 1 KiB per degree of freedom): a
+/// longer line is an error naming it, skipped to its end, and the lines after it are read as
+/// usual. Also `\r\n` endings, a line that is not UTF-8, and a last line without an end.
+#[test]
+fn batch_lines_have_a_length_cap() {
+    let dir = scratch_dir("batch_cap");
+    let batch = dir.join("odd.jsonl");
+    let mut bytes = b"{\"q\": [0.1, 0, 0]}\r\n{\"q\": [0.2, 0, 0]".to_vec();
+    // Valid JSON, but 2 MiB long.
+    bytes.extend(std::iter::repeat_n(b' ', 2 << 20));
+    bytes.extend_from_slice(
+        b"}\n{\"q\": [0.3, 0, 0]}\n{\"q\": [0.4, \xff, 0]}\n{\"q\": [0.5, 0, 0]}",
+    );
+    std::fs::write(&batch, bytes).unwrap();
+    let arg = batch.to_str().unwrap();
+
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("odd.jsonl: line 2: the line is longer than 1051648 bytes"),
+        "{stderr}"
+    );
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1);
+
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg, "--keep-going"]);
+    assert!(!out.status.success());
+    let lines = json_lines(out.stdout);
+    assert_eq!(lines.len(), 5);
+    for (i, v) in lines.iter().enumerate() {
+        match i {
+            1 => assert!(v["error"].as_str().unwrap().contains("longer than"), "{v}"),
+            3 => assert_eq!(v["error"], "byte 13 of the line is not UTF-8 text"),
+            _ => {
+                let q1 = 0.1 * (i + 1) as f64;
+                let x = position(v, "link3")[0];
+                assert!((x - 9.0 * q1.cos()).abs() < 1e-14, "line {}: {v}", i + 1);
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A chain without moving joints: `--batch` writes one result per line (the lines go one by one,
 /// not through the batch kernel, which cannot count empty configurations), and `bench` says
 /// there is nothing to time.
