@@ -509,10 +509,62 @@ fn urdf_duplicates_syntax_and_empty() {
     };
     let cut = urdf(r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j""#);
     assert!(cut.contains("not a complete XML document"), "{cut}");
-    let untyped = urdf(
-        r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j"><parent link="a"/><child link="b"/></joint></robot>"#,
-    );
-    assert_eq!(untyped, "missing field `type`");
+}
+
+/// The parser's messages that do not say where (a missing attribute or element, a number that
+/// is not one, an unknown joint type) are given the line and the element, and for a number the
+/// attribute.
+#[test]
+fn urdf_parser_errors_name_the_element() {
+    let urdf = |joint: &str| {
+        let text = format!(
+            "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n<link name=\"c\"/>\n\
+             <joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n\
+             {joint}\n</robot>"
+        );
+        match Chain::from_urdf_str(&text).unwrap_err().kind() {
+            LoadErrorKind::Urdf { message } => message.clone(),
+            other => panic!("expected a URDF error, got {other:?}"),
+        }
+    };
+    let cases = [
+        (
+            r#"<joint name="j2"><parent link="b"/><child link="c"/></joint>"#,
+            "line 6: joint 'j2': missing `type`",
+        ),
+        (
+            r#"<joint type="fixed"><parent link="b"/><child link="c"/></joint>"#,
+            "line 6: <joint>: missing `name`",
+        ),
+        (
+            r#"<joint name="j2" type="fixed"><parent link="b"/></joint>"#,
+            "line 6: joint 'j2': missing `child`",
+        ),
+        (
+            r#"<joint name="j2" type="revolute"><parent link="b"/><child link="c"/><limit lower="0" upper="1" effort="1"/></joint>"#,
+            "line 6: joint 'j2': missing `velocity`",
+        ),
+        (
+            r#"<joint name="j2" type="revolute"><parent link="b"/><child link="c"/>
+               <limit lower="-1" upper="one" effort="1" velocity="1"/></joint>"#,
+            "line 7: joint 'j2': <limit> attribute upper=\"one\" is not a number",
+        ),
+        (
+            r#"<joint name="j2" type="hinge"><parent link="b"/><child link="c"/></joint>"#,
+            "line 6: joint 'j2': unknown variant `hinge`",
+        ),
+        (
+            r#"<link name="d"><inertial><mass value="heavy"/></inertial></link>"#,
+            "line 6: link 'd': <mass> attribute value=\"heavy\" is not a number",
+        ),
+    ];
+    for (joint, expected) in cases {
+        let message = urdf(joint);
+        assert!(
+            message.starts_with(expected),
+            "{message}\nexpected {expected}"
+        );
+    }
 }
 
 #[test]

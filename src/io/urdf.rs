@@ -14,8 +14,11 @@ pub(crate) const MAX_XML_DEPTH: usize = 100;
 pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     check_depth(source)?;
     check_vector_attributes(source)?;
-    let robot = urdf_rs::read_from_string(source).map_err(|e| LoadErrorKind::Urdf {
-        message: parser_message(&e.to_string()),
+    let robot = urdf_rs::read_from_string(source).map_err(|e| {
+        let message = parser_message(&e.to_string());
+        LoadErrorKind::Urdf {
+            message: locate(source, &message).unwrap_or(message),
+        }
     })?;
     let mut b = ChainBuilder::new(robot.name.clone());
     for link in &robot.links {
@@ -116,6 +119,128 @@ fn parser_message(message: &str) -> String {
     }
 }
 
+/// Attributes `urdf-rs` reads as one number.
+const NUMBER_ATTRIBUTES: [&str; 23] = [
+    "lower",
+    "upper",
+    "effort",
+    "velocity",
+    "multiplier",
+    "offset",
+    "damping",
+    "friction",
+    "soft_lower_limit",
+    "soft_upper_limit",
+    "k_position",
+    "k_velocity",
+    "rising",
+    "falling",
+    "value",
+    "radius",
+    "length",
+    "ixx",
+    "ixy",
+    "ixz",
+    "iyy",
+    "iyz",
+    "izz",
+];
+
+/// Where the parser's complaint `message` comes from, for messages that do not say (`missing
+/// field`, `invalid float literal`, `unknown variant`): each element under `<robot>` is parsed on
+/// its own, and the first that fails with the same message is named with its line. For a number
+/// that is not one, the attribute is named too. `None` when no single element reproduces it.
+/// Runs only on a file the parser refused.
+fn locate(source: &str, message: &str) -> Option<String> {
+    for (start, end, tag) in top_level_elements(source) {
+        let alone = format!("<robot name=\"r\">{}</robot>", &source[start..end]);
+        match urdf_rs::read_from_string(&alone) {
+            Err(e) if parser_message(&e.to_string()) == message => {}
+            _ => continue,
+        }
+        let element = match attribute(tag, "name") {
+            Some(name) => format!("{} '{name}'", element_name(tag)),
+            None => format!("<{}>", element_name(tag)),
+        };
+        let line_of = |offset: usize| source[..offset].matches('\n').count() + 1;
+        if message == "invalid float literal" {
+            let inner = tags(&source[start..end]).find_map(|(offset, inner)| {
+                attributes(inner)
+                    .find(|(name, value)| {
+                        NUMBER_ATTRIBUTES.contains(name) && value.trim().parse::<f64>().is_err()
+                    })
+                    .map(|(name, value)| (start + offset, element_name(inner), name, value))
+            });
+            if let Some((offset, inner, name, value)) = inner {
+                return Some(format!(
+                    "line {}: {element}: <{inner}> attribute {name}=\"{value}\" is not a number",
+                    line_of(offset)
+                ));
+            }
+        }
+        let message = match message.strip_prefix("missing field ") {
+            Some(field) => format!("missing {field}"),
+            None => message.to_string(),
+        };
+        return Some(format!("line {}: {element}: {message}", line_of(start)));
+    }
+    None
+}
+
+/// The elements directly under the root, as (start offset, end offset, opening tag); an element
+/// the file does not close is left out.
+fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
+    let mut depth = 0usize;
+    let mut open = None;
+    let mut elements = Vec::new();
+    for (offset, tag) in tags(source) {
+        if tag.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            if depth == 1 {
+                if let Some((start, opening)) = open.take() {
+                    elements.push((start, offset + tag.len(), opening));
+                }
+            }
+        } else if tag.ends_with("/>") {
+            if depth == 1 {
+                elements.push((offset, offset + tag.len(), tag));
+            }
+        } else {
+            if depth == 1 {
+                open = Some((offset, tag));
+            }
+            depth += 1;
+        }
+    }
+    elements
+}
+
+/// The element name of a tag's text (`<limit lower="0"/>` → `limit`).
+fn element_name(tag: &str) -> &str {
+    tag.trim_start_matches('<')
+        .split(|c: char| c.is_whitespace() || c == '/' || c == '>')
+        .next()
+        .unwrap_or("")
+}
+
+/// The attributes of a tag's text as (name, value), in order; stops at the first thing that is
+/// not `name="value"` or `name='value'`.
+fn attributes(tag: &str) -> impl Iterator<Item = (&str, &str)> {
+    let mut rest = tag
+        .trim_start_matches('<')
+        .trim_end_matches('>')
+        .trim_end_matches('/');
+    rest = rest.trim_start_matches(|c: char| !c.is_whitespace());
+    std::iter::from_fn(move || {
+        let (name, after) = rest.trim_start().split_once('=')?;
+        let after = after.trim_start();
+        let quote = after.chars().next().filter(|c| *c == '"' || *c == '\'')?;
+        let (value, tail) = after[1..].split_once(quote)?;
+        rest = tail;
+        Some((name.trim(), value))
+    })
+}
+
 /// The tags of an XML text, skipping comments, CDATA sections, declarations and processing
 /// instructions: yields (byte offset, tag text from `<` to `>`).
 fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
@@ -168,10 +293,7 @@ fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
 /// of guessing.
 fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
     for (offset, tag) in tags(source) {
-        let name = tag[1..]
-            .split(|c: char| c.is_whitespace() || c == '/' || c == '>')
-            .next()
-            .unwrap_or("");
+        let name = element_name(tag);
         if name != "origin" && name != "axis" {
             continue;
         }
