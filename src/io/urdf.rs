@@ -196,10 +196,10 @@ fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
     for (offset, tag) in tags(source) {
         if tag.starts_with("</") {
             depth = depth.saturating_sub(1);
-            if depth == 1 {
-                if let Some((start, opening)) = open.take() {
-                    elements.push((start, offset + tag.len(), opening));
-                }
+            if depth == 1
+                && let Some((start, opening)) = open.take()
+            {
+                elements.push((start, offset + tag.len(), opening));
             }
         } else if tag.ends_with("/>") {
             if depth == 1 {
