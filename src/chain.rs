@@ -176,6 +176,17 @@ pub struct ChainBuilder {
 }
 
 impl ChainBuilder {
+    /// What already has `name`, if anything: `"joint"` or `"link"`.
+    pub(crate) fn name_owner(&self, name: &str) -> Option<&'static str> {
+        if self.joints.iter().any(|j| j.name == name) {
+            Some("joint")
+        } else if self.links.iter().any(|l| l == name) {
+            Some("link")
+        } else {
+            None
+        }
+    }
+
     /// An empty builder for a robot called `name`.
     #[must_use]
     pub fn new(name: impl Into<String>) -> Self {

@@ -183,6 +183,14 @@ pub enum FieldProblem {
         /// The joint type.
         kind: &'static str,
     },
+    /// A name given to one thing is already another's (a DH tool named like a joint or link).
+    #[error("'{name}' is already the name of a {owner}")]
+    NameTaken {
+        /// The name.
+        name: String,
+        /// What already has it: `joint` or `link`.
+        owner: &'static str,
+    },
 }
 
 /// The joints and links handed to [`ChainBuilder`](crate::ChainBuilder) do not form a valid

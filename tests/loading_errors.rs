@@ -205,6 +205,32 @@ fn yaml_duplicate_names() {
         model(&load("yaml/empty_name.yaml")),
         &ModelError::EmptyName { what: "joint" }
     );
+    // The tool is a link and a fixed joint under one name: a name already taken is the tool's
+    // error, not a duplicate the file does not contain.
+    for (file, owner, name) in [
+        ("yaml/tool_named_like_a_joint.yaml", "joint", "j2"),
+        ("yaml/tool_named_like_a_link.yaml", "link", "arm"),
+    ] {
+        let e = load(file);
+        assert_eq!(
+            field(&e),
+            (
+                None,
+                "tool.name",
+                &FieldProblem::NameTaken {
+                    name: name.into(),
+                    owner
+                }
+            )
+        );
+        assert!(
+            message(&e).ends_with(&format!(
+                "tool.name: '{name}' is already the name of a {owner}"
+            )),
+            "{}",
+            message(&e)
+        );
+    }
     let e = load("yaml/duplicate_key.yaml");
     // Placed in its joint, without the parser's advice on its own options.
     assert_eq!(yaml(&e), (Some("j1"), Some(6), "duplicate mapping key: a"));

@@ -509,6 +509,10 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     if let Some(tool) = &raw.tool {
         let name = tool.name.clone().unwrap_or_else(|| "tool".to_string());
         let placement = r.frame("tool", tool)?;
+        // (The tool is a link and the fixed joint to it, both under its name.)
+        if let Some(owner) = b.name_owner(&name) {
+            return Err(r.problem("tool.name", FieldProblem::NameTaken { name, owner }));
+        }
         b.link(name.clone());
         b.joint(
             JointSpec::new(name.clone(), JointKind::Fixed, parent, name).with_origin(placement),
