@@ -190,9 +190,7 @@ pub enum CliError {
         source: Box<CliError>,
     },
     /// A batch line is longer than any configuration of the chain could need.
-    #[error(
-        "the line is longer than {limit} bytes (the most a configuration of this chain needs is far less); is this a batch file?"
-    )]
+    #[error("the line is longer than {limit} bytes, the most read for one configuration")]
     LineTooLong {
         /// The cap, in bytes.
         limit: usize,
@@ -977,8 +975,8 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             let result = match read_capped_line(&mut reader, &mut bytes, limit) {
                 Ok(CappedLine::End) => break,
                 Ok(CappedLine::Line) => {
-                    String::from_utf8(std::mem::take(&mut bytes)).map_err(|e| CliError::NotUtf8 {
-                        byte: e.utf8_error().valid_up_to() + 1,
+                    std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
+                        byte: e.valid_up_to() + 1,
                     })
                 }
                 Ok(CappedLine::TooLong) => Err(CliError::LineTooLong { limit }),
@@ -991,7 +989,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 if line.trim().is_empty() {
                     return Ok(None);
                 }
-                let c = batch_configuration(&chain, &line)?;
+                let c = batch_configuration(&chain, line)?;
                 if batchable && c.qd.is_none() && c.qdd.is_none() {
                     check_q(&chain, &c.q, data.limit_policy())?;
                     pending.extend_from_slice(&c.q);
@@ -1055,7 +1053,6 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
     emit(out, &c, &mut data)
 }
 
-/// The output line standing in for a failed batch line under `--keep-going`.
 /// The longest batch line read, in bytes: 1 MiB, plus 1 KiB per degree of freedom (a line names
 /// at most three numbers per joint, or three members named after it).
 fn batch_line_limit(dof: usize) -> usize {
@@ -1124,6 +1121,7 @@ fn read_capped_line(
     Ok(CappedLine::Line)
 }
 
+/// The output line standing in for a failed batch line under `--keep-going`.
 fn error_json(line: usize, e: &CliError) -> String {
     json!({ "line": line, "error": error_chain(e) }).to_string()
 }
