@@ -1060,7 +1060,7 @@ fn batch_line_limit(dof: usize) -> usize {
 }
 
 /// What [`read_capped_line`] read.
-#[derive(Debug, PartialEq)]
+#[derive(Debug)]
 enum CappedLine {
     /// A line (without its end) is in the buffer.
     Line,

@@ -64,6 +64,14 @@ fn yaml_field(e: &LoadError) -> Option<&str> {
     }
 }
 
+/// The message of the URDF parser's error for `text`.
+fn urdf_message(text: &str) -> String {
+    match Chain::from_urdf_str(text).unwrap_err().kind() {
+        LoadErrorKind::Urdf { message } => message.clone(),
+        other => panic!("expected a URDF error, got {other:?}"),
+    }
+}
+
 fn model(e: &LoadError) -> &ModelError {
     match e.kind() {
         LoadErrorKind::Model(m) => m,
@@ -527,13 +535,8 @@ fn urdf_duplicates_syntax_and_empty() {
         load("urdf/empty.urdf").kind(),
         LoadErrorKind::Empty
     ));
-    // The parser's messages in the file's terms: a file cut short says so, and the
-    // deserializer's "custom: " prefix is dropped.
-    let urdf = |text: &str| match Chain::from_urdf_str(text).unwrap_err().kind() {
-        LoadErrorKind::Urdf { message } => message.clone(),
-        other => panic!("expected a URDF error, got {other:?}"),
-    };
-    let cut = urdf(r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j""#);
+    // The parser's messages in the file's terms: a file cut short says so.
+    let cut = urdf_message(r#"<robot name="r"><link name="a"/><link name="b"/><joint name="j""#);
     assert!(cut.contains("not a complete XML document"), "{cut}");
 }
 
@@ -548,10 +551,7 @@ fn urdf_parser_errors_name_the_element() {
              <joint name=\"j1\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n\
              {joint}\n</robot>"
         );
-        match Chain::from_urdf_str(&text).unwrap_err().kind() {
-            LoadErrorKind::Urdf { message } => message.clone(),
-            other => panic!("expected a URDF error, got {other:?}"),
-        }
+        urdf_message(&text)
     };
     let cases = [
         (

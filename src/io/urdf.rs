@@ -162,7 +162,6 @@ fn locate(source: &str, message: &str) -> Option<String> {
             Some(name) => format!("{} '{name}'", element_name(tag)),
             None => format!("<{}>", element_name(tag)),
         };
-        let line_of = |offset: usize| source[..offset].matches('\n').count() + 1;
         if message == "invalid float literal" {
             let inner = tags(&source[start..end]).find_map(|(offset, inner)| {
                 attributes(inner)
@@ -174,7 +173,7 @@ fn locate(source: &str, message: &str) -> Option<String> {
             if let Some((offset, inner, name, value)) = inner {
                 return Some(format!(
                     "line {}: {element}: <{inner}> attribute {name}=\"{value}\" is not a number",
-                    line_of(offset)
+                    line_at(source, offset)
                 ));
             }
         }
@@ -182,7 +181,10 @@ fn locate(source: &str, message: &str) -> Option<String> {
             Some(field) => format!("missing {field}"),
             None => message.to_string(),
         };
-        return Some(format!("line {}: {element}: {message}", line_of(start)));
+        return Some(format!(
+            "line {}: {element}: {message}",
+            line_at(source, start)
+        ));
     }
     None
 }
@@ -213,6 +215,11 @@ fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
         }
     }
     elements
+}
+
+/// The 1-based line of byte `offset` in `source`.
+fn line_at(source: &str, offset: usize) -> usize {
+    source[..offset].matches('\n').count() + 1
 }
 
 /// The element name of a tag's text (`<limit lower="0"/>` → `limit`).
@@ -303,7 +310,7 @@ fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
             };
             let tokens: Vec<&str> = value.split_whitespace().collect();
             if tokens.len() != 3 || tokens.iter().any(|t| t.parse::<f64>().is_err()) {
-                let line = source[..offset].matches('\n').count() + 1;
+                let line = line_at(source, offset);
                 return Err(LoadErrorKind::Urdf {
                     message: format!(
                         "line {line}: <{name}> attribute {attr}=\"{value}\" is not three numbers"
@@ -317,23 +324,7 @@ fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
 
 /// The value of attribute `name` in a tag's text.
 fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
-    let mut from = 0;
-    while let Some(off) = tag[from..].find(name) {
-        let at = from + off;
-        from = at + name.len();
-        let before_ok = tag[..at].ends_with(|c: char| c.is_whitespace());
-        let rest = tag[from..].trim_start();
-        let Some(rest) = rest.strip_prefix('=') else {
-            continue;
-        };
-        let rest = rest.trim_start();
-        let Some(quote) = rest.chars().next().filter(|c| *c == '"' || *c == '\'') else {
-            continue;
-        };
-        if !before_ok {
-            continue;
-        }
-        return rest[1..].find(quote).map(|end| &rest[1..1 + end]);
-    }
-    None
+    attributes(tag)
+        .find(|(n, _)| *n == name)
+        .map(|(_, value)| value)
 }
