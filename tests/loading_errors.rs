@@ -593,6 +593,90 @@ fn urdf_parser_errors_name_the_element() {
     }
 }
 
+/// A document whose root is not `<robot>`, or a `<robot>` without a name, is refused: the XML
+/// parser would read either as a robot.
+#[test]
+fn urdf_root_must_be_a_named_robot() {
+    let cases = [
+        (
+            "<?xml version=\"1.0\"?>\n<!-- a comment -->\n<robt name=\"r\"><link name=\"a\"/></robt>",
+            "line 3: the root element is <robt>; a URDF file's is <robot>",
+        ),
+        (
+            "<sdf version=\"1.6\"><model name=\"m\"><link name=\"a\"/></model></sdf>",
+            "line 1: the root element is <sdf>; a URDF file's is <robot>",
+        ),
+        (
+            "<?xml version=\"1.0\"?>\n<robot>\n<link name=\"a\"/>\n</robot>",
+            "line 2: <robot> has no name attribute (URDF requires one)",
+        ),
+    ];
+    for (text, expected) in cases {
+        assert_eq!(urdf_message(text), expected);
+    }
+    let chain = Chain::from_urdf_str("<robot name=\"r\"><link name=\"a\"/></robot>").unwrap();
+    assert_eq!(chain.name(), "r");
+}
+
+/// An element or attribute that URDF does not define in a joint's kinematic parts is skipped by
+/// the parser; it draws a warning naming the line, the joint and the part, so that a typo
+/// (`<orgin>`, `rp=`, `lowr=`) does not silently leave an identity origin or a zero bound.
+#[test]
+fn urdf_typos_in_a_joint_draw_warnings() {
+    let urdf = |inside: &str| {
+        format!(
+            "<robot name=\"r\">\n<link name=\"a\"/><link name=\"b\"/>\n\
+             <joint name=\"j\" type=\"revolute\">\n<parent link=\"a\"/><child link=\"b\"/>\n{inside}\n\
+             </joint>\n</robot>"
+        )
+    };
+    let limit = r#"<limit lower="-1" upper="1" effort="1" velocity="1"/>"#;
+    let cases = [
+        (
+            format!(r#"<orgin xyz="1 0 0"/>{limit}"#),
+            "line 5: joint 'j': <orgin> is not a URDF joint element and is ignored",
+        ),
+        (
+            format!(r#"<origin xyz="1 0 0" rp="0 0 1"/>{limit}"#),
+            "line 5: joint 'j': <origin> attribute rp is not a URDF attribute and is ignored (it takes xyz, rpy)",
+        ),
+        (
+            r#"<limit lowr="-1" upper="1" effort="1" velocity="1"/>"#.to_string(),
+            "line 5: joint 'j': <limit> attribute lowr is not a URDF attribute and is ignored (it takes lower, upper, effort, velocity)",
+        ),
+    ];
+    for (inside, expected) in cases {
+        let chain = Chain::from_urdf_str(&urdf(&inside)).unwrap();
+        assert_eq!(chain.warnings(), [expected.to_string()], "{inside}");
+    }
+    // Past twenty, the rest are counted rather than listed.
+    let many = format!("{limit}{}", "<note/>\n".repeat(25));
+    let chain = Chain::from_urdf_str(&urdf(&many)).unwrap();
+    let warnings = chain.warnings();
+    assert_eq!(warnings.len(), 21, "{warnings:?}");
+    assert_eq!(
+        warnings[19],
+        "line 24: joint 'j': <note> is not a URDF joint element and is ignored"
+    );
+    assert_eq!(
+        warnings[20],
+        "5 more elements or attributes in joints are not URDF and are ignored"
+    );
+    // Vendor attributes on dynamics data, namespaced attributes and the defined parts draw none.
+    let clean = format!(
+        r#"<origin xyz="1 0 0" rpy="0 0 1"/><axis xyz="0 0 1"/>{limit}
+           <dynamics damping="0.1" D="1" K="7000" mu_coulomb="0"/>
+           <safety_controller k_position="100" k_velocity="40" soft_lower_limit="-1" soft_upper_limit="1"/>
+           <calibration rising="0"/>"#
+    );
+    let chain = Chain::from_urdf_str(&urdf(&clean)).unwrap();
+    assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
+    let named = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/>
+        <joint name="j" type="fixed" xacro:note="x"><parent link="a"/><child link="b"/></joint></robot>"#;
+    let chain = Chain::from_urdf_str(named).unwrap();
+    assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
+}
+
 #[test]
 fn files_that_cannot_be_read() {
     let missing = Chain::from_file("tests/data/bad/does_not_exist.yaml").unwrap_err();

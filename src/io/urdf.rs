@@ -13,6 +13,7 @@ pub(crate) const MAX_XML_DEPTH: usize = 100;
 /// Parses URDF text into a chain description.
 pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     check_depth(source)?;
+    check_root(source)?;
     check_vector_attributes(source)?;
     let robot = urdf_rs::read_from_string(source).map_err(|e| {
         let message = parser_message(&e.to_string());
@@ -21,6 +22,9 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         }
     })?;
     let mut b = ChainBuilder::new(robot.name.clone());
+    for warning in ignored_joint_parts(source) {
+        b.warn(warning);
+    }
     for link in &robot.links {
         b.link(link.name.clone());
     }
@@ -293,6 +297,127 @@ fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
         }
     }
     Ok(())
+}
+
+/// Refuses a document whose root element is not `<robot>`, or whose `<robot>` has no name (the
+/// parser would read any root, and default the name to empty). A file with no element at all is
+/// left to the parser, which says so.
+fn check_root(source: &str) -> Result<(), LoadErrorKind> {
+    let Some((offset, tag)) = tags(source).next() else {
+        return Ok(());
+    };
+    let line = line_at(source, offset);
+    let message = match element_name(tag) {
+        "robot" if attribute(tag, "name").is_some() => return Ok(()),
+        "robot" => format!("line {line}: <robot> has no name attribute (URDF requires one)"),
+        other => format!("line {line}: the root element is <{other}>; a URDF file's is <robot>"),
+    };
+    Err(LoadErrorKind::Urdf { message })
+}
+
+/// The elements URDF defines inside `<joint>`, each with its attributes when they take part in
+/// the kinematics (`None`: dynamics, calibration and safety data, which vendors extend with
+/// attributes of their own, are not checked).
+const JOINT_PARTS: [(&str, Option<&[&str]>); 9] = [
+    ("origin", Some(&["xyz", "rpy"])),
+    ("parent", Some(&["link"])),
+    ("child", Some(&["link"])),
+    ("axis", Some(&["xyz"])),
+    ("limit", Some(&["lower", "upper", "effort", "velocity"])),
+    ("mimic", Some(&["joint", "multiplier", "offset"])),
+    ("dynamics", None),
+    ("calibration", None),
+    ("safety_controller", None),
+];
+
+/// Most warnings [`ignored_joint_parts`] lists one by one; the rest are counted.
+const MAX_PART_WARNINGS: usize = 20;
+
+/// Warnings for what the parser skips without a word inside a `<joint>`: an element or attribute
+/// URDF does not define there, such as `<orgin>` or `<origin rp="..">`, which would leave the
+/// joint's origin at the identity. Attributes with a namespace prefix (`xacro:`) are not
+/// checked. One pass over the text, lines counted as it goes.
+fn ignored_joint_parts(source: &str) -> Vec<String> {
+    // (byte offset, message without its line), and how many more there were.
+    let mut found: Vec<(usize, String)> = Vec::new();
+    let mut more = 0usize;
+    let mut note = |offset: usize, message: &dyn Fn() -> String| {
+        if found.len() < MAX_PART_WARNINGS {
+            found.push((offset, message()));
+        } else {
+            more += 1;
+        }
+    };
+    let mut depth = 0usize;
+    let mut joint = None;
+    for (offset, tag) in tags(source) {
+        if tag.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            continue;
+        }
+        let name = element_name(tag);
+        let unknown = |allowed: &[&str]| {
+            attributes(tag)
+                .map(|(attr, _)| attr)
+                .filter(|attr| !attr.contains(':') && !allowed.contains(attr))
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        };
+        match depth {
+            1 if name == "joint" => {
+                let label =
+                    attribute(tag, "name").map_or("<joint>".into(), |n| format!("joint '{n}'"));
+                for attr in unknown(&["name", "type"]) {
+                    note(offset, &|| {
+                        format!(
+                            "{label}: attribute {attr} is not a URDF joint attribute and is ignored"
+                        )
+                    });
+                }
+                joint = Some(label);
+            }
+            1 => joint = None,
+            2 => {
+                if let Some(label) = &joint {
+                    match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
+                        Some((_, None)) => {}
+                        Some((_, Some(allowed))) => {
+                            for attr in unknown(allowed) {
+                                note(offset, &|| {
+                                    format!(
+                                        "{label}: <{name}> attribute {attr} is not a URDF attribute and is ignored (it takes {})",
+                                        allowed.join(", ")
+                                    )
+                                });
+                            }
+                        }
+                        None => note(offset, &|| {
+                            format!("{label}: <{name}> is not a URDF joint element and is ignored")
+                        }),
+                    }
+                }
+            }
+            _ => {}
+        }
+        if !tag.ends_with("/>") {
+            depth += 1;
+        }
+    }
+    let (mut line, mut counted) = (1, 0);
+    let mut warnings: Vec<String> = found
+        .into_iter()
+        .map(|(offset, message)| {
+            line += source[counted..offset].matches('\n').count();
+            counted = offset;
+            format!("line {line}: {message}")
+        })
+        .collect();
+    if more > 0 {
+        warnings.push(format!(
+            "{more} more elements or attributes in joints are not URDF and are ignored"
+        ));
+    }
+    warnings
 }
 
 /// `urdf-rs` reads `xyz`/`rpy` attributes by dropping tokens that are not numbers
