@@ -618,9 +618,10 @@ fn urdf_root_must_be_a_named_robot() {
     assert_eq!(chain.name(), "r");
 }
 
-/// An element or attribute that URDF does not define in a joint's kinematic parts is skipped by
-/// the parser; it draws a warning naming the line, the joint and the part, so that a typo
-/// (`<orgin>`, `rp=`, `lowr=`) does not silently leave an identity origin or a zero bound.
+/// An element or attribute that URDF does not define in a joint's kinematic parts, or an element
+/// under `<robot>` it does not define, is skipped by the parser; it draws a warning naming the
+/// line (and the joint and part), so that a typo (`<orgin>`, `rp=`, `lowr=`, `<jiont>`) does not
+/// silently leave an identity origin, a zero bound or a missing joint.
 #[test]
 fn urdf_typos_in_a_joint_draw_warnings() {
     let urdf = |inside: &str| {
@@ -649,6 +650,14 @@ fn urdf_typos_in_a_joint_draw_warnings() {
         let chain = Chain::from_urdf_str(&urdf(&inside)).unwrap();
         assert_eq!(chain.warnings(), [expected.to_string()], "{inside}");
     }
+    // A misspelt joint under <robot> would be missing from the model.
+    let misspelt = "<robot name=\"r\">\n<link name=\"a\"/>\n\
+        <jiont name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></jiont>\n</robot>";
+    let chain = Chain::from_urdf_str(misspelt).unwrap();
+    assert_eq!(
+        chain.warnings(),
+        ["line 3: <jiont> is not a URDF element under <robot> and is ignored".to_string()]
+    );
     // Past twenty, the rest are counted rather than listed.
     let many = format!("{limit}{}", "<note/>\n".repeat(25));
     let chain = Chain::from_urdf_str(&urdf(&many)).unwrap();
@@ -660,7 +669,7 @@ fn urdf_typos_in_a_joint_draw_warnings() {
     );
     assert_eq!(
         warnings[20],
-        "5 more elements or attributes in joints are not URDF and are ignored"
+        "5 more elements or attributes are not URDF and are ignored"
     );
     // Vendor attributes on dynamics data, namespaced attributes and the defined parts draw none.
     let clean = format!(
@@ -672,7 +681,9 @@ fn urdf_typos_in_a_joint_draw_warnings() {
     let chain = Chain::from_urdf_str(&urdf(&clean)).unwrap();
     assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
     let named = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/>
-        <joint name="j" type="fixed" xacro:note="x"><parent link="a"/><child link="b"/></joint></robot>"#;
+        <joint name="j" type="fixed" xacro:note="x"><parent link="a"/><child link="b"/></joint>
+        <material name="grey"/><transmission name="t"/><gazebo reference="a"/><xacro:property name="p"/>
+        </robot>"#;
     let chain = Chain::from_urdf_str(named).unwrap();
     assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
 }

@@ -22,7 +22,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         }
     })?;
     let mut b = ChainBuilder::new(robot.name.clone());
-    for warning in ignored_joint_parts(source) {
+    for warning in ignored_parts(source) {
         b.warn(warning);
     }
     for link in &robot.links {
@@ -330,14 +330,26 @@ const JOINT_PARTS: [(&str, Option<&[&str]>); 9] = [
     ("safety_controller", None),
 ];
 
-/// Most warnings [`ignored_joint_parts`] lists one by one; the rest are counted.
+/// The elements URDF and its common extensions put under `<robot>`.
+const TOP_LEVEL: [&str; 7] = [
+    "link",
+    "joint",
+    "material",
+    "transmission",
+    "gazebo",
+    "ros2_control",
+    "sensor",
+];
+
+/// Most warnings [`ignored_parts`] lists one by one; the rest are counted.
 const MAX_PART_WARNINGS: usize = 20;
 
-/// Warnings for what the parser skips without a word inside a `<joint>`: an element or attribute
-/// URDF does not define there, such as `<orgin>` or `<origin rp="..">`, which would leave the
-/// joint's origin at the identity. Attributes with a namespace prefix (`xacro:`) are not
-/// checked. One pass over the text, lines counted as it goes.
-fn ignored_joint_parts(source: &str) -> Vec<String> {
+/// Warnings for what the parser skips without a word: an element under `<robot>` that URDF does
+/// not define (`<jiont>`: the joint would be missing), and inside a `<joint>` an element or
+/// attribute URDF does not define there, such as `<orgin>` or `<origin rp="..">`, which would
+/// leave the joint's origin at the identity. Elements and attributes with a namespace prefix
+/// (`xacro:`) are not checked. One pass over the text, lines counted as it goes.
+fn ignored_parts(source: &str) -> Vec<String> {
     // (byte offset, message without its line), and how many more there were.
     let mut found: Vec<(usize, String)> = Vec::new();
     let mut more = 0usize;
@@ -376,7 +388,14 @@ fn ignored_joint_parts(source: &str) -> Vec<String> {
                 }
                 joint = Some(label);
             }
-            1 => joint = None,
+            1 => {
+                joint = None;
+                if !name.contains(':') && !TOP_LEVEL.contains(&name) {
+                    note(offset, &|| {
+                        format!("<{name}> is not a URDF element under <robot> and is ignored")
+                    });
+                }
+            }
             2 => {
                 if let Some(label) = &joint {
                     match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
@@ -414,7 +433,7 @@ fn ignored_joint_parts(source: &str) -> Vec<String> {
         .collect();
     if more > 0 {
         warnings.push(format!(
-            "{more} more elements or attributes in joints are not URDF and are ignored"
+            "{more} more elements or attributes are not URDF and are ignored"
         ));
     }
     warnings
