@@ -196,26 +196,20 @@ fn locate(source: &str, message: &str) -> Option<String> {
 /// The elements directly under the root, as (start offset, end offset, opening tag); an element
 /// the file does not close is left out.
 fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
-    let mut depth = 0usize;
     let mut open = None;
     let mut elements = Vec::new();
-    for (offset, tag) in tags(source) {
+    for (offset, tag, depth) in nested_tags(source) {
+        if depth != 1 {
+            continue;
+        }
         if tag.starts_with("</") {
-            depth = depth.saturating_sub(1);
-            if depth == 1
-                && let Some((start, opening)) = open.take()
-            {
+            if let Some((start, opening)) = open.take() {
                 elements.push((start, offset + tag.len(), opening));
             }
         } else if tag.ends_with("/>") {
-            if depth == 1 {
-                elements.push((offset, offset + tag.len(), tag));
-            }
+            elements.push((offset, offset + tag.len(), tag));
         } else {
-            if depth == 1 {
-                open = Some((offset, tag));
-            }
-            depth += 1;
+            open = Some((offset, tag));
         }
     }
     elements
@@ -280,20 +274,32 @@ fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
     })
 }
 
+/// [`tags`] with the number of elements open around each: the root's opening tag is at depth 0,
+/// its children's tags at 1, and a closing tag at the depth of its opening tag.
+fn nested_tags(source: &str) -> impl Iterator<Item = (usize, &str, usize)> {
+    let mut depth = 0usize;
+    tags(source).map(move |(offset, tag)| {
+        if tag.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            (offset, tag, depth)
+        } else {
+            let at = depth;
+            if !tag.ends_with("/>") {
+                depth += 1;
+            }
+            (offset, tag, at)
+        }
+    })
+}
+
 /// Refuses element nesting deeper than [`MAX_XML_DEPTH`] before the recursive XML parser sees
 /// the file.
 fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
-    let mut depth = 0usize;
-    for (_, tag) in tags(source) {
-        if tag.starts_with("</") {
-            depth = depth.saturating_sub(1);
-        } else if !tag.ends_with("/>") {
-            depth += 1;
-            if depth > MAX_XML_DEPTH {
-                return Err(LoadErrorKind::Urdf {
-                    message: format!("elements nest deeper than {MAX_XML_DEPTH} levels"),
-                });
-            }
+    for (_, tag, depth) in nested_tags(source) {
+        if depth >= MAX_XML_DEPTH && !tag.starts_with("</") && !tag.ends_with("/>") {
+            return Err(LoadErrorKind::Urdf {
+                message: format!("elements nest deeper than {MAX_XML_DEPTH} levels"),
+            });
         }
     }
     Ok(())
@@ -360,11 +366,9 @@ fn ignored_parts(source: &str) -> Vec<String> {
             more += 1;
         }
     };
-    let mut depth = 0usize;
     let mut joint = None;
-    for (offset, tag) in tags(source) {
+    for (offset, tag, depth) in nested_tags(source) {
         if tag.starts_with("</") {
-            depth = depth.saturating_sub(1);
             continue;
         }
         let name = element_name(tag);
@@ -372,7 +376,6 @@ fn ignored_parts(source: &str) -> Vec<String> {
             attributes(tag)
                 .map(|(attr, _)| attr)
                 .filter(|attr| !attr.contains(':') && !allowed.contains(attr))
-                .map(str::to_string)
                 .collect::<Vec<_>>()
         };
         match depth {
@@ -417,9 +420,6 @@ fn ignored_parts(source: &str) -> Vec<String> {
                 }
             }
             _ => {}
-        }
-        if !tag.ends_with("/>") {
-            depth += 1;
         }
     }
     let (mut line, mut counted) = (1, 0);
