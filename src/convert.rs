@@ -11,7 +11,8 @@
 //! joint from a new root link. Limits are carried over; mimic joints keep their mimic element.
 //!
 //! The model holds kinematics only: links are written with a zero (massless) inertial, and a
-//! `<limit>`'s required effort and velocity as 0.
+//! `<limit>`'s required effort and velocity as 0. Fixed and continuous joints get no `<limit>`,
+//! and fixed joints no `<axis>`.
 
 use crate::chain::{Chain, JointSpec};
 use crate::joint::{JointKind, Limits, normalize_axis};
@@ -95,6 +96,8 @@ fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
 struct Writer {
     links: Vec<urdf_rs::Link>,
     joints: Vec<urdf_rs::Joint>,
+    /// For each joint: whether its `<limit>` and its `<axis>` are filler (see `without_filler`).
+    filler: Vec<(bool, bool)>,
     names: std::collections::HashSet<String>,
 }
 
@@ -123,6 +126,8 @@ impl Writer {
             return Err(ConvertError::NameClash { name });
         }
         let (lower, upper) = limits.map_or((0.0, 0.0), |l| (l.lower, l.upper));
+        self.filler
+            .push((limits.is_none(), matches!(kind, urdf_rs::JointType::Fixed)));
         self.joints.push(urdf_rs::Joint {
             name,
             joint_type: kind,
@@ -183,6 +188,7 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let mut w = Writer {
         links: Vec::new(),
         joints: Vec::new(),
+        filler: Vec::new(),
         names: std::collections::HashSet::new(),
     };
     for l in d.links() {
@@ -212,9 +218,48 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
         joints: w.joints,
         materials: Vec::new(),
     };
-    urdf_rs::write_to_string(&robot).map_err(|e| ConvertError::Write {
+    let text = urdf_rs::write_to_string(&robot).map_err(|e| ConvertError::Write {
         message: e.to_string(),
-    })
+    })?;
+    Ok(without_filler(&text, &w.filler))
+}
+
+/// `text` without the elements `urdf-rs` writes for every joint whether it applies or not: the
+/// `<limit>` of a joint without limits (fixed or continuous) and the `<axis>` of a fixed joint.
+/// `filler` holds, in the joints' order, whether each has them. The writer puts each element on
+/// a line of its own; should the joints not be found one per line, the text is kept as written
+/// (the elements are ignored by URDF readers for those joint types).
+fn without_filler(text: &str, filler: &[(bool, bool)]) -> String {
+    let starts = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("<joint "))
+        .count();
+    if starts != filler.len() {
+        return text.to_string();
+    }
+    let mut joint: Option<(bool, bool)> = None;
+    let mut index = 0;
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        let element = line.trim_start();
+        if element.starts_with("<joint ") {
+            joint = Some(filler[index]);
+            index += 1;
+        } else if element.starts_with("</joint>") {
+            joint = None;
+        }
+        let drop = match joint {
+            Some((limit, axis)) => {
+                (limit && element.starts_with("<limit ")) || (axis && element.starts_with("<axis "))
+            }
+            None => false,
+        };
+        if !drop {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
 }
 
 fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {

@@ -111,3 +111,43 @@ fn prismatic_joints_without_limits_are_refused() {
         Err(kinechain::convert::ConvertError::UnlimitedPrismatic { .. })
     ));
 }
+
+/// Fixed and continuous joints are written without the `<limit>` the URDF writer would fill with
+/// zeros (which reads as a locked range), and fixed joints without an `<axis>`; limited joints
+/// keep both.
+#[test]
+fn limits_and_axes_are_written_only_where_they_apply() {
+    let chain = Chain::from_dh_yaml_str(
+        "convention: standard\njoints:\n  \
+         - {name: spin, type: revolute, a: 0.5, alpha: 0.3, d: 0, theta: 0}\n  \
+         - {name: arm, type: revolute, a: 0.5, alpha: 0, d: 0.1, theta: 0, limits: [-1, 1]}\n  \
+         - {name: flange, type: fixed, a: 0, alpha: 0, d: 0.2, theta: 0}\n",
+    )
+    .unwrap();
+    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    // Each joint's element, by name.
+    let block = |name: &str| {
+        let start = text
+            .find(&format!("<joint name=\"{name}\""))
+            .unwrap_or_else(|| panic!("no joint {name} in\n{text}"));
+        let end = start + text[start..].find("</joint>").unwrap();
+        &text[start..end]
+    };
+    for (name, kind, limit, axis) in [
+        ("spin", "continuous", false, true),
+        ("spin_post", "fixed", false, false),
+        ("arm", "revolute", true, true),
+        ("arm_post", "fixed", false, false),
+        ("flange", "fixed", false, false),
+    ] {
+        let b = block(name);
+        assert!(b.contains(&format!("type=\"{kind}\"")), "{b}");
+        assert_eq!(b.contains("<limit "), limit, "{b}");
+        assert_eq!(b.contains("<axis "), axis, "{b}");
+    }
+    assert!(block("arm").contains("<limit lower=\"-1\" upper=\"1\""), "{text}");
+    let urdf = Chain::from_urdf_str(&text).unwrap();
+    assert!(urdf.warnings().is_empty(), "{:?}", urdf.warnings());
+    let spin = urdf.joint(urdf.joint_id("spin").unwrap());
+    assert_eq!(spin.limits(), [None]);
+}
