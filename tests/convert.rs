@@ -145,7 +145,10 @@ fn limits_and_axes_are_written_only_where_they_apply() {
         assert_eq!(b.contains("<limit "), limit, "{b}");
         assert_eq!(b.contains("<axis "), axis, "{b}");
     }
-    assert!(block("arm").contains("<limit lower=\"-1\" upper=\"1\""), "{text}");
+    assert!(
+        block("arm").contains("<limit lower=\"-1\" upper=\"1\""),
+        "{text}"
+    );
     let urdf = Chain::from_urdf_str(&text).unwrap();
     assert!(urdf.warnings().is_empty(), "{:?}", urdf.warnings());
     let spin = urdf.joint(urdf.joint_id("spin").unwrap());
