@@ -593,8 +593,8 @@ fn urdf_parser_errors_name_the_element() {
     }
 }
 
-/// A document whose root is not `<robot>`, or a `<robot>` without a name, is refused: the XML
-/// parser would read either as a robot.
+/// A document whose root is not `<robot>`, a `<robot>` without a name, or a second element after
+/// the root is refused: the XML parser would read each as a robot.
 #[test]
 fn urdf_root_must_be_a_named_robot() {
     let cases = [
@@ -609,6 +609,10 @@ fn urdf_root_must_be_a_named_robot() {
         (
             "<?xml version=\"1.0\"?>\n<robot>\n<link name=\"a\"/>\n</robot>",
             "line 2: <robot> has no name attribute (URDF requires one)",
+        ),
+        (
+            "<robot name=\"r\">\n<link name=\"a\"/>\n</robot>\n<robot name=\"s\"/>\n",
+            "line 4: <robot> follows the <robot> element; a URDF file has one root element",
         ),
     ];
     for (text, expected) in cases {

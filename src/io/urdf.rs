@@ -305,16 +305,26 @@ fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
     Ok(())
 }
 
-/// Refuses a document whose root element is not `<robot>`, or whose `<robot>` has no name (the
-/// parser would read any root, and default the name to empty). A file with no element at all is
-/// left to the parser, which says so.
+/// Refuses a document whose root element is not `<robot>`, whose `<robot>` has no name, or that
+/// has a second element after the root (the parser would read any root, default the name to
+/// empty, and stop at the root's end). A file with no element at all is left to the parser,
+/// which says so.
 fn check_root(source: &str) -> Result<(), LoadErrorKind> {
-    let Some((offset, tag)) = tags(source).next() else {
+    let mut roots =
+        nested_tags(source).filter(|(_, tag, depth)| *depth == 0 && !tag.starts_with("</"));
+    let Some((offset, tag, _)) = roots.next() else {
         return Ok(());
     };
     let line = line_at(source, offset);
     let message = match element_name(tag) {
-        "robot" if attribute(tag, "name").is_some() => return Ok(()),
+        "robot" if attribute(tag, "name").is_some() => match roots.next() {
+            None => return Ok(()),
+            Some((offset, tag, _)) => format!(
+                "line {}: <{}> follows the <robot> element; a URDF file has one root element",
+                line_at(source, offset),
+                element_name(tag)
+            ),
+        },
         "robot" => format!("line {line}: <robot> has no name attribute (URDF requires one)"),
         other => format!("line {line}: the root element is <{other}>; a URDF file's is <robot>"),
     };
