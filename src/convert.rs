@@ -96,8 +96,6 @@ fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
 struct Writer {
     links: Vec<urdf_rs::Link>,
     joints: Vec<urdf_rs::Joint>,
-    /// For each joint: whether its `<limit>` and its `<axis>` are filler (see `without_filler`).
-    filler: Vec<(bool, bool)>,
     names: std::collections::HashSet<String>,
 }
 
@@ -126,8 +124,6 @@ impl Writer {
             return Err(ConvertError::NameClash { name });
         }
         let (lower, upper) = limits.map_or((0.0, 0.0), |l| (l.lower, l.upper));
-        self.filler
-            .push((limits.is_none(), matches!(kind, urdf_rs::JointType::Fixed)));
         self.joints.push(urdf_rs::Joint {
             name,
             joint_type: kind,
@@ -188,7 +184,6 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let mut w = Writer {
         links: Vec::new(),
         joints: Vec::new(),
-        filler: Vec::new(),
         names: std::collections::HashSet::new(),
     };
     for l in d.links() {
@@ -221,38 +216,37 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let text = urdf_rs::write_to_string(&robot).map_err(|e| ConvertError::Write {
         message: e.to_string(),
     })?;
-    Ok(without_filler(&text, &w.filler))
+    Ok(without_filler(&text, &robot.joints))
 }
 
-/// `text` without the elements `urdf-rs` writes for every joint whether it applies or not: the
-/// `<limit>` of a joint without limits (fixed or continuous) and the `<axis>` of a fixed joint.
-/// `filler` holds, in the joints' order, whether each has them. The writer puts each element on
-/// a line of its own; should the joints not be found one per line, the text is kept as written
-/// (the elements are ignored by URDF readers for those joint types).
-fn without_filler(text: &str, filler: &[(bool, bool)]) -> String {
+/// `text`, written from `joints`, without the elements `urdf-rs` writes for every joint whether
+/// it applies or not: the `<limit>` of a fixed or continuous joint (the only ones written without
+/// limits) and the `<axis>` of a fixed joint. The writer puts each element on a line of its own;
+/// should the joints not be found one per line, the text is kept as written (URDF readers ignore
+/// those elements for those joint types).
+fn without_filler(text: &str, joints: &[urdf_rs::Joint]) -> String {
+    use urdf_rs::JointType::{Continuous, Fixed};
     let starts = text
         .lines()
         .filter(|l| l.trim_start().starts_with("<joint "))
         .count();
-    if starts != filler.len() {
+    if starts != joints.len() {
         return text.to_string();
     }
-    let mut joint: Option<(bool, bool)> = None;
-    let mut index = 0;
+    let mut kinds = joints.iter().map(|j| &j.joint_type);
+    let mut joint = None;
     let mut out = String::with_capacity(text.len());
     for line in text.lines() {
         let element = line.trim_start();
         if element.starts_with("<joint ") {
-            joint = Some(filler[index]);
-            index += 1;
+            joint = kinds.next();
         } else if element.starts_with("</joint>") {
             joint = None;
         }
         let drop = match joint {
-            Some((limit, axis)) => {
-                (limit && element.starts_with("<limit ")) || (axis && element.starts_with("<axis "))
-            }
-            None => false,
+            Some(Fixed) => element.starts_with("<limit ") || element.starts_with("<axis "),
+            Some(Continuous) => element.starts_with("<limit "),
+            _ => false,
         };
         if !drop {
             out.push_str(line);
