@@ -662,6 +662,17 @@ fn urdf_typos_in_a_joint_draw_warnings() {
         chain.warnings(),
         ["line 3: <jiont> is not a URDF element under <robot> and is ignored".to_string()]
     );
+    // An attribute of <joint> itself other than name and type.
+    let attribute = "<robot name=\"r\">\n<link name=\"a\"/><link name=\"b\"/>\n\
+        <joint name=\"j\" type=\"fixed\" label=\"x\"><parent link=\"a\"/><child link=\"b\"/></joint>\n</robot>";
+    let chain = Chain::from_urdf_str(attribute).unwrap();
+    assert_eq!(
+        chain.warnings(),
+        [
+            "line 3: joint 'j': attribute label is not a URDF joint attribute and is ignored"
+                .to_string()
+        ]
+    );
     // Past twenty, the rest are counted rather than listed.
     let many = format!("{limit}{}", "<note/>\n".repeat(25));
     let chain = Chain::from_urdf_str(&urdf(&many)).unwrap();
