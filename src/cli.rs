@@ -14,7 +14,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
 use serde_json::{Map, Value, json};
 use std::io::{BufRead, BufWriter, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Forward kinematics of robot chains from DH YAML or URDF files.
@@ -287,6 +287,19 @@ fn load(path: &PathBuf) -> Result<Chain, CliError> {
     Ok(chain)
 }
 
+/// Warns of what a URDF file holds beyond its kinematics, which `convert` does not write.
+fn warn_dropped(path: &Path) {
+    let dropped = std::fs::read_to_string(path)
+        .ok()
+        .and_then(|text| crate::convert::dropped_from_urdf(&text));
+    if let Some(dropped) = dropped {
+        eprintln!(
+            "warning: {}: the URDF written has the kinematics only; not written: {dropped}",
+            path.display()
+        );
+    }
+}
+
 /// Writes `text` to `path`, or to `out` when there is no path.
 fn write_output(path: Option<&PathBuf>, text: &str, out: &mut dyn Write) -> Result<(), CliError> {
     match path {
@@ -323,6 +336,9 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Convert { robot, output } => {
             let chain = load(&robot)?;
             let text = crate::convert::to_urdf(&chain)?;
+            if crate::io::Format::from_path(&robot) == Some(crate::io::Format::Urdf) {
+                warn_dropped(&robot);
+            }
             write_output(output.as_ref(), &text, out)
         }
         Command::Render {

@@ -219,6 +219,58 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     Ok(without_filler(&text, &robot.joints))
 }
 
+/// What the URDF `text` holds that [`to_urdf`] does not write, since the model keeps kinematics
+/// only: visual and collision elements, links' masses and inertias, joints' effort and velocity
+/// limits, dynamics, calibration and safety controllers, and materials. `None` when it holds none
+/// of these (a file that `to_urdf` wrote, for one) or cannot be read.
+pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
+    let robot = urdf_rs::read_from_string(text).ok()?;
+    let count = |n: usize, what: &str| (n > 0).then(|| format!("{n} {what}"));
+    let inertial = |l: &&urdf_rs::Link| {
+        let (m, i) = (l.inertial.mass.value, &l.inertial.inertia);
+        [m, i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz]
+            .iter()
+            .any(|&x| x != 0.0)
+    };
+    let parts: Vec<String> = [
+        count(
+            robot.links.iter().map(|l| l.visual.len()).sum(),
+            "visual elements",
+        ),
+        count(
+            robot.links.iter().map(|l| l.collision.len()).sum(),
+            "collision elements",
+        ),
+        count(
+            robot.links.iter().filter(inertial).count(),
+            "links' masses and inertias",
+        ),
+        count(
+            robot
+                .joints
+                .iter()
+                .filter(|j| j.limit.effort != 0.0 || j.limit.velocity != 0.0)
+                .count(),
+            "joints' effort and velocity limits",
+        ),
+        count(
+            robot
+                .joints
+                .iter()
+                .filter(|j| {
+                    j.dynamics.is_some() || j.calibration.is_some() || j.safety_controller.is_some()
+                })
+                .count(),
+            "joints' dynamics, calibration or safety controller elements",
+        ),
+        count(robot.materials.len(), "materials"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
 /// `text`, written from `joints`, without the elements `urdf-rs` writes for every joint whether
 /// it applies or not: the `<limit>` of a fixed or continuous joint (the only ones written without
 /// limits) and the `<axis>` of a fixed joint. The writer puts each element on a line of its own;

@@ -913,6 +913,39 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
 }
 
 #[test]
+fn converting_a_urdf_says_what_is_not_written() {
+    let dir = scratch_dir("convert_urdf");
+    let written = dir.join("panda.urdf");
+    let out = kinechain(&[
+        "convert",
+        "robots/panda.urdf",
+        "-o",
+        written.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    for part in [
+        "warning: robots/panda.urdf: the URDF written has the kinematics only",
+        "11 visual elements, 17 collision elements, 11 links' masses and inertias",
+        "9 joints' effort and velocity limits",
+    ] {
+        assert!(stderr.contains(part), "{stderr}");
+    }
+    // The written file has nothing more to drop, and a DH table never had any of it.
+    for robot in [written.to_str().unwrap(), "robots/puma560.yaml"] {
+        let out = kinechain(&["convert", robot]);
+        assert!(out.status.success());
+        assert!(
+            out.stderr.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn convert_and_render_write_files() {
     let dir = scratch_dir("convert");
     let urdf = dir.join("puma.urdf");
