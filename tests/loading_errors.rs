@@ -614,12 +614,36 @@ fn urdf_root_must_be_a_named_robot() {
             "<robot name=\"r\">\n<link name=\"a\"/>\n</robot>\n<robot name=\"s\"/>\n",
             "line 4: <robot> follows the <robot> element; a URDF file has one root element",
         ),
+        (
+            "<robot name=\"r\">\n<link name=\"a\"/>\n</robot>\n</robot>\n",
+            "line 4: </robot> closes no open element",
+        ),
+        // Text outside the root (a truncated copy, a paste gone wrong) was skipped.
+        (
+            "hello\n<robot name=\"r\"><link name=\"a\"/></robot>",
+            "line 1: text outside the root element <robot>",
+        ),
+        (
+            "<robot name=\"r\"><link name=\"a\"/></robot>\n<!-- c -->\nlink b",
+            "line 3: text outside the root element <robot>",
+        ),
+        (
+            "<robot name=\"r\"/>\n\nx",
+            "line 3: text outside the root element <robot>",
+        ),
     ];
     for (text, expected) in cases {
         assert_eq!(urdf_message(text), expected);
     }
-    let chain = Chain::from_urdf_str("<robot name=\"r\"><link name=\"a\"/></robot>").unwrap();
-    assert_eq!(chain.name(), "r");
+    // A byte order mark, the XML declaration, comments and blank lines around the root are not
+    // text.
+    for text in [
+        "<robot name=\"r\"><link name=\"a\"/></robot>",
+        "\u{feff}<?xml version=\"1.0\"?>\n<!-- c -->\n<robot name=\"r\">\n<link name=\"a\"/>\n</robot>\n<!-- end -->\n\n",
+    ] {
+        let chain = Chain::from_urdf_str(text).unwrap();
+        assert_eq!(chain.name(), "r");
+    }
 }
 
 /// An element or attribute that URDF does not define in a joint's kinematic parts, or an element

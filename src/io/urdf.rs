@@ -254,17 +254,7 @@ fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
         loop {
             let off = source[i..].find('<')?;
             i += off;
-            let rest = &source[i..];
-            let skip_to = |end: &str| rest.find(end).map_or(rest.len(), |e| e + end.len());
-            let (len, is_tag) = if rest.starts_with("<!--") {
-                (skip_to("-->"), false)
-            } else if rest.starts_with("<![CDATA[") {
-                (skip_to("]]>"), false)
-            } else if rest.starts_with("<?") || rest.starts_with("<!") {
-                (skip_to(">"), false)
-            } else {
-                (skip_to(">"), true)
-            };
+            let (len, is_tag) = markup(&source[i..]);
             let start = i;
             i += len;
             if is_tag {
@@ -272,6 +262,38 @@ fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
             }
         }
     })
+}
+
+/// The length of the markup that `rest` starts with (at a `<`), and whether it is a tag rather
+/// than a comment, CDATA section, declaration or processing instruction.
+fn markup(rest: &str) -> (usize, bool) {
+    let skip_to = |end: &str| rest.find(end).map_or(rest.len(), |e| e + end.len());
+    if rest.starts_with("<!--") {
+        (skip_to("-->"), false)
+    } else if rest.starts_with("<![CDATA[") {
+        (skip_to("]]>"), false)
+    } else if rest.starts_with("<?") || rest.starts_with("<!") {
+        (skip_to(">"), false)
+    } else {
+        (skip_to(">"), true)
+    }
+}
+
+/// The offset of the first text in `source[range]` that is neither blank nor markup.
+fn stray_text(source: &str, range: std::ops::Range<usize>) -> Option<usize> {
+    let mut i = range.start;
+    while i < range.end {
+        let rest = &source[i..range.end];
+        let text = rest.find('<').unwrap_or(rest.len());
+        if let Some(at) = rest[..text].find(|c: char| !c.is_whitespace() && c != '\u{feff}') {
+            return Some(i + at);
+        }
+        i += text;
+        if i < range.end {
+            i += markup(&source[i..range.end]).0;
+        }
+    }
+    None
 }
 
 /// [`tags`] with the number of elements open around each: the root's opening tag is at depth 0,
@@ -306,24 +328,45 @@ fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
 }
 
 /// Refuses a document whose root element is not `<robot>`, whose `<robot>` has no name, or that
-/// has a second element after the root (the parser would read any root, default the name to
-/// empty, and stop at the root's end). A file with no element at all is left to the parser,
-/// which says so.
+/// has a second element or any text (other than comments and the like) before or after the root
+/// (the parser would read any root, default the name to empty, and skip the rest). A file with
+/// no element at all is left to the parser, which says so.
 fn check_root(source: &str) -> Result<(), LoadErrorKind> {
-    let mut roots =
-        nested_tags(source).filter(|(_, tag, depth)| *depth == 0 && !tag.starts_with("</"));
-    let Some((offset, tag, _)) = roots.next() else {
+    let mut outside = nested_tags(source).filter(|(_, _, depth)| *depth == 0);
+    let Some((offset, tag, _)) = outside.next() else {
         return Ok(());
     };
     let line = line_at(source, offset);
+    let root_end = if tag.ends_with("/>") {
+        Some(offset + tag.len())
+    } else {
+        outside.next().map(|(o, t, _)| o + t.len())
+    };
+    let stray = |range| {
+        stray_text(source, range).map(|at| {
+            format!(
+                "line {}: text outside the root element <robot>",
+                line_at(source, at)
+            )
+        })
+    };
     let message = match element_name(tag) {
-        "robot" if attribute(tag, "name").is_some() => match roots.next() {
-            None => return Ok(()),
+        "robot" if attribute(tag, "name").is_some() => match outside.next() {
+            Some((offset, tag, _)) if tag.starts_with("</") => format!(
+                "line {}: {tag} closes no open element",
+                line_at(source, offset)
+            ),
             Some((offset, tag, _)) => format!(
                 "line {}: <{}> follows the <robot> element; a URDF file has one root element",
                 line_at(source, offset),
                 element_name(tag)
             ),
+            None => match stray(0..offset)
+                .or_else(|| root_end.and_then(|end| stray(end..source.len())))
+            {
+                Some(message) => message,
+                None => return Ok(()),
+            },
         },
         "robot" => format!("line {line}: <robot> has no name attribute (URDF requires one)"),
         other => format!("line {line}: the root element is <{other}>; a URDF file's is <robot>"),
