@@ -353,8 +353,9 @@ fn check_root(source: &str) -> Result<(), LoadErrorKind> {
     let message = match element_name(tag) {
         "robot" if attribute(tag, "name").is_some() => match outside.next() {
             Some((offset, tag, _)) if tag.starts_with("</") => format!(
-                "line {}: {tag} closes no open element",
-                line_at(source, offset)
+                "line {}: </{}> closes no open element",
+                line_at(source, offset),
+                element_name(tag.trim_start_matches("</"))
             ),
             Some((offset, tag, _)) => format!(
                 "line {}: <{}> follows the <robot> element; a URDF file has one root element",
