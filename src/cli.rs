@@ -809,12 +809,17 @@ fn check_finite(
 }
 
 /// A number for a table: six decimals, or six significant digits after the first in exponent
-/// form from 10⁹ on (where six decimals would print hundreds of digits for a large value).
+/// form from 10⁹ on (where six decimals would print hundreds of digits for a large value). A
+/// value that shows as zero has no sign: the `-` of `-0.000000` would come from a rounding
+/// residue such as −6·10⁻¹⁷ or from −0, not from the robot.
 fn fixed(x: f64) -> String {
-    if x.abs() < 1e9 {
-        format!("{x:.6}")
-    } else {
-        format!("{x:.6e}")
+    if x.abs() >= 1e9 {
+        return format!("{x:.6e}");
+    }
+    let text = format!("{x:.6}");
+    match text.strip_prefix('-') {
+        Some(digits) if digits.bytes().all(|b| b == b'0' || b == b'.') => digits.to_string(),
+        _ => text,
     }
 }
 

@@ -716,6 +716,28 @@ fn results_that_overflow_are_errors() {
 /// output (to the six decimals shown), and `undefined` where JSON has `null`.
 #[test]
 fn tables_print_the_orientation_asked_for() {
+    // Rounding residues (−6e-17, say) and −0 show as zero, without a sign: at this
+    // configuration several position and rotation entries are such residues.
+    let q = "[0, -0.5, 0.3, 0, 0.4, 0]";
+    let args = ["fk", "robots/puma560.yaml", "--q", q, "--format", "table"];
+    let table = ok_text(&args);
+    let json = &ok_json(&args[..4])[0];
+    let residue = |x: &Value| x.as_f64().is_some_and(|x| x < 0.0 && x > -5e-7);
+    let residues = json["links"]
+        .as_object()
+        .unwrap()
+        .values()
+        .flat_map(|l| {
+            l["pose"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .flat_map(|r| r.as_array().unwrap())
+        })
+        .filter(|x| residue(x))
+        .count();
+    assert!(residues >= 3, "{residues}");
+    assert!(!table.contains("-0.000000"), "{table}");
     let q = "[0.3, -0.5, -1.2, 0.1, -0.7, 2.9]";
     for (kind, header, key) in [
         ("quat", "quaternion (w x y z)", "quaternion"),
