@@ -697,6 +697,19 @@ fn urdf_typos_in_a_joint_draw_warnings() {
                 .to_string()
         ]
     );
+    // Text where URDF has elements only: a stray character left by an edit.
+    let stray = "<robot name=\"r\">\n<link name=\"a\"/>x\n<link name=\"b\">\n  y</link>\n\
+        <joint name=\"j\" type=\"fixed\"><parent link=\"a\"/>><child link=\"b\"/></joint>\n</robot>";
+    let chain = Chain::from_urdf_str(stray).unwrap();
+    assert_eq!(
+        chain.warnings(),
+        [
+            "line 2: text inside <robot> is not URDF and is ignored",
+            "line 4: link 'b': text inside <link> is not URDF and is ignored",
+            "line 5: joint 'j': text inside <joint> is not URDF and is ignored",
+        ]
+        .map(String::from)
+    );
     // Past twenty, the rest are counted rather than listed.
     let many = format!("{limit}{}", "<note/>\n".repeat(25));
     let chain = Chain::from_urdf_str(&urdf(&many)).unwrap();
@@ -721,7 +734,8 @@ fn urdf_typos_in_a_joint_draw_warnings() {
     assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());
     let named = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/>
         <joint name="j" type="fixed" xacro:note="x"><parent link="a"/><child link="b"/></joint>
-        <material name="grey"/><transmission name="t"/><gazebo reference="a"/><xacro:property name="p"/>
+        <material name="grey"/><transmission name="t"><type>simple</type></transmission>
+        <gazebo reference="a"><mu1>0.2</mu1></gazebo><xacro:property name="p"/> <!-- a comment -->
         </robot>"#;
     let chain = Chain::from_urdf_str(named).unwrap();
     assert!(chain.warnings().is_empty(), "{:?}", chain.warnings());

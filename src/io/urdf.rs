@@ -407,8 +407,10 @@ const MAX_PART_WARNINGS: usize = 20;
 /// Warnings for what the parser skips without a word: an element under `<robot>` that URDF does
 /// not define (`<jiont>`: the joint would be missing), and inside a `<joint>` an element or
 /// attribute URDF does not define there, such as `<orgin>` or `<origin rp="..">`, which would
-/// leave the joint's origin at the identity. Elements and attributes with a namespace prefix
-/// (`xacro:`) are not checked. One pass over the text, lines counted as it goes.
+/// leave the joint's origin at the identity; and text directly inside `<robot>`, a `<link>` or a
+/// `<joint>`, whose contents URDF defines as elements only (a stray character left by an edit).
+/// Elements and attributes with a namespace prefix (`xacro:`) are not checked. One pass over the
+/// text, lines counted as it goes.
 fn ignored_parts(source: &str) -> Vec<String> {
     // (byte offset, message without its line), and how many more there were.
     let mut found: Vec<(usize, String)> = Vec::new();
@@ -421,7 +423,26 @@ fn ignored_parts(source: &str) -> Vec<String> {
         }
     };
     let mut joint = None;
+    // The <link> or <joint> open under <robot>, as (label, element name), for text inside it.
+    let mut holder: Option<(String, &str)> = None;
+    // Where the text after the previous tag starts, and how many elements are open there.
+    let (mut text_from, mut open) = (0, 0);
     for (offset, tag, depth) in nested_tags(source) {
+        let checked = open == 1 || (open == 2 && holder.is_some());
+        if checked && let Some(at) = stray_text(source, text_from..offset) {
+            note(at, &|| match (open, &holder) {
+                (2, Some((label, element))) => {
+                    format!("{label}: text inside <{element}> is not URDF and is ignored")
+                }
+                _ => "text inside <robot> is not URDF and is ignored".to_string(),
+            });
+        }
+        text_from = offset + tag.len();
+        open = if tag.starts_with("</") || tag.ends_with("/>") {
+            depth
+        } else {
+            depth + 1
+        };
         if tag.starts_with("</") {
             continue;
         }
@@ -443,10 +464,16 @@ fn ignored_parts(source: &str) -> Vec<String> {
                         )
                     });
                 }
+                holder = Some((label.clone(), "joint"));
                 joint = Some(label);
             }
             1 => {
                 joint = None;
+                holder = (name == "link").then(|| {
+                    let label =
+                        attribute(tag, "name").map_or("<link>".into(), |n| format!("link '{n}'"));
+                    (label, "link")
+                });
                 if !name.contains(':') && !TOP_LEVEL.contains(&name) {
                     note(offset, &|| {
                         format!("<{name}> is not a URDF element under <robot> and is ignored")
