@@ -10,9 +10,9 @@
 //! link `<joint>_theta` (its two entries of `q` keep their order). A root placement becomes a fixed
 //! joint from a new root link. Limits are carried over; mimic joints keep their mimic element.
 //!
-//! The model holds kinematics only: links are written with a zero (massless) inertial, and a
-//! `<limit>`'s required effort and velocity as 0. Fixed and continuous joints get no `<limit>`,
-//! and fixed joints no `<axis>`.
+//! The model holds kinematics only: links are written without `<inertial>` (URDF's massless
+//! frame), and a `<limit>`'s required effort and velocity as 0. Fixed and continuous joints get no
+//! `<limit>`, and fixed joints no `<axis>`.
 
 use crate::chain::{Chain, JointSpec};
 use crate::joint::{JointKind, Limits, normalize_axis};
@@ -38,12 +38,6 @@ pub enum ConvertError {
         /// The name.
         name: String,
     },
-    /// urdf-rs could not write the model.
-    #[error("cannot write URDF: {message}")]
-    Write {
-        /// What urdf-rs said.
-        message: String,
-    },
 }
 
 /// `(xyz, rpy)` of a rigid transform, rpy as URDF reads it (`R = Rz(yaw) Ry(pitch) Rx(roll)`);
@@ -65,22 +59,26 @@ fn xyz_rpy(t: &Transform) -> ([f64; 3], [f64; 3]) {
     (t.p, rpy)
 }
 
-fn pose(t: &Transform) -> urdf_rs::Pose {
-    let (xyz, rpy) = xyz_rpy(t);
-    // `+ 0.0` turns −0 into 0, which the file would otherwise show as `-0`.
-    urdf_rs::Pose {
-        xyz: urdf_rs::Vec3(xyz.map(|x| x + 0.0)),
-        rpy: urdf_rs::Vec3(rpy.map(|x| x + 0.0)),
-    }
+/// Three numbers as a URDF attribute value, each the shortest text that reads back as the same
+/// `f64`; `+ 0.0` turns −0 into 0, which would otherwise show as `-0`.
+fn triple(x: [f64; 3]) -> String {
+    let [a, b, c] = x.map(|x| x + 0.0);
+    format!("{a} {b} {c}")
 }
 
-fn link(name: &str) -> urdf_rs::Link {
-    urdf_rs::Link {
-        name: name.to_string(),
-        inertial: urdf_rs::Inertial::default(),
-        visual: Vec::new(),
-        collision: Vec::new(),
+/// `text` for an attribute value in double quotes.
+fn escaped(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            c => out.push(c),
+        }
     }
+    out
 }
 
 /// The transform `Rot(v, θ) Trans(v d)` of a motion with constant θ and d.
@@ -93,9 +91,30 @@ fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
     )
 }
 
+/// The URDF joint types a chain is written with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum UrdfType {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Fixed,
+}
+
+impl UrdfType {
+    fn name(self) -> &'static str {
+        match self {
+            UrdfType::Revolute => "revolute",
+            UrdfType::Continuous => "continuous",
+            UrdfType::Prismatic => "prismatic",
+            UrdfType::Fixed => "fixed",
+        }
+    }
+}
+
+/// The links and joints written so far, as URDF text, and the names taken.
 struct Writer {
-    links: Vec<urdf_rs::Link>,
-    joints: Vec<urdf_rs::Joint>,
+    links: String,
+    joints: String,
     names: std::collections::HashSet<String>,
 }
 
@@ -104,15 +123,18 @@ impl Writer {
         if !self.names.insert(format!("link:{name}")) {
             return Err(ConvertError::NameClash { name });
         }
-        self.links.push(link(&name));
+        self.links
+            .push_str(&format!("  <link name=\"{}\"/>\n", escaped(&name)));
         Ok(name)
     }
 
+    /// Writes a joint: its `<axis>` unless it is fixed, a `<limit>` when it has limits (a
+    /// revolute or prismatic joint), and its `<mimic>`.
     #[allow(clippy::too_many_arguments)]
     fn joint(
         &mut self,
         name: String,
-        kind: urdf_rs::JointType,
+        kind: UrdfType,
         parent: &str,
         child: &str,
         origin: &Transform,
@@ -123,36 +145,35 @@ impl Writer {
         if !self.names.insert(format!("joint:{name}")) {
             return Err(ConvertError::NameClash { name });
         }
-        let (lower, upper) = limits.map_or((0.0, 0.0), |l| (l.lower, l.upper));
-        self.joints.push(urdf_rs::Joint {
-            name,
-            joint_type: kind,
-            origin: pose(origin),
-            parent: urdf_rs::LinkName {
-                link: parent.to_string(),
-            },
-            child: urdf_rs::LinkName {
-                link: child.to_string(),
-            },
-            axis: urdf_rs::Axis {
-                xyz: urdf_rs::Vec3(axis),
-            },
-            limit: urdf_rs::JointLimit {
-                lower,
-                upper,
-                effort: 0.0,
-                velocity: 0.0,
-                ..urdf_rs::JointLimit::default()
-            },
-            calibration: None,
-            dynamics: None,
-            mimic: mimic.map(|m| urdf_rs::Mimic {
-                joint: m.joint.clone(),
-                multiplier: Some(m.multiplier),
-                offset: Some(m.offset),
-            }),
-            safety_controller: None,
-        });
+        let (xyz, rpy) = xyz_rpy(origin);
+        let mut text = format!(
+            "  <joint name=\"{}\" type=\"{}\">\n    <origin xyz=\"{}\" rpy=\"{}\"/>\n    \
+             <parent link=\"{}\"/>\n    <child link=\"{}\"/>\n",
+            escaped(&name),
+            kind.name(),
+            triple(xyz),
+            triple(rpy),
+            escaped(parent),
+            escaped(child),
+        );
+        if kind != UrdfType::Fixed {
+            text.push_str(&format!("    <axis xyz=\"{}\"/>\n", triple(axis)));
+        }
+        if let Some(Limits { lower, upper }) = limits.filter(|_| kind != UrdfType::Fixed) {
+            text.push_str(&format!(
+                "    <limit lower=\"{lower}\" upper=\"{upper}\" effort=\"0\" velocity=\"0\"/>\n"
+            ));
+        }
+        if let Some(m) = mimic {
+            text.push_str(&format!(
+                "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>\n",
+                escaped(&m.joint),
+                m.multiplier,
+                m.offset
+            ));
+        }
+        text.push_str("  </joint>\n");
+        self.joints.push_str(&text);
         Ok(())
     }
 }
@@ -161,16 +182,16 @@ fn moving_kind(
     kind: JointKind,
     limits: Option<Limits>,
     joint: &str,
-) -> Result<urdf_rs::JointType, ConvertError> {
+) -> Result<UrdfType, ConvertError> {
     Ok(match (kind, limits) {
-        (JointKind::Prismatic, Some(_)) => urdf_rs::JointType::Prismatic,
+        (JointKind::Prismatic, Some(_)) => UrdfType::Prismatic,
         (JointKind::Prismatic, None) => {
             return Err(ConvertError::UnlimitedPrismatic {
                 joint: joint.to_string(),
             });
         }
-        (_, Some(_)) => urdf_rs::JointType::Revolute,
-        (_, None) => urdf_rs::JointType::Continuous,
+        (_, Some(_)) => UrdfType::Revolute,
+        (_, None) => UrdfType::Continuous,
     })
 }
 
@@ -182,8 +203,8 @@ fn moving_kind(
 pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let d = chain.description();
     let mut w = Writer {
-        links: Vec::new(),
-        joints: Vec::new(),
+        links: String::new(),
+        joints: String::new(),
         names: std::collections::HashSet::new(),
     };
     for l in d.links() {
@@ -194,7 +215,7 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
         let world = w.fresh_link(format!("{root_link}_world"))?;
         w.joint(
             format!("{root_link}_placement"),
-            urdf_rs::JointType::Fixed,
+            UrdfType::Fixed,
             &world,
             &root_link,
             &root,
@@ -206,17 +227,12 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     for js in d.joints() {
         write_joint(&mut w, js)?;
     }
-    let robot = urdf_rs::Robot {
-        name: chain.name().to_string(),
-        version: None,
-        links: w.links,
-        joints: w.joints,
-        materials: Vec::new(),
-    };
-    let text = urdf_rs::write_to_string(&robot).map_err(|e| ConvertError::Write {
-        message: e.to_string(),
-    })?;
-    Ok(without_filler(&text, &robot.joints))
+    Ok(format!(
+        "<robot name=\"{}\">\n{}{}</robot>\n",
+        escaped(chain.name()),
+        w.links,
+        w.joints
+    ))
 }
 
 /// What the URDF `text` holds that [`to_urdf`] does not write, since the model keeps kinematics
@@ -271,43 +287,6 @@ pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
     (!parts.is_empty()).then(|| parts.join(", "))
 }
 
-/// `text`, written from `joints`, without the elements `urdf-rs` writes for every joint whether
-/// it applies or not: the `<limit>` of a fixed or continuous joint (the only ones written without
-/// limits) and the `<axis>` of a fixed joint. The writer puts each element on a line of its own;
-/// should the joints not be found one per line, the text is kept as written (URDF readers ignore
-/// those elements for those joint types).
-fn without_filler(text: &str, joints: &[urdf_rs::Joint]) -> String {
-    use urdf_rs::JointType::{Continuous, Fixed};
-    let starts = text
-        .lines()
-        .filter(|l| l.trim_start().starts_with("<joint "))
-        .count();
-    if starts != joints.len() {
-        return text.to_string();
-    }
-    let mut kinds = joints.iter().map(|j| &j.joint_type);
-    let mut joint = None;
-    let mut out = String::with_capacity(text.len());
-    for line in text.lines() {
-        let element = line.trim_start();
-        if element.starts_with("<joint ") {
-            joint = kinds.next();
-        } else if element.starts_with("</joint>") {
-            joint = None;
-        }
-        let drop = match joint {
-            Some(Fixed) => element.starts_with("<limit ") || element.starts_with("<axis "),
-            Some(Continuous) => element.starts_with("<limit "),
-            _ => false,
-        };
-        if !drop {
-            out.push_str(line);
-            out.push('\n');
-        }
-    }
-    out
-}
-
 fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
     let axis = normalize_axis(js.axis).unwrap_or([0.0, 0.0, 1.0]);
     let origin = js.origin * screw(axis, js.theta, js.d);
@@ -315,7 +294,7 @@ fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
     if js.kind == JointKind::Fixed {
         return w.joint(
             js.name.clone(),
-            urdf_rs::JointType::Fixed,
+            UrdfType::Fixed,
             &js.parent,
             &js.child,
             &(origin * js.post),
@@ -371,7 +350,7 @@ fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
     if has_post {
         w.joint(
             format!("{}_post", js.name),
-            urdf_rs::JointType::Fixed,
+            UrdfType::Fixed,
             &after_motion,
             &js.child,
             &js.post,

@@ -154,3 +154,19 @@ fn limits_and_axes_are_written_only_where_they_apply() {
     let spin = urdf.joint(urdf.joint_id("spin").unwrap());
     assert_eq!(spin.limits(), [None]);
 }
+
+/// Names are written as XML attribute values: `&`, `<`, `>` and `"` in them come back unchanged.
+#[test]
+fn names_with_markup_characters_survive_the_round_trip() {
+    let chain = Chain::from_dh_yaml_str(
+        "name: 'R&D \"arm\" <2>'\nconvention: modified\nbase: {name: 'base<0>'}\njoints:\n  \
+         - {name: 'shoulder & elbow', link: 'upper\"arm', type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    assert_eq!(urdf.name(), "R&D \"arm\" <2>");
+    let links: Vec<&str> = urdf.links().iter().map(|l| l.name()).collect();
+    assert_eq!(links, ["base<0>", "upper\"arm"], "{text}");
+    assert!(urdf.joint_id("shoulder & elbow").is_ok(), "{text}");
+}
