@@ -112,9 +112,8 @@ fn prismatic_joints_without_limits_are_refused() {
     ));
 }
 
-/// Fixed and continuous joints are written without the `<limit>` the URDF writer would fill with
-/// zeros (which reads as a locked range), and fixed joints without an `<axis>`; limited joints
-/// keep both.
+/// Fixed and continuous joints are written without a `<limit>` (one of zeros would read as a
+/// locked range), and fixed joints without an `<axis>`; limited joints keep both.
 #[test]
 fn limits_and_axes_are_written_only_where_they_apply() {
     let chain = Chain::from_dh_yaml_str(
