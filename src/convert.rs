@@ -159,7 +159,7 @@ impl Writer {
         if kind != UrdfType::Fixed {
             text.push_str(&format!("    <axis xyz=\"{}\"/>\n", triple(axis)));
         }
-        if let Some(Limits { lower, upper }) = limits.filter(|_| kind != UrdfType::Fixed) {
+        if let Some(Limits { lower, upper }) = limits {
             text.push_str(&format!(
                 "    <limit lower=\"{lower}\" upper=\"{upper}\" effort=\"0\" velocity=\"0\"/>\n"
             ));

@@ -422,8 +422,8 @@ fn ignored_parts(source: &str) -> Vec<String> {
             more += 1;
         }
     };
-    let mut joint = None;
-    // The <link> or <joint> open under <robot>, as (label, element name), for text inside it.
+    // The <link> or <joint> open under <robot>, as (label, element name): its parts are checked
+    // when it is a joint, and text directly inside it in both cases.
     let mut holder: Option<(String, &str)> = None;
     // Where the text after the previous tag starts, and how many elements are open there.
     let (mut text_from, mut open) = (0, 0);
@@ -464,11 +464,9 @@ fn ignored_parts(source: &str) -> Vec<String> {
                         )
                     });
                 }
-                holder = Some((label.clone(), "joint"));
-                joint = Some(label);
+                holder = Some((label, "joint"));
             }
             1 => {
-                joint = None;
                 holder = (name == "link").then(|| {
                     let label =
                         attribute(tag, "name").map_or("<link>".into(), |n| format!("link '{n}'"));
@@ -481,7 +479,7 @@ fn ignored_parts(source: &str) -> Vec<String> {
                 }
             }
             2 => {
-                if let Some(label) = &joint {
+                if let Some((label, "joint")) = &holder {
                     match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
                         Some((_, None)) => {}
                         Some((_, Some(allowed))) => {
