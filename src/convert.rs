@@ -32,6 +32,17 @@ pub enum ConvertError {
         /// The joint.
         joint: String,
     },
+    /// A name holds a character that an XML file cannot contain.
+    #[error(
+        "the name {name:?} holds the character U+{:04X}, which an XML file cannot contain",
+        u32::from(*character)
+    )]
+    NotXml {
+        /// The name.
+        name: String,
+        /// The character.
+        character: char,
+    },
     /// A generated link or joint name collides with an existing one.
     #[error("the generated name '{name}' is already used in the model")]
     NameClash {
@@ -66,8 +77,13 @@ fn triple(x: [f64; 3]) -> String {
     format!("{a} {b} {c}")
 }
 
-/// `text` for an attribute value in double quotes.
-fn escaped(text: &str) -> String {
+/// `text` for an attribute value in double quotes. Tab, line feed and carriage return are written
+/// as character references, which a reader keeps (written as they are, it would read them as
+/// spaces).
+///
+/// # Errors
+/// [`ConvertError::NotXml`] for a character that no XML 1.0 document can hold.
+fn escaped(text: &str) -> Result<String, ConvertError> {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
@@ -75,10 +91,17 @@ fn escaped(text: &str) -> String {
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
+            '\t' | '\n' | '\r' => out.push_str(&format!("&#{};", u32::from(c))),
+            '\u{0}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}' => {
+                return Err(ConvertError::NotXml {
+                    name: text.to_string(),
+                    character: c,
+                });
+            }
             c => out.push(c),
         }
     }
-    out
+    Ok(out)
 }
 
 /// The transform `Rot(v, θ) Trans(v d)` of a motion with constant θ and d.
@@ -124,7 +147,7 @@ impl Writer {
             return Err(ConvertError::NameClash { name });
         }
         self.links
-            .push_str(&format!("  <link name=\"{}\"/>\n", escaped(&name)));
+            .push_str(&format!("  <link name=\"{}\"/>\n", escaped(&name)?));
         Ok(name)
     }
 
@@ -149,12 +172,12 @@ impl Writer {
         let mut text = format!(
             "  <joint name=\"{}\" type=\"{}\">\n    <origin xyz=\"{}\" rpy=\"{}\"/>\n    \
              <parent link=\"{}\"/>\n    <child link=\"{}\"/>\n",
-            escaped(&name),
+            escaped(&name)?,
             kind.name(),
             triple(xyz),
             triple(rpy),
-            escaped(parent),
-            escaped(child),
+            escaped(parent)?,
+            escaped(child)?,
         );
         if kind != UrdfType::Fixed {
             text.push_str(&format!("    <axis xyz=\"{}\"/>\n", triple(axis)));
@@ -167,7 +190,7 @@ impl Writer {
         if let Some(m) = mimic {
             text.push_str(&format!(
                 "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>\n",
-                escaped(&m.joint),
+                escaped(&m.joint)?,
                 m.multiplier,
                 m.offset
             ));
@@ -198,8 +221,9 @@ fn moving_kind(
 /// The chain as URDF text; its links keep their names and poses.
 ///
 /// # Errors
-/// [`ConvertError`] for a prismatic joint without limits (URDF requires them) or a generated
-/// name that clashes with an existing one.
+/// [`ConvertError`] for a prismatic joint without limits (URDF requires them), a generated
+/// name that clashes with an existing one, or a name holding a character that XML cannot (a
+/// control character other than tab, line feed and carriage return).
 pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let d = chain.description();
     let mut w = Writer {
@@ -229,7 +253,7 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     }
     Ok(format!(
         "<robot name=\"{}\">\n{}{}</robot>\n",
-        escaped(chain.name()),
+        escaped(chain.name())?,
         w.links,
         w.joints
     ))

@@ -168,4 +168,25 @@ fn names_with_markup_characters_survive_the_round_trip() {
     let links: Vec<&str> = urdf.links().iter().map(|l| l.name()).collect();
     assert_eq!(links, ["base<0>", "upper\"arm"], "{text}");
     assert!(urdf.joint_id("shoulder & elbow").is_ok(), "{text}");
+    // Tab and line feed come back as written (a raw one would read as a space); a control
+    // character that XML cannot hold is an error naming it.
+    let tabbed = Chain::from_dh_yaml_str(
+        "name: \"a\\tb\\nc\"\nconvention: modified\njoints:\n  \
+         - {name: j, type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let text = kinechain::convert::to_urdf(&tabbed).unwrap();
+    assert_eq!(Chain::from_urdf_str(&text).unwrap().name(), "a\tb\nc");
+    let control = Chain::from_dh_yaml_str(
+        "name: \"a\\x01b\"\nconvention: modified\njoints:\n  \
+         - {name: j, type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    assert_eq!(
+        kinechain::convert::to_urdf(&control),
+        Err(kinechain::convert::ConvertError::NotXml {
+            name: "a\u{1}b".into(),
+            character: '\u{1}'
+        })
+    );
 }
