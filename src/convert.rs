@@ -77,31 +77,15 @@ fn triple(x: [f64; 3]) -> String {
     format!("{a} {b} {c}")
 }
 
-/// `text` for an attribute value in double quotes. Tab, line feed and carriage return are written
-/// as character references, which a reader keeps (written as they are, it would read them as
-/// spaces).
+/// `text` for an attribute value ([`crate::xml::escape`]).
 ///
 /// # Errors
 /// [`ConvertError::NotXml`] for a character that no XML 1.0 document can hold.
 fn escaped(text: &str) -> Result<String, ConvertError> {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\t' | '\n' | '\r' => out.push_str(&format!("&#{};", u32::from(c))),
-            '\u{0}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}' => {
-                return Err(ConvertError::NotXml {
-                    name: text.to_string(),
-                    character: c,
-                });
-            }
-            c => out.push(c),
-        }
-    }
-    Ok(out)
+    crate::xml::escape(text).map_err(|character| ConvertError::NotXml {
+        name: text.to_string(),
+        character,
+    })
 }
 
 /// The transform `Rot(v, θ) Trans(v d)` of a motion with constant θ and d.

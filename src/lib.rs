@@ -26,6 +26,7 @@ pub mod render;
 pub mod rotation;
 pub mod transform;
 mod trig;
+mod xml;
 
 pub use arith::{Isa, force_isa, isa};
 pub use nalgebra;

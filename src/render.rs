@@ -10,6 +10,7 @@
 
 use crate::chain::{Chain, LinkId};
 use crate::kinematics::Poses;
+use crate::xml::escape_shown;
 use nalgebra::{Point3, Vector3};
 use std::fmt::Write as _;
 
@@ -80,13 +81,6 @@ fn round_length(target: f64) -> f64 {
         .map(|m| m * base)
         .filter(|l| *l <= target)
         .fold(base, f64::max)
-}
-
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The chain at the configuration of `poses`, as an SVG document.
@@ -166,7 +160,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
         size + 40.0,
         size + 40.0
     );
-    let _ = writeln!(s, "<title>{}</title>", escape(chain.name()));
+    let _ = writeln!(s, "<title>{}</title>", escape_shown(chain.name()));
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     for (i, p) in panels.iter().enumerate() {
         let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
@@ -200,7 +194,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
                 a.1,
                 b.0,
                 b.1,
-                escape(j.name())
+                escape_shown(j.name())
             );
         }
         // Joint axes: short arrows from the axis point along the axis.
@@ -213,7 +207,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
                 a.1,
                 b.0,
                 b.1,
-                escape(name)
+                escape_shown(name)
             );
         }
         let _ = writeln!(s, "</g>");
@@ -237,8 +231,8 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
         let _ = writeln!(
             s,
             r#"<g class="link{role}" data-link="{}"><title>{}</title>"#,
-            escape(name),
-            escape(name)
+            escape_shown(name),
+            escape_shown(name)
         );
         for p in &panels {
             let o = p.at(&origins[i]);
