@@ -19,6 +19,7 @@ use crate::joint::{JointKind, Limits, normalize_axis};
 use crate::rotation::Rpy;
 use crate::transform::Transform;
 use nalgebra::{Unit, Vector3};
+use std::fmt::Write as _;
 
 /// A chain that URDF cannot express.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -130,8 +131,7 @@ impl Writer {
         if !self.names.insert(format!("link:{name}")) {
             return Err(ConvertError::NameClash { name });
         }
-        self.links
-            .push_str(&format!("  <link name=\"{}\"/>\n", escaped(&name)?));
+        let _ = writeln!(self.links, "  <link name=\"{}\"/>", escaped(&name)?);
         Ok(name)
     }
 
@@ -152,8 +152,11 @@ impl Writer {
         if !self.names.insert(format!("joint:{name}")) {
             return Err(ConvertError::NameClash { name });
         }
+        // (Writing to a `String` cannot fail.)
         let (xyz, rpy) = xyz_rpy(origin);
-        let mut text = format!(
+        let text = &mut self.joints;
+        let _ = write!(
+            text,
             "  <joint name=\"{}\" type=\"{}\">\n    <origin xyz=\"{}\" rpy=\"{}\"/>\n    \
              <parent link=\"{}\"/>\n    <child link=\"{}\"/>\n",
             escaped(&name)?,
@@ -164,23 +167,24 @@ impl Writer {
             escaped(child)?,
         );
         if kind != UrdfType::Fixed {
-            text.push_str(&format!("    <axis xyz=\"{}\"/>\n", triple(axis)));
+            let _ = writeln!(text, "    <axis xyz=\"{}\"/>", triple(axis));
         }
         if let Some(Limits { lower, upper }) = limits {
-            text.push_str(&format!(
-                "    <limit lower=\"{lower}\" upper=\"{upper}\" effort=\"0\" velocity=\"0\"/>\n"
-            ));
+            let _ = writeln!(
+                text,
+                "    <limit lower=\"{lower}\" upper=\"{upper}\" effort=\"0\" velocity=\"0\"/>"
+            );
         }
         if let Some(m) = mimic {
-            text.push_str(&format!(
-                "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>\n",
+            let _ = writeln!(
+                text,
+                "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>",
                 escaped(&m.joint)?,
                 m.multiplier,
                 m.offset
-            ));
+            );
         }
         text.push_str("  </joint>\n");
-        self.joints.push_str(&text);
         Ok(())
     }
 }

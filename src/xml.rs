@@ -7,12 +7,10 @@ fn allowed(c: char) -> bool {
 
 /// `text` for element content or a double-quoted attribute value: `&`, `<`, `>` and `"` escaped,
 /// and tab, line feed and carriage return as character references (which an attribute keeps;
-/// written as they are, a reader turns them into spaces).
-///
-/// # Errors
-/// The first character that no XML 1.0 document can hold (the other control characters,
-/// U+FFFE and U+FFFF).
-pub(crate) fn escape(text: &str) -> Result<String, char> {
+/// written as they are, a reader turns them into spaces). A character that no XML 1.0 document
+/// can hold (the other control characters, U+FFFE and U+FFFF) is passed to `invalid`, which
+/// gives what to write instead or the error.
+fn escape_with<E>(text: &str, invalid: impl Fn(char) -> Result<char, E>) -> Result<String, E> {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
@@ -21,21 +19,28 @@ pub(crate) fn escape(text: &str) -> Result<String, char> {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\t' | '\n' | '\r' => out.push_str(&format!("&#{};", u32::from(c))),
-            c if !allowed(c) => return Err(c),
+            c if !allowed(c) => out.push(invalid(c)?),
             c => out.push(c),
         }
     }
     Ok(out)
 }
 
-/// [`escape`] for text that is only shown (names in a drawing): a character XML cannot hold
+/// [`escape_with`] for text that must be kept exactly (a URDF name).
+///
+/// # Errors
+/// The first character that no XML 1.0 document can hold.
+pub(crate) fn escape(text: &str) -> Result<String, char> {
+    escape_with(text, Err)
+}
+
+/// [`escape_with`] for text that is only shown (names in a drawing): a character XML cannot hold
 /// becomes U+FFFD, the replacement character.
 pub(crate) fn escape_shown(text: &str) -> String {
-    let shown: String = text
-        .chars()
-        .map(|c| if allowed(c) { c } else { '\u{fffd}' })
-        .collect();
-    escape(&shown).unwrap_or_default()
+    match escape_with(text, |_| Ok::<_, std::convert::Infallible>('\u{fffd}')) {
+        Ok(shown) => shown,
+        Err(never) => match never {},
+    }
 }
 
 #[cfg(test)]

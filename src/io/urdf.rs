@@ -202,7 +202,7 @@ fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
         if depth != 1 {
             continue;
         }
-        if tag.starts_with("</") {
+        if closes(tag) {
             if let Some((start, opening)) = open.take() {
                 elements.push((start, offset + tag.len(), opening));
             }
@@ -296,21 +296,28 @@ fn stray_text(source: &str, range: std::ops::Range<usize>) -> Option<usize> {
     None
 }
 
+/// Whether a tag's text closes an element (`</joint>`).
+fn closes(tag: &str) -> bool {
+    tag.starts_with("</")
+}
+
+/// Whether a tag's text opens an element that a closing tag ends (not `<axis/>`).
+fn opens(tag: &str) -> bool {
+    !closes(tag) && !tag.ends_with("/>")
+}
+
 /// [`tags`] with the number of elements open around each: the root's opening tag is at depth 0,
 /// its children's tags at 1, and a closing tag at the depth of its opening tag.
 fn nested_tags(source: &str) -> impl Iterator<Item = (usize, &str, usize)> {
     let mut depth = 0usize;
     tags(source).map(move |(offset, tag)| {
-        if tag.starts_with("</") {
+        if closes(tag) {
             depth = depth.saturating_sub(1);
-            (offset, tag, depth)
-        } else {
-            let at = depth;
-            if !tag.ends_with("/>") {
-                depth += 1;
-            }
-            (offset, tag, at)
+            return (offset, tag, depth);
         }
+        let at = depth;
+        depth += usize::from(opens(tag));
+        (offset, tag, at)
     })
 }
 
@@ -318,7 +325,7 @@ fn nested_tags(source: &str) -> impl Iterator<Item = (usize, &str, usize)> {
 /// the file.
 fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
     for (_, tag, depth) in nested_tags(source) {
-        if depth >= MAX_XML_DEPTH && !tag.starts_with("</") && !tag.ends_with("/>") {
+        if depth >= MAX_XML_DEPTH && opens(tag) {
             return Err(LoadErrorKind::Urdf {
                 message: format!("elements nest deeper than {MAX_XML_DEPTH} levels"),
             });
@@ -352,7 +359,7 @@ fn check_root(source: &str) -> Result<(), LoadErrorKind> {
     };
     let message = match element_name(tag) {
         "robot" if attribute(tag, "name").is_some() => match outside.next() {
-            Some((offset, tag, _)) if tag.starts_with("</") => format!(
+            Some((offset, tag, _)) if closes(tag) => format!(
                 "line {}: </{}> closes no open element",
                 line_at(source, offset),
                 element_name(tag.trim_start_matches("</"))
@@ -438,12 +445,8 @@ fn ignored_parts(source: &str) -> Vec<String> {
             });
         }
         text_from = offset + tag.len();
-        open = if tag.starts_with("</") || tag.ends_with("/>") {
-            depth
-        } else {
-            depth + 1
-        };
-        if tag.starts_with("</") {
+        open = depth + usize::from(opens(tag));
+        if closes(tag) {
             continue;
         }
         let name = element_name(tag);
