@@ -21,6 +21,9 @@ pub(crate) trait Arith: Copy {
     /// Whether [`Arith::mul_add`] rounds once (then the exact product error
     /// `a * b − RN(a * b)` is one operation away).
     const FUSED: bool;
+    /// Whether this instantiation runs in a function compiled for AVX-512 (where a vector of
+    /// [`Lanes`] is one 512-bit register).
+    const WIDE: bool = false;
     /// `a * b + c`.
     fn mul_add(a: f64, b: f64, c: f64) -> f64;
 }
@@ -101,6 +104,7 @@ impl Arith for Fused512 {
     type Col = Avx;
     type Lanes = Z8;
     const FUSED: bool = true;
+    const WIDE: bool = true;
     #[inline(always)]
     fn mul_add(a: f64, b: f64, c: f64) -> f64 {
         a.mul_add(b, c)
@@ -383,6 +387,61 @@ fn update_level() -> u8 {
 pub fn force_isa(isa: Option<Isa>) {
     FORCED.store(isa.map_or(0, |i| i as u8), Ordering::Relaxed);
     update_level();
+}
+
+/// 0 until first read, then 1 (one 512-bit register) or 2 (two 256-bit halves).
+static TRIG: AtomicU8 = AtomicU8::new(0);
+/// 0, or 1 / 2 as forced by [`force_narrow_trig`].
+static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
+
+/// Whether a single evaluation on the AVX-512 path computes the `sin`/`cos` of at most eight
+/// joint angles in two 256-bit halves rather than one 512-bit register (detected once: yes on
+/// Intel CPUs, no on others), unless set with [`force_narrow_trig`]. Batches and evaluations that
+/// need more than eight angles always use 512-bit registers. Both give the same bits.
+///
+/// On an Intel Xeon (Emerald Rapids) a single evaluation that executes any 512-bit instruction
+/// took about 10 ns longer, whatever the amount of 512-bit work: one 512-bit multiply added to an
+/// evaluation otherwise on 256-bit registers made a UR5 11–23% slower. Eight angles in 512 bits
+/// save less than that, more than eight save more (`docs/performance.md#an-intel-host`).
+#[must_use]
+#[inline]
+pub fn narrow_trig() -> bool {
+    match TRIG.load(Ordering::Relaxed) {
+        2 => true,
+        1 => false,
+        _ => first_trig(),
+    }
+}
+
+#[cold]
+fn first_trig() -> bool {
+    let width = match TRIG_FORCED.load(Ordering::Relaxed) {
+        0 if is_intel() => 2,
+        0 => 1,
+        forced => forced,
+    };
+    TRIG.store(width, Ordering::Relaxed);
+    width == 2
+}
+
+/// Sets [`narrow_trig`] (for comparing the two in tests and benchmarks); `None` restores the
+/// choice by vendor.
+pub fn force_narrow_trig(narrow: Option<bool>) {
+    TRIG_FORCED.store(narrow.map_or(0, |n| 1 + u8::from(n)), Ordering::Relaxed);
+    TRIG.store(0, Ordering::Relaxed);
+    let _ = first_trig();
+}
+
+/// Whether the CPU's vendor string is Intel's.
+fn is_intel() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let id = std::arch::x86_64::__cpuid(0);
+        let vendor = [id.ebx, id.edx, id.ecx].map(u32::to_le_bytes);
+        vendor.as_flattened() == b"GenuineIntel"
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 fn detect() -> Isa {

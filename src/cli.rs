@@ -1178,6 +1178,17 @@ fn configuration_count(s: &str) -> Result<usize, String> {
 /// call evaluates.
 type Method<'a> = (String, Box<dyn FnMut() + 'a>, usize);
 
+/// The instruction set of the kernels, and for AVX-512 how single evaluations of at most eight
+/// angles compute their `sin`/`cos` ([`crate::narrow_trig`]).
+fn kernels_name() -> String {
+    match crate::isa() {
+        crate::Isa::Avx512 if crate::narrow_trig() => {
+            "avx512 (single evaluations of up to 8 angles: sin/cos on 256 bits)".to_string()
+        }
+        isa => isa.name().to_string(),
+    }
+}
+
 fn bench(
     path: &PathBuf,
     level: Level,
@@ -1441,7 +1452,7 @@ fn bench(
         links,
         chain.moving_joint_count(),
         qs.len(),
-        crate::isa().name()
+        kernels_name()
     );
     // The method column as wide as its longest name (the end link's name is part of one).
     let width = methods

@@ -956,6 +956,27 @@ pub(crate) fn all_sin_cos<A: Arith>(
     sin: &mut [f64],
     cos: &mut [f64],
 ) {
+    if A::WIDE
+        && let [g] = gather
+        && crate::arith::narrow_trig()
+        && let (Some(s_out), Some(c_out)) = (
+            sin.first_chunk_mut::<LANES>(),
+            cos.first_chunk_mut::<LANES>(),
+        )
+    {
+        // Two 256-bit halves: the same operations lane by lane, so the same bits (see
+        // `narrow_trig` for when and why).
+        for h in 0..2 {
+            let theta: [f64; 4] = std::array::from_fn(|i| {
+                let j = 4 * h + i;
+                A::mul_add(g.scale[j], q[g.index[j]], g.offset[j])
+            });
+            let (s, c) = lanes_sin_cos::<A, 4>(theta);
+            s_out[4 * h..4 * h + 4].copy_from_slice(&s);
+            c_out[4 * h..4 * h + 4].copy_from_slice(&c);
+        }
+        return;
+    }
     for ((g, s_out), c_out) in gather
         .iter()
         .zip(sin.chunks_exact_mut(LANES))

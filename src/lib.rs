@@ -28,7 +28,7 @@ pub mod transform;
 mod trig;
 mod xml;
 
-pub use arith::{Isa, force_isa, isa};
+pub use arith::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};
 pub use nalgebra;
 
 pub use chain::{

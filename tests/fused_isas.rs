@@ -1,8 +1,10 @@
-//! The fused-multiply–add kernels (AVX2 and, where the CPU has it, AVX-512), each forced in turn
-//! in this process: both meet the 50-digit reference bounds, their batches equal their single
-//! evaluations bit for bit, and the two give the same bits as each other (the same operations in
+//! The fused-multiply–add kernels (AVX2 and, where the CPU has it, AVX-512 with the `sin`/`cos`
+//! of single evaluations in one 512-bit register and in two 256-bit halves), each forced in turn
+//! in this process: all meet the 50-digit reference bounds, their batches equal their single
+//! evaluations bit for bit, and they give the same bits as each other (the same operations in
 //! the same order, four lanes or eight). The default tests run only the widest path the machine
-//! has, so without this file an AVX-512 machine would never run the AVX2 kernels.
+//! has and one of the two ways of computing `sin`/`cos` on it, so without this file an AVX-512
+//! machine would never run the AVX2 kernels.
 //!
 //! The instruction set is a process-wide choice, so this binary holds a single test.
 
@@ -10,7 +12,8 @@ mod common;
 
 use common::*;
 use kinechain::{
-    Data, Isa, LimitPolicy, force_isa, forward_accelerations, forward_kinematics_to, isa,
+    Data, Isa, LimitPolicy, force_isa, force_narrow_trig, forward_accelerations,
+    forward_kinematics_to, isa, narrow_trig,
 };
 
 /// Every link's pose, velocity and acceleration (as bits) over random states of `file`, and the
@@ -57,18 +60,27 @@ const FILES: [&str; 6] = [
 #[test]
 fn avx2_and_avx512_kernels_meet_the_bounds_and_agree_bit_for_bit() {
     let mut fingerprints = Vec::new();
-    for wanted in [Isa::Avx2, Isa::Avx512] {
+    for (wanted, narrow) in [
+        (Isa::Avx2, false),
+        (Isa::Avx512, false),
+        (Isa::Avx512, true),
+    ] {
         force_isa(Some(wanted));
+        force_narrow_trig(Some(narrow));
+        assert_eq!(narrow_trig(), narrow);
         if isa() != wanted {
             eprintln!("this CPU has no {}: not tested", wanted.name());
             continue;
         }
+        let wanted = match narrow {
+            true => format!("{} with 256-bit sin/cos", wanted.name()),
+            false => wanted.name().to_string(),
+        };
         for path in reference_files() {
             let (position, rotation) = pose_ulps(&path);
             assert!(
                 position <= 8.0 && rotation <= 8.0,
-                "{}: {}: position {position:.2} ulp of reach, rotation {rotation:.2} ulp",
-                wanted.name(),
+                "{wanted}: {}: position {position:.2} ulp of reach, rotation {rotation:.2} ulp",
                 path.display()
             );
         }
@@ -77,18 +89,19 @@ fn avx2_and_avx512_kernels_meet_the_bounds_and_agree_bit_for_bit() {
         fingerprints.push((wanted, prints));
     }
     force_isa(None);
-    if let [(a, first), (b, second)] = &fingerprints[..] {
-        for ((file, x), y) in FILES.iter().zip(first).zip(second) {
-            assert_eq!(x.len(), y.len());
-            let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
-            assert_eq!(
-                differ,
-                0,
-                "{file}: {differ} of {} values differ between {} and {}",
-                x.len(),
-                a.name(),
-                b.name()
-            );
+    force_narrow_trig(None);
+    if let [(a, first), rest @ ..] = &fingerprints[..] {
+        for (b, second) in rest {
+            for ((file, x), y) in FILES.iter().zip(first).zip(second) {
+                assert_eq!(x.len(), y.len());
+                let differ = x.iter().zip(y).filter(|(p, q)| p != q).count();
+                assert_eq!(
+                    differ,
+                    0,
+                    "{file}: {differ} of {} values differ between {a} and {b}",
+                    x.len(),
+                );
+            }
         }
     }
 }
