@@ -391,9 +391,10 @@ pub fn force_isa(isa: Option<Isa>) {
 
 /// 0 until first read, then 1 (one 512-bit register) or 2 (two 256-bit halves).
 static TRIG: AtomicU8 = AtomicU8::new(0);
+/// 0 until first read, then the choice by vendor (1 or 2, as in `TRIG`).
+static TRIG_DETECTED: AtomicU8 = AtomicU8::new(0);
 /// 0, or 1 / 2 as forced by [`force_narrow_trig`].
 static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
-
 /// Whether a single evaluation on the AVX-512 path computes the `sin`/`cos` of at most eight
 /// joint angles in two 256-bit halves rather than one 512-bit register (detected once: yes on
 /// Intel CPUs, no on others), unless set with [`force_narrow_trig`]. Batches and evaluations that
@@ -416,8 +417,16 @@ pub fn narrow_trig() -> bool {
 #[cold]
 fn first_trig() -> bool {
     let width = match TRIG_FORCED.load(Ordering::Relaxed) {
-        0 if is_intel() => 2,
-        0 => 1,
+        0 => match TRIG_DETECTED.load(Ordering::Relaxed) {
+            // The vendor is read once: `cpuid` exits to the hypervisor in a virtual machine,
+            // microseconds each time.
+            0 => {
+                let detected = if is_intel() { 2 } else { 1 };
+                TRIG_DETECTED.store(detected, Ordering::Relaxed);
+                detected
+            }
+            detected => detected,
+        },
         forced => forced,
     };
     TRIG.store(width, Ordering::Relaxed);

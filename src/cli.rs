@@ -1265,10 +1265,14 @@ fn bench(
         .max(1);
     let big: Vec<f64> = (0..copies).flat_map(|_| flat.iter().copied()).collect();
     let (flat, big) = (&flat, &big);
-    let all_links = |isa: Option<crate::Isa>| -> Box<dyn FnMut() + '_> {
+    // `wide`: `sin`/`cos` forced into one 512-bit register where `narrow_trig` would split them.
+    let all_links = |isa: Option<crate::Isa>, wide: bool| -> Box<dyn FnMut() + '_> {
         let mut d = data();
         Box::new(move || {
             crate::force_isa(isa);
+            if wide {
+                crate::force_narrow_trig(Some(false));
+            }
             for q in qs.iter() {
                 black_box(
                     forward_kinematics(chain, &mut d, black_box(q))
@@ -1277,12 +1281,15 @@ fn bench(
                 );
             }
             crate::force_isa(None);
+            if wide {
+                crate::force_narrow_trig(None);
+            }
         })
     };
     let mut methods: Vec<Method<'_>> = Vec::new();
     match level {
         Level::Pose => {
-            methods.push((ALL_LINKS.into(), all_links(None), n));
+            methods.push((ALL_LINKS.into(), all_links(None, false), n));
             let mut d = data();
             methods.push((
                 format!("kinechain, end link {} only", chain.link(end).name()),
@@ -1396,9 +1403,21 @@ fn bench(
                     count,
                 ));
             }
+            // Where the choice of `narrow_trig` applies, what it saves.
+            let turning = chain.turning_before.last().copied().unwrap_or(0);
+            if crate::isa() == crate::Isa::Avx512
+                && crate::narrow_trig()
+                && (1..=crate::kernel::LANES).contains(&turning)
+            {
+                methods.push((
+                    "kinechain, all links, sin/cos in one 512-bit register".into(),
+                    all_links(None, true),
+                    n,
+                ));
+            }
             methods.push((
                 "kinechain, baseline x86-64 path".into(),
-                all_links(Some(crate::Isa::Baseline)),
+                all_links(Some(crate::Isa::Baseline), false),
                 n,
             ));
             if let Some((label, k)) = k_method(path, chain, qs) {
@@ -1434,7 +1453,7 @@ fn bench(
                 }),
                 n,
             ));
-            methods.push((POSES_ONLY.into(), all_links(None), n));
+            methods.push((POSES_ONLY.into(), all_links(None, false), n));
         }
     }
 

@@ -380,6 +380,15 @@ fn bench_prints_times_ratios_and_errors() {
     ] {
         assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
     }
+    // Where single evaluations split their `sin`/`cos` into 256-bit halves (AVX-512 on Intel), a
+    // row times the 512-bit form they avoid, and the header says so; elsewhere neither appears.
+    let narrow = kinechain::isa() == kinechain::Isa::Avx512 && kinechain::narrow_trig();
+    assert_eq!(
+        text.contains("kinechain, all links, sin/cos in one 512-bit register"),
+        narrow,
+        "{text}"
+    );
+    assert_eq!(text.contains("sin/cos on 256 bits"), narrow, "{text}");
     // The incremental update against a full evaluation from the same rounds: a positive factor.
     assert!(factor_after(&text, "incremental (panda_finger_joint1 moves): ") > 0.0);
     // The error line reports a small error (under 8 ulp of the reach).
