@@ -395,6 +395,7 @@ static TRIG: AtomicU8 = AtomicU8::new(0);
 static TRIG_DETECTED: AtomicU8 = AtomicU8::new(0);
 /// 0, or 1 / 2 as forced by [`force_narrow_trig`].
 static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
+
 /// Whether a single evaluation on the AVX-512 path computes the `sin`/`cos` of at most eight
 /// joint angles in two 256-bit halves rather than one 512-bit register (detected once: yes on
 /// Intel CPUs, no on others), unless set with [`force_narrow_trig`]. Batches and evaluations that
@@ -402,8 +403,9 @@ static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
 ///
 /// On an Intel Xeon (Emerald Rapids) a single evaluation that executes any 512-bit instruction
 /// took about 10 ns longer, whatever the amount of 512-bit work: one 512-bit multiply added to an
-/// evaluation otherwise on 256-bit registers made a UR5 11–23% slower. Eight angles in 512 bits
-/// save less than that, more than eight save more (`docs/performance.md#an-intel-host`).
+/// evaluation otherwise on 256-bit registers made the Panda, UR5 and Kinova URDFs 15–23% slower.
+/// Eight angles in 512 bits save less than that, more than eight save more
+/// (`docs/performance.md#512-bit-instructions-in-single-evaluations`).
 #[must_use]
 #[inline]
 pub fn narrow_trig() -> bool {
