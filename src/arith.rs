@@ -337,10 +337,70 @@ impl Isa {
     }
 }
 
-static DETECTED: AtomicU8 = AtomicU8::new(0);
-static FORCED: AtomicU8 = AtomicU8::new(0);
-/// `min(FORCED, DETECTED)`, or 0 until first computed (read on every kernel call).
-static LEVEL: AtomicU8 = AtomicU8::new(0);
+/// A choice made once from what the CPU reports, which tests and benchmarks can override:
+/// `current` is 0 until first read, then what `resolve` makes of the forced value (0 for none)
+/// and the detected one. Reading it is one load and a comparison; `detect` runs once (`cpuid`
+/// leaves a virtual machine for the hypervisor, microseconds each time).
+struct Detected {
+    detected: AtomicU8,
+    forced: AtomicU8,
+    current: AtomicU8,
+    detect: fn() -> u8,
+    resolve: fn(forced: u8, detected: u8) -> u8,
+}
+
+impl Detected {
+    const fn new(detect: fn() -> u8, resolve: fn(u8, u8) -> u8) -> Detected {
+        Detected {
+            detected: AtomicU8::new(0),
+            forced: AtomicU8::new(0),
+            current: AtomicU8::new(0),
+            detect,
+            resolve,
+        }
+    }
+
+    #[inline(always)]
+    fn get(&self) -> u8 {
+        match self.current.load(Ordering::Relaxed) {
+            0 => self.update(),
+            current => current,
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn update(&self) -> u8 {
+        let detected = match self.detected.load(Ordering::Relaxed) {
+            0 => {
+                let d = (self.detect)();
+                self.detected.store(d, Ordering::Relaxed);
+                d
+            }
+            d => d,
+        };
+        let current = (self.resolve)(self.forced.load(Ordering::Relaxed), detected);
+        self.current.store(current, Ordering::Relaxed);
+        current
+    }
+
+    fn force(&self, forced: u8) {
+        self.forced.store(forced, Ordering::Relaxed);
+        self.update();
+    }
+}
+
+/// The instruction set as an `Isa` value: the detected one, or at most the forced one.
+static LEVEL: Detected = Detected::new(detect_level, |forced, detected| match forced {
+    0 => detected,
+    forced => forced.min(detected),
+});
+
+/// 1 (one 512-bit register) or 2 (two 256-bit halves): by vendor, unless forced.
+static TRIG: Detected = Detected::new(detect_trig, |forced, detected| match forced {
+    0 => detected,
+    forced => forced,
+});
 
 /// The instruction set the kernels use on this machine (detected once), unless lowered with
 /// [`force_isa`].
@@ -348,53 +408,18 @@ static LEVEL: AtomicU8 = AtomicU8::new(0);
 #[inline]
 pub fn isa() -> Isa {
     // One load and two comparisons on every kernel call; the detection only on the first.
-    match LEVEL.load(Ordering::Relaxed) {
-        3 => Isa::Avx512,
-        2 => Isa::Avx2,
-        1 => Isa::Baseline,
-        _ => first_isa(),
-    }
-}
-
-#[cold]
-fn first_isa() -> Isa {
-    match update_level() {
+    match LEVEL.get() {
         3 => Isa::Avx512,
         2 => Isa::Avx2,
         _ => Isa::Baseline,
     }
 }
 
-fn update_level() -> u8 {
-    let detected = match DETECTED.load(Ordering::Relaxed) {
-        0 => {
-            let d = detect() as u8;
-            DETECTED.store(d, Ordering::Relaxed);
-            d
-        }
-        d => d,
-    };
-    let level = match FORCED.load(Ordering::Relaxed) {
-        0 => detected,
-        forced => forced.min(detected),
-    };
-    LEVEL.store(level, Ordering::Relaxed);
-    level
-}
-
 /// Makes the kernels use at most `isa` (for comparing paths in tests and benchmarks); `None`
 /// restores detection. A request above what the CPU supports is lowered to what it supports.
 pub fn force_isa(isa: Option<Isa>) {
-    FORCED.store(isa.map_or(0, |i| i as u8), Ordering::Relaxed);
-    update_level();
+    LEVEL.force(isa.map_or(0, |i| i as u8));
 }
-
-/// 0 until first read, then 1 (one 512-bit register) or 2 (two 256-bit halves).
-static TRIG: AtomicU8 = AtomicU8::new(0);
-/// 0 until first read, then the choice by vendor (1 or 2, as in `TRIG`).
-static TRIG_DETECTED: AtomicU8 = AtomicU8::new(0);
-/// 0, or 1 / 2 as forced by [`force_narrow_trig`].
-static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
 
 /// Whether a single evaluation on the AVX-512 path computes the `sin`/`cos` of at most eight
 /// joint angles in two 256-bit halves rather than one 512-bit register (detected once: yes on
@@ -409,38 +434,17 @@ static TRIG_FORCED: AtomicU8 = AtomicU8::new(0);
 #[must_use]
 #[inline]
 pub fn narrow_trig() -> bool {
-    match TRIG.load(Ordering::Relaxed) {
-        2 => true,
-        1 => false,
-        _ => first_trig(),
-    }
-}
-
-#[cold]
-fn first_trig() -> bool {
-    let width = match TRIG_FORCED.load(Ordering::Relaxed) {
-        0 => match TRIG_DETECTED.load(Ordering::Relaxed) {
-            // The vendor is read once: `cpuid` exits to the hypervisor in a virtual machine,
-            // microseconds each time.
-            0 => {
-                let detected = if is_intel() { 2 } else { 1 };
-                TRIG_DETECTED.store(detected, Ordering::Relaxed);
-                detected
-            }
-            detected => detected,
-        },
-        forced => forced,
-    };
-    TRIG.store(width, Ordering::Relaxed);
-    width == 2
+    TRIG.get() == 2
 }
 
 /// Sets [`narrow_trig`] (for comparing the two in tests and benchmarks); `None` restores the
 /// choice by vendor.
 pub fn force_narrow_trig(narrow: Option<bool>) {
-    TRIG_FORCED.store(narrow.map_or(0, |n| 1 + u8::from(n)), Ordering::Relaxed);
-    TRIG.store(0, Ordering::Relaxed);
-    let _ = first_trig();
+    TRIG.force(narrow.map_or(0, |n| 1 + u8::from(n)));
+}
+
+fn detect_trig() -> u8 {
+    if is_intel() { 2 } else { 1 }
 }
 
 /// Whether the CPU's vendor string is Intel's.
@@ -453,6 +457,10 @@ fn is_intel() -> bool {
     }
     #[cfg(not(target_arch = "x86_64"))]
     false
+}
+
+fn detect_level() -> u8 {
+    detect() as u8
 }
 
 fn detect() -> Isa {
