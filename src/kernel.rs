@@ -959,21 +959,16 @@ pub(crate) fn all_sin_cos<A: Arith>(
     if A::WIDE
         && let [g] = gather
         && crate::arith::narrow_trig()
-        && let (Some(s_out), Some(c_out)) = (
-            sin.first_chunk_mut::<LANES>(),
-            cos.first_chunk_mut::<LANES>(),
-        )
     {
         // Two 256-bit halves: the same operations lane by lane, so the same bits (see
         // `narrow_trig` for when and why).
-        for h in 0..2 {
-            let theta: [f64; 4] = std::array::from_fn(|i| {
-                let j = 4 * h + i;
-                A::mul_add(g.scale[j], q[g.index[j]], g.offset[j])
-            });
-            let (s, c) = lanes_sin_cos::<A, 4>(theta);
-            s_out[4 * h..4 * h + 4].copy_from_slice(&s);
-            c_out[4 * h..4 * h + 4].copy_from_slice(&c);
+        let (s_out, c_out) = (&mut sin[..LANES], &mut cos[..LANES]);
+        for ((s, c), first) in s_out
+            .chunks_exact_mut(4)
+            .zip(c_out.chunks_exact_mut(4))
+            .zip([0, 4])
+        {
+            gathered_sin_cos::<A, 4>(g, first, q, s, c);
         }
         return;
     }
@@ -982,14 +977,30 @@ pub(crate) fn all_sin_cos<A: Arith>(
         .zip(sin.chunks_exact_mut(LANES))
         .zip(cos.chunks_exact_mut(LANES))
     {
-        // The gather closure does no arithmetic (a closure is not always inlined into the
-        // target-feature function, and `mul_add` outside it would be a library call).
-        let gathered = Lanes(std::array::from_fn(|i| q[g.index[i]]));
-        let theta = Lanes::mul_add::<A>(Lanes(g.scale), gathered, Lanes(g.offset));
-        let (s, c) = Lanes::sin_cos::<A>(theta);
-        s_out.copy_from_slice(&s.0);
-        c_out.copy_from_slice(&c.0);
+        gathered_sin_cos::<A, LANES>(g, 0, q, s_out, c_out);
     }
+}
+
+/// `sin θ` and `cos θ` of lanes `first..first + W` of the chunk `g` into `s_out` and `c_out`
+/// (`W` entries each), in one vector of `W` lanes.
+#[inline(always)]
+fn gathered_sin_cos<A: Arith, const W: usize>(
+    g: &crate::chain::ThetaGather,
+    first: usize,
+    q: &[f64],
+    s_out: &mut [f64],
+    c_out: &mut [f64],
+) {
+    // The gather closure does no arithmetic (a closure is not always inlined into the
+    // target-feature function, and `mul_add` outside it would be a library call).
+    let gathered: [f64; W] = std::array::from_fn(|i| q[g.index[first + i]]);
+    let mut theta = [0.0; W];
+    for i in 0..W {
+        theta[i] = A::mul_add(g.scale[first + i], gathered[i], g.offset[first + i]);
+    }
+    let (s, c) = lanes_sin_cos::<A, W>(theta);
+    s_out.copy_from_slice(&s);
+    c_out.copy_from_slice(&c);
 }
 
 #[cfg(test)]
