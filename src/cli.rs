@@ -1403,11 +1403,11 @@ fn bench(
                     count,
                 ));
             }
-            // Where the choice of `narrow_trig` applies, what it saves.
-            let turning = chain.turning_before.last().copied().unwrap_or(0);
+            // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
+            // `kernel::all_sin_cos` makes), what it saves.
             if crate::isa() == crate::Isa::Avx512
                 && crate::narrow_trig()
-                && (1..=crate::kernel::LANES).contains(&turning)
+                && chain.theta_gather.len() == 1
             {
                 methods.push((
                     "kinechain, all links, sin/cos in one 512-bit register".into(),

@@ -230,9 +230,8 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
         };
         let _ = writeln!(
             s,
-            r#"<g class="link{role}" data-link="{}"><title>{}</title>"#,
-            escape_shown(name),
-            escape_shown(name)
+            r#"<g class="link{role}" data-link="{shown}"><title>{shown}</title>"#,
+            shown = escape_shown(name)
         );
         for p in &panels {
             let o = p.at(&origins[i]);

@@ -1,5 +1,7 @@
 //! Text for the XML that kinechain writes (URDF from `convert`, SVG from `render`).
 
+use std::fmt::Write as _;
+
 /// Whether an XML 1.0 document can hold `c` at all (escaped or not).
 fn allowed(c: char) -> bool {
     !matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}')
@@ -18,7 +20,10 @@ fn escape_with<E>(text: &str, invalid: impl Fn(char) -> Result<char, E>) -> Resu
             '<' => out.push_str("&lt;"),
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
-            '\t' | '\n' | '\r' => out.push_str(&format!("&#{};", u32::from(c))),
+            // (Writing to a `String` cannot fail.)
+            '\t' | '\n' | '\r' => {
+                let _ = write!(out, "&#{};", u32::from(c));
+            }
             c if !allowed(c) => out.push(invalid(c)?),
             c => out.push(c),
         }
