@@ -518,6 +518,9 @@ pub(crate) struct Body {
     /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
+    /// For a general `pre` (not [`Body::in_place`]) with the joint about z: the steps of the
+    /// local frame `pre · M(θ, d) · post` after `pre` (whose `pre` steps are none).
+    pub(crate) z_local: Option<ZSteps>,
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
     /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
@@ -716,6 +719,10 @@ impl Body {
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
+            z_local: match pre {
+                Placement::General(_) => ZSteps::new(&Placement::Identity, &motion, &post),
+                _ => None,
+            },
             rate_shape: (u8::from(no_post) * Body::NO_POST)
                 | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
                 | (u8::from(about_z) * Body::ABOUT_Z)
@@ -1731,6 +1738,27 @@ mod tests {
         assert!(ur5.bodies.iter().all(Body::in_place));
         let tiago = Chain::from_file(reference.join("tiago_no_hand.urdf")).unwrap();
         assert!(!tiago.bodies.iter().all(Body::in_place));
+        // Composed bodies turning about z build their local frame from shape codes too: every
+        // joint of the SO-101, whose origins all turn about two or three axes. A body has at most
+        // one of the two shapes.
+        let so101 = Chain::from_file(reference.join("so101.urdf")).unwrap();
+        assert!(
+            so101
+                .bodies
+                .iter()
+                .all(|b| !b.in_place() && b.z_local.is_some())
+        );
+        for chain in [&panda, &ur5, &tiago, &so101] {
+            for body in &chain.bodies {
+                assert!(body.z_steps.is_none() || body.z_local.is_none());
+                assert_eq!(
+                    body.z_local.is_some(),
+                    !body.in_place()
+                        && body.motion.axis == crate::joint::Axis::Z
+                        && CheapPlacement::new(&body.post).is_some()
+                );
+            }
+        }
         // Seven sines for seven turning joints: one vector of lanes.
         assert_eq!(panda.theta_gather.len(), 1);
         // The flag the kernels test instead of the parent's index: set on every body whose

@@ -776,9 +776,21 @@ fn z_steps<N: Num, A: Arith>(
     sin_cos: (N, N),
 ) -> Frame<N> {
     cheap_place::<N, A>(&mut f, &steps.pre);
-    by_shape!(steps.motion, z_motion::<N, A>(&mut f, body, q, sin_cos));
-    cheap_place::<N, A>(&mut f, &steps.post);
+    z_motion_post::<N, A>(&mut f, body, steps, q, sin_cos);
     f
+}
+
+/// The steps of a [`ZSteps`] after its `pre`: `f ← f · M(θ, d) · post`.
+#[inline(always)]
+fn z_motion_post<N: Num, A: Arith>(
+    f: &mut Frame<N>,
+    body: &Body,
+    steps: &ZSteps,
+    q: &[N],
+    sin_cos: (N, N),
+) {
+    by_shape!(steps.motion, z_motion::<N, A>(f, body, q, sin_cos));
+    cheap_place::<N, A>(f, &steps.post);
 }
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZSteps::motion`]).
@@ -888,6 +900,10 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 #[inline(always)]
 pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
     let mut m = Frame::splat(&body.pre_frame);
+    if let Some(steps) = &body.z_local {
+        z_motion_post::<N, A>(&mut m, body, steps, q, sin_cos);
+        return m;
+    }
     apply_motion::<N, A>(&mut m, body, q, Some(body.axis_in_parent), sin_cos);
     place::<N, A>(&mut m, &body.post);
     m

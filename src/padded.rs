@@ -254,9 +254,21 @@ fn z_steps<A: Arith>(
     sin_cos: (f64, f64),
 ) -> [A::Col; 4] {
     cheap_place::<A>(&mut f, &steps.pre);
-    crate::kernel::by_shape!(steps.motion, z_motion::<A>(&mut f, body, q, sin_cos));
-    cheap_place::<A>(&mut f, &steps.post);
+    z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
     f
+}
+
+/// The steps of a [`ZSteps`] after its `pre` (see `kernel::z_motion_post`).
+#[inline(always)]
+fn z_motion_post<A: Arith>(
+    f: &mut [A::Col; 4],
+    body: &Body,
+    steps: &ZSteps,
+    q: &[f64],
+    sin_cos: (f64, f64),
+) {
+    crate::kernel::by_shape!(steps.motion, z_motion::<A>(f, body, q, sin_cos));
+    cheap_place::<A>(f, &steps.post);
 }
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::z_motion`).
@@ -318,6 +330,10 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
 #[inline(always)]
 pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
     let mut f = Frame4::<A::Col>::load(&body.pre4).0;
+    if let Some(steps) = &body.z_local {
+        z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
+        return Frame4(f);
+    }
     let axis = A::Col::load(&body.axis4);
     apply_motion::<A>(&mut f, body, q, Some(axis), sin_cos);
     place::<A>(&mut f, &body.post);
