@@ -40,8 +40,6 @@ pub(crate) trait Col: Copy {
     /// All four entries.
     fn store(self, out: &mut [f64; 4]);
     fn splat(x: f64) -> Self;
-    /// Every entry set to entry `i` (`i < 4`, a constant after inlining).
-    fn broadcast(self, i: usize) -> Self;
     /// `a * b + c`, entry by entry.
     fn mul_add(a: Self, b: Self, c: Self) -> Self;
     fn mul(a: Self, b: Self) -> Self;
@@ -148,10 +146,6 @@ impl<A: Arith> Col for Portable<A> {
     #[inline(always)]
     fn splat(x: f64) -> Self {
         Portable([x; 4], std::marker::PhantomData)
-    }
-    #[inline(always)]
-    fn broadcast(self, i: usize) -> Self {
-        Self::splat(self.0[i])
     }
     #[inline(always)]
     fn mul_add(a: Self, b: Self, c: Self) -> Self {
@@ -263,18 +257,6 @@ impl Col for Avx {
     fn splat(x: f64) -> Self {
         use std::arch::x86_64::_mm256_set1_pd;
         Avx(unsafe { _mm256_set1_pd(x) })
-    }
-    #[inline(always)]
-    fn broadcast(self, i: usize) -> Self {
-        use std::arch::x86_64::_mm256_permute4x64_pd as permute;
-        Avx(unsafe {
-            match i {
-                0 => permute::<0x00>(self.0),
-                1 => permute::<0x55>(self.0),
-                2 => permute::<0xAA>(self.0),
-                _ => permute::<0xFF>(self.0),
-            }
-        })
     }
     #[inline(always)]
     fn mul_add(a: Self, b: Self, c: Self) -> Self {

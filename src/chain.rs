@@ -518,9 +518,9 @@ pub(crate) struct Body {
     /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
-    /// For a general `pre` (not [`Body::in_place`]) with the joint about z: the steps of the
-    /// local frame `pre · M(θ, d) · post` after `pre` (whose `pre` steps are none).
-    pub(crate) z_local: Option<ZSteps>,
+    /// For a general `pre` (applied as a full product) with the joint about z: the steps after
+    /// it, `M(θ, d) · post` (its own `pre` steps are none).
+    pub(crate) z_after_general: Option<ZSteps>,
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
     /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
@@ -692,12 +692,6 @@ impl Body {
     /// θ varies (the joint turns).
     pub(crate) const TURNS: u8 = 16;
 
-    /// Evaluated in place on the parent's frame (`pre` costs a few operations), rather than as a
-    /// local frame composed onto the parent's (a general `pre`); see [`crate::kernel::pose_step`].
-    pub(crate) fn in_place(&self) -> bool {
-        !matches!(self.pre, Placement::General(_))
-    }
-
     pub(crate) fn new(
         parent: Option<usize>,
         pre: Placement,
@@ -719,7 +713,7 @@ impl Body {
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
-            z_local: match pre {
+            z_after_general: match pre {
                 Placement::General(_) => ZSteps::new(&Placement::Identity, &motion, &post),
                 _ => None,
             },
@@ -1717,7 +1711,7 @@ mod tests {
     }
 
     #[test]
-    fn arms_take_the_in_place_shape() {
+    fn bodies_take_the_shape_codes() {
         // Standard DH rows, and the Panda's URDF origins (rpy = (±π/2, 0, 0)): every arm joint is
         // evaluated in place without dispatch; the fingers, after the hand's fixed frame turned
         // about z, in place with dispatch on kinds.
@@ -1730,15 +1724,16 @@ mod tests {
             shapes,
             [true, true, true, true, true, true, true, false, false]
         );
-        assert!(panda.bodies.iter().all(Body::in_place));
-        // The UR5's URDF origins turn about y (rpy = (0, 1.57079632679, 0)): in place too.
-        // TIAGo's turn about two axes at once: composed.
+        let general = |b: &Body| matches!(b.pre, Placement::General(_));
+        assert!(!panda.bodies.iter().any(general));
+        // The UR5's URDF origins turn about y (rpy = (0, 1.57079632679, 0)): a plane rotation
+        // too. TIAGo's turn about two axes at once: general.
         let reference = root.join("../tests/data/reference/urdf");
         let ur5 = Chain::from_file(reference.join("ur5.urdf")).unwrap();
-        assert!(ur5.bodies.iter().all(Body::in_place));
+        assert!(!ur5.bodies.iter().any(general));
         let tiago = Chain::from_file(reference.join("tiago_no_hand.urdf")).unwrap();
-        assert!(!tiago.bodies.iter().all(Body::in_place));
-        // Composed bodies turning about z build their local frame from shape codes too: every
+        assert!(tiago.bodies.iter().any(general));
+        // After a general origin, a joint about z takes its steps from shape codes too: every
         // joint of the SO-101, whose origins all turn about two or three axes. A body has at most
         // one of the two shapes.
         let so101 = Chain::from_file(reference.join("so101.urdf")).unwrap();
@@ -1746,14 +1741,14 @@ mod tests {
             so101
                 .bodies
                 .iter()
-                .all(|b| !b.in_place() && b.z_local.is_some())
+                .all(|b| general(b) && b.z_after_general.is_some())
         );
         for chain in [&panda, &ur5, &tiago, &so101] {
             for body in &chain.bodies {
-                assert!(body.z_steps.is_none() || body.z_local.is_none());
+                assert!(body.z_steps.is_none() || body.z_after_general.is_none());
                 assert_eq!(
-                    body.z_local.is_some(),
-                    !body.in_place()
+                    body.z_after_general.is_some(),
+                    general(body)
                         && body.motion.axis == crate::joint::Axis::Z
                         && CheapPlacement::new(&body.post).is_some()
                 );

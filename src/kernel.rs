@@ -732,27 +732,15 @@ pub(crate) fn body_sin_cos<N: Num, A: Arith>(body: &Body, q: &[N]) -> (N, N) {
 }
 
 /// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the axis, rotate by θ about it (the two
-/// commute). The axis in the frame `f` is expressed in (needed only for a sliding joint) is
-/// `z_const` if given, else the joint axis carried by `f`'s columns; `sin_cos` is
-/// `(sin θ, cos θ)` when θ varies.
+/// commute). The axis (needed only for a sliding joint) is the one `f`'s columns carry;
+/// `sin_cos` is `(sin θ, cos θ)` when θ varies.
 #[inline(always)]
-fn apply_motion<N: Num, A: Arith>(
-    f: &mut Frame<N>,
-    body: &Body,
-    q: &[N],
-    z_const: Option<[f64; 3]>,
-    sin_cos: (N, N),
-) {
+fn apply_motion<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, q: &[N], sin_cos: (N, N)) {
     let m = &body.motion;
     match m.d {
         Term::Const(0.0) => {}
         d => {
-            // Not a closure: one that is not inlined is a call inside the batch kernels, and
-            // every vector register is caller-saved.
-            let z = match z_const {
-                Some(z) => z.map(N::splat),
-                None => axis_of::<N, A>(&f.r, &m.axis),
-            };
+            let z = axis_of::<N, A>(&f.r, &m.axis);
             f.p = axpy::<N, A>(term_value::<N, A>(&d, q), z, f.p);
         }
     }
@@ -894,46 +882,13 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
     }
 }
 
-/// The body's frame relative to its parent body, `pre · M(θ, d) · post`: independent of the
-/// parent, so that the joints of a chain can be worked on in parallel and only [`compose`]
-/// remains on the chain's dependency path.
-#[inline(always)]
-pub(crate) fn local_frame<N: Num, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
-    let mut m = Frame::splat(&body.pre_frame);
-    if let Some(steps) = &body.z_local {
-        z_motion_post::<N, A>(&mut m, body, steps, q, sin_cos);
-        return m;
-    }
-    apply_motion::<N, A>(&mut m, body, q, Some(body.axis_in_parent), sin_cos);
-    place::<N, A>(&mut m, &body.post);
-    m
-}
-
-/// `a · b`, the only work on a chain's dependency path.
-#[inline(always)]
-pub(crate) fn compose<N: Num, A: Arith>(a: &Frame<N>, b: &Frame<N>) -> Frame<N> {
-    let zero = [N::splat(0.0); 3];
-    Frame {
-        r: [
-            mat_vec_add::<N, A>(&a.r, &b.r[0], zero),
-            mat_vec_add::<N, A>(&a.r, &b.r[1], zero),
-            mat_vec_add::<N, A>(&a.r, &b.r[2], zero),
-        ],
-        p: mat_vec_add::<N, A>(&a.r, &b.p, a.p),
-    }
-}
-
 /// Frame of a body from its parent's frame (`None`: the body hangs from the world), given
-/// `(sin θ, cos θ)` of its joint.
-///
-/// Two orders of the same product `parent · pre · M(θ, d) · post`, chosen per body at load time
-/// ([`Body::in_place`]):
-/// - in place, `((parent · pre) · M) · post`, each factor applied to the running frame: a DH row
-///   or an `rpy = (α, 0, 0)` origin costs a few column rotations and one or three multiply–adds
-///   per origin entry, about half the work of a composition;
-/// - local, `parent · (pre · M · post)`, when `pre` is a general rotation: applying it would cost
-///   a full composition on the chain's dependency path, while the local frame does not depend on
-///   the parent and is composed in one product.
+/// `(sin θ, cos θ)` of its joint: `((parent · pre) · M(θ, d)) · post`, each factor applied to the
+/// running frame in place. A DH row or an origin that turns about one axis costs a few column
+/// rotations and one or three multiply–adds per origin entry; a general `pre` costs a full
+/// product with constant coefficients (broadcast from memory), which measured faster than
+/// composing a local frame `pre · M · post` built off the dependency chain (whose entries must be
+/// broadcast from registers: docs/performance.md, "How a joint is evaluated").
 #[inline(always)]
 pub(crate) fn pose_step<N: Num, A: Arith>(
     parent: Option<&Frame<N>>,
@@ -941,24 +896,21 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
     q: &[N],
     sin_cos: (N, N),
 ) -> Frame<N> {
-    if body.in_place() {
-        let mut f = match parent {
-            Some(f) => *f,
-            None => Frame::splat(&crate::transform::Transform::IDENTITY),
-        };
-        if let Some(steps) = &body.z_steps {
-            return z_steps::<N, A>(f, body, steps, q, sin_cos);
-        }
-        place::<N, A>(&mut f, &body.pre);
-        apply_motion::<N, A>(&mut f, body, q, None, sin_cos);
+    let mut f = match parent {
+        Some(f) => *f,
+        None => Frame::splat(&crate::transform::Transform::IDENTITY),
+    };
+    if let Some(steps) = &body.z_steps {
+        return z_steps::<N, A>(f, body, steps, q, sin_cos);
+    }
+    place::<N, A>(&mut f, &body.pre);
+    if let Some(steps) = &body.z_after_general {
+        z_motion_post::<N, A>(&mut f, body, steps, q, sin_cos);
+    } else {
+        apply_motion::<N, A>(&mut f, body, q, sin_cos);
         place::<N, A>(&mut f, &body.post);
-        return f;
     }
-    let m = local_frame::<N, A>(body, q, sin_cos);
-    match parent {
-        Some(f) => compose::<N, A>(f, &m),
-        None => m,
-    }
+    f
 }
 
 /// `sin θ` and `cos θ` of every body at `q`, [`LANES`] joints at a time (vectorised: the

@@ -211,26 +211,16 @@ pub(crate) fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
     }
 }
 
-/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`); the axis in `f`'s frame is
-/// `z_const` if given, else the joint axis carried by `f`'s columns.
+/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`); the axis is the one `f`'s columns
+/// carry.
 #[inline(always)]
-fn apply_motion<A: Arith>(
-    f: &mut [A::Col; 4],
-    body: &Body,
-    q: &[f64],
-    z_const: Option<A::Col>,
-    sin_cos: (f64, f64),
-) {
+fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: (f64, f64)) {
     let m = &body.motion;
     match m.d {
         Term::Const(0.0) => {}
         d => {
             let d = A::Col::splat(term_value::<f64, A>(&d, q));
-            // Not a closure (see `kernel::apply_motion`).
-            let z = match z_const {
-                Some(z) => z,
-                None => axis_of(f, &m.axis),
-            };
+            let z = axis_of(f, &m.axis);
             f[3] = A::Col::mul_add(d, z, f[3]);
         }
     }
@@ -325,39 +315,6 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
     }
 }
 
-/// The body's frame relative to its parent body, `pre · M(θ, d) · post` (eq. 2.119 for `M`),
-/// given `(sin θ, cos θ)` when θ varies.
-#[inline(always)]
-pub(crate) fn local_frame<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
-    let mut f = Frame4::<A::Col>::load(&body.pre4).0;
-    if let Some(steps) = &body.z_local {
-        z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
-        return Frame4(f);
-    }
-    let axis = A::Col::load(&body.axis4);
-    apply_motion::<A>(&mut f, body, q, Some(axis), sin_cos);
-    place::<A>(&mut f, &body.post);
-    Frame4(f)
-}
-
-/// `a · b`.
-#[inline(always)]
-pub(crate) fn compose<C: Col>(a: &Frame4<C>, b: &Frame4<C>) -> Frame4<C> {
-    let zero = C::splat(0.0);
-    Frame4([
-        combine(&a.0, broadcasts(b.0[0]), zero),
-        combine(&a.0, broadcasts(b.0[1]), zero),
-        combine(&a.0, broadcasts(b.0[2]), zero),
-        combine(&a.0, broadcasts(b.0[3]), a.0[3]),
-    ])
-}
-
-/// Each of the first three entries of `c` in every entry.
-#[inline(always)]
-fn broadcasts<C: Col>(c: C) -> [C; 3] {
-    [c.broadcast(0), c.broadcast(1), c.broadcast(2)]
-}
-
 /// The columns of `parent`, or of the world frame for `None`. (A function, not a closure: see
 /// `kernel::apply_motion`.)
 #[inline(always)]
@@ -368,8 +325,8 @@ fn columns_or_world<C: Col>(parent: Option<&Frame4<C>>) -> [C; 4] {
     }
 }
 
-/// The frame of a body from its parent's frame (`None`: the body hangs from the world), in the
-/// order `kernel::pose_step` chose for the body.
+/// The frame of a body from its parent's frame (`None`: the body hangs from the world), with the
+/// steps of `kernel::pose_step`.
 #[inline(always)]
 pub(crate) fn pose_step<A: Arith>(
     parent: Option<&Frame4<A::Col>>,
@@ -377,28 +334,18 @@ pub(crate) fn pose_step<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) -> Frame4<A::Col> {
-    // (Bodies with z steps are evaluated in place: their `pre` is cheap.)
+    let mut f = columns_or_world(parent);
     if let Some(steps) = &body.z_steps {
-        return Frame4(z_steps::<A>(
-            columns_or_world(parent),
-            body,
-            steps,
-            q,
-            sin_cos,
-        ));
+        return Frame4(z_steps::<A>(f, body, steps, q, sin_cos));
     }
-    if body.in_place() {
-        let mut f = columns_or_world(parent);
-        place::<A>(&mut f, &body.pre);
-        apply_motion::<A>(&mut f, body, q, None, sin_cos);
+    place::<A>(&mut f, &body.pre);
+    if let Some(steps) = &body.z_after_general {
+        z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
+    } else {
+        apply_motion::<A>(&mut f, body, q, sin_cos);
         place::<A>(&mut f, &body.post);
-        return Frame4(f);
     }
-    let local = local_frame::<A>(body, q, sin_cos);
-    match parent {
-        Some(f) => compose(f, &local),
-        None => local,
-    }
+    Frame4(f)
 }
 
 /// Motion state of a body (see `kernel::Rates`) in vector registers.
