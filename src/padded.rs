@@ -315,8 +315,8 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
     }
 }
 
-/// The columns of `parent`, or of the world frame for `None`. (A function, not a closure: see
-/// `kernel::apply_motion`.)
+/// The columns of `parent`, or of the world frame for `None`. (A function, not a closure: a
+/// closure that is not inlined is a call, and every vector register is caller-saved.)
 #[inline(always)]
 fn columns_or_world<C: Col>(parent: Option<&Frame4<C>>) -> [C; 4] {
     match parent {
