@@ -6,7 +6,7 @@
 //! configuration, to the last bit on the same instruction set.
 
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, ZSteps};
+use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, ZTail};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::joint::Term;
@@ -651,8 +651,11 @@ fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<L
         out.fill(Frame::splat(&Transform::IDENTITY));
     }
     by_shape!(steps.pre.shape, block_place::<A>(out, &steps.pre));
-    by_shape!(steps.motion, block_motion::<A>(out, body, q, dof));
-    by_shape!(steps.post.shape, block_place::<A>(out, &steps.post));
+    by_shape!(steps.tail.motion, block_motion::<A>(out, body, q, dof));
+    by_shape!(
+        steps.tail.post.shape,
+        block_place::<A>(out, &steps.tail.post)
+    );
 }
 
 /// `f ← f · p` for every frame of a block, `p` of shape `SHAPE`.
@@ -682,13 +685,13 @@ fn block_motion<A: Arith, const MOTION: u8>(
     q: &[Lanes],
     dof: usize,
 ) {
-    let turns = ZSteps::theta_kind(MOTION) != ZSteps::ZERO;
-    let slides = ZSteps::d_kind(MOTION) != ZSteps::ZERO;
+    let turns = ZTail::theta_kind(MOTION) != ZTail::ZERO;
+    let slides = ZTail::d_kind(MOTION) != ZTail::ZERO;
     if !turns && !slides {
         return;
     }
     for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
-        let (sin, cos) = if ZSteps::theta_kind(MOTION) == ZSteps::VARIABLE {
+        let (sin, cos) = if ZTail::theta_kind(MOTION) == ZTail::VARIABLE {
             chunk_sin_cos::<A>(body, qc, dof)
         } else {
             (Lanes::splat(0.0), Lanes::splat(1.0))

@@ -519,8 +519,8 @@ pub(crate) struct Body {
     /// translation and a rotation about x): no dispatch on kinds left in the kernels.
     pub(crate) z_steps: Option<ZSteps>,
     /// For a general `pre` (applied as a full product) with the joint about z: the steps after
-    /// it, `M(θ, d) · post` (its own `pre` steps are none).
-    pub(crate) z_after_general: Option<ZSteps>,
+    /// it.
+    pub(crate) z_after_general: Option<ZTail>,
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
     /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
@@ -556,10 +556,16 @@ impl RateTerm {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ZSteps {
     pub(crate) pre: CheapPlacement,
-    pub(crate) post: CheapPlacement,
-    /// The kind of d (bits 0–1) and of θ (bits 2–3): [`ZSteps::ZERO`], [`ZSteps::CONSTANT`] or
-    /// [`ZSteps::VARIABLE`].
+    pub(crate) tail: ZTail,
+}
+
+/// The steps after `pre` of a body about its z axis, `f ← f · M(θ, d) · post`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ZTail {
+    /// The kind of d (bits 0–1) and of θ (bits 2–3): [`ZTail::ZERO`], [`ZTail::CONSTANT`] or
+    /// [`ZTail::VARIABLE`].
     pub(crate) motion: u8,
+    pub(crate) post: CheapPlacement,
 }
 
 /// A placement that is a translation followed by a rotation about x (either may be absent),
@@ -647,6 +653,15 @@ impl CheapPlacement {
 }
 
 impl ZSteps {
+    fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
+        Some(ZSteps {
+            pre: CheapPlacement::new(pre)?,
+            tail: ZTail::new(motion, post)?,
+        })
+    }
+}
+
+impl ZTail {
     /// A term that is zero (its step is skipped), another constant, or read from `q`.
     pub(crate) const ZERO: u8 = 0;
     pub(crate) const CONSTANT: u8 = 1;
@@ -662,7 +677,7 @@ impl ZSteps {
         motion >> 2
     }
 
-    fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
+    fn new(motion: &Motion, post: &Placement) -> Option<ZTail> {
         if motion.axis != crate::joint::Axis::Z {
             return None;
         }
@@ -671,10 +686,9 @@ impl ZSteps {
             Term::Const(_) => Self::CONSTANT,
             Term::Var { .. } => Self::VARIABLE,
         };
-        Some(ZSteps {
-            pre: CheapPlacement::new(pre)?,
-            post: CheapPlacement::new(post)?,
+        Some(ZTail {
             motion: kind(&motion.d) | kind(&motion.theta) << 2,
+            post: CheapPlacement::new(post)?,
         })
     }
 }
@@ -714,7 +728,7 @@ impl Body {
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             z_steps: ZSteps::new(&pre, &motion, &post),
             z_after_general: match pre {
-                Placement::General(_) => ZSteps::new(&Placement::Identity, &motion, &post),
+                Placement::General(_) => ZTail::new(&motion, &post),
                 _ => None,
             },
             rate_shape: (u8::from(no_post) * Body::NO_POST)

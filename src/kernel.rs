@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, CheapPlacement, Placement, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, ZSteps, ZTail};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -764,24 +764,18 @@ fn z_steps<N: Num, A: Arith>(
     sin_cos: (N, N),
 ) -> Frame<N> {
     cheap_place::<N, A>(&mut f, &steps.pre);
-    z_motion_post::<N, A>(&mut f, body, steps, q, sin_cos);
+    z_tail::<N, A>(&mut f, body, &steps.tail, q, sin_cos);
     f
 }
 
-/// The steps of a [`ZSteps`] after its `pre`: `f ← f · M(θ, d) · post`.
+/// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes.
 #[inline(always)]
-fn z_motion_post<N: Num, A: Arith>(
-    f: &mut Frame<N>,
-    body: &Body,
-    steps: &ZSteps,
-    q: &[N],
-    sin_cos: (N, N),
-) {
-    by_shape!(steps.motion, z_motion::<N, A>(f, body, q, sin_cos));
-    cheap_place::<N, A>(f, &steps.post);
+fn z_tail<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, tail: &ZTail, q: &[N], sin_cos: (N, N)) {
+    by_shape!(tail.motion, z_motion::<N, A>(f, body, q, sin_cos));
+    cheap_place::<N, A>(f, &tail.post);
 }
 
-/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZSteps::motion`]).
+/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZTail::motion`]).
 #[inline(always)]
 pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     f: &mut Frame<N>,
@@ -790,12 +784,12 @@ pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     sin_cos: (N, N),
 ) {
     let m = &body.motion;
-    if ZSteps::d_kind(MOTION) != ZSteps::ZERO {
+    if ZTail::d_kind(MOTION) != ZTail::ZERO {
         f.p = axpy::<N, A>(term_value::<N, A>(&m.d, q), f.r[2], f.p);
     }
-    match ZSteps::theta_kind(MOTION) {
-        ZSteps::ZERO => {}
-        ZSteps::CONSTANT => {
+    match ZTail::theta_kind(MOTION) {
+        ZTail::ZERO => {}
+        ZTail::CONSTANT => {
             let (s, c) = m.const_sin_cos;
             plane::<N, A>(&mut f.r, 0, 1, N::splat(s), N::splat(c));
         }
@@ -804,7 +798,7 @@ pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
 }
 
 /// Calls `$f::<…, SHAPE>(args)` for a four-bit shape code `$shape` resolved at load time (a
-/// [`CheapPlacement::shape`], a [`ZSteps::motion`]): one jump through a table instead of one
+/// [`CheapPlacement::shape`], a [`ZTail::motion`]): one jump through a table instead of one
 /// test per step, each arm the code for its shape.
 macro_rules! by_shape {
     ($shape:expr, $f:ident::<$($g:ty),*>($($arg:expr),*)) => {
@@ -904,8 +898,8 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
         return z_steps::<N, A>(f, body, steps, q, sin_cos);
     }
     place::<N, A>(&mut f, &body.pre);
-    if let Some(steps) = &body.z_after_general {
-        z_motion_post::<N, A>(&mut f, body, steps, q, sin_cos);
+    if let Some(tail) = &body.z_after_general {
+        z_tail::<N, A>(&mut f, body, tail, q, sin_cos);
     } else {
         apply_motion::<N, A>(&mut f, body, q, sin_cos);
         place::<N, A>(&mut f, &body.post);

@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZSteps};
+use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZSteps, ZTail};
 use crate::joint::{Axis, Term};
 use crate::kernel::term_value;
 use crate::transform::Transform;
@@ -244,21 +244,21 @@ fn z_steps<A: Arith>(
     sin_cos: (f64, f64),
 ) -> [A::Col; 4] {
     cheap_place::<A>(&mut f, &steps.pre);
-    z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
+    z_tail::<A>(&mut f, body, &steps.tail, q, sin_cos);
     f
 }
 
-/// The steps of a [`ZSteps`] after its `pre` (see `kernel::z_motion_post`).
+/// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes (see `kernel::z_tail`).
 #[inline(always)]
-fn z_motion_post<A: Arith>(
+fn z_tail<A: Arith>(
     f: &mut [A::Col; 4],
     body: &Body,
-    steps: &ZSteps,
+    tail: &ZTail,
     q: &[f64],
     sin_cos: (f64, f64),
 ) {
-    crate::kernel::by_shape!(steps.motion, z_motion::<A>(f, body, q, sin_cos));
-    cheap_place::<A>(f, &steps.post);
+    crate::kernel::by_shape!(tail.motion, z_motion::<A>(f, body, q, sin_cos));
+    cheap_place::<A>(f, &tail.post);
 }
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::z_motion`).
@@ -271,13 +271,13 @@ fn z_motion<A: Arith, const MOTION: u8>(
 ) {
     type C<A> = <A as Arith>::Col;
     let m = &body.motion;
-    if ZSteps::d_kind(MOTION) != ZSteps::ZERO {
+    if ZTail::d_kind(MOTION) != ZTail::ZERO {
         let d = C::<A>::splat(term_value::<f64, A>(&m.d, q));
         f[3] = C::<A>::mul_add(d, f[2], f[3]);
     }
-    match ZSteps::theta_kind(MOTION) {
-        ZSteps::ZERO => {}
-        ZSteps::CONSTANT => plane(f, 0, 1, m.const_sin_cos.0, m.const_sin_cos.1),
+    match ZTail::theta_kind(MOTION) {
+        ZTail::ZERO => {}
+        ZTail::CONSTANT => plane(f, 0, 1, m.const_sin_cos.0, m.const_sin_cos.1),
         _ => plane(f, 0, 1, sin_cos.0, sin_cos.1),
     }
 }
@@ -339,8 +339,8 @@ pub(crate) fn pose_step<A: Arith>(
         return Frame4(z_steps::<A>(f, body, steps, q, sin_cos));
     }
     place::<A>(&mut f, &body.pre);
-    if let Some(steps) = &body.z_after_general {
-        z_motion_post::<A>(&mut f, body, steps, q, sin_cos);
+    if let Some(tail) = &body.z_after_general {
+        z_tail::<A>(&mut f, body, tail, q, sin_cos);
     } else {
         apply_motion::<A>(&mut f, body, q, sin_cos);
         place::<A>(&mut f, &body.post);
