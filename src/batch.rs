@@ -631,7 +631,7 @@ fma_dispatch!(fn block_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &
 /// [`kernel::pose_step`], so the frames are those of a single evaluation, bit for bit.
 #[inline(always)]
 fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<Lanes>]) {
-    let Some(steps) = &body.z_steps else {
+    let (Some(pre), Some(tail)) = (&body.pre_steps, &body.z_tail) else {
         for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
             for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
                 let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
@@ -650,12 +650,9 @@ fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<L
     if body.parent.is_none() {
         out.fill(Frame::splat(&Transform::IDENTITY));
     }
-    by_shape!(steps.pre.shape, block_place::<A>(out, &steps.pre));
-    by_shape!(steps.tail.motion, block_motion::<A>(out, body, q, dof));
-    by_shape!(
-        steps.tail.post.shape,
-        block_place::<A>(out, &steps.tail.post)
-    );
+    by_shape!(pre.shape, block_place::<A>(out, pre));
+    by_shape!(tail.motion, block_motion::<A>(out, body, q, dof));
+    by_shape!(tail.post.shape, block_place::<A>(out, &tail.post));
 }
 
 /// `f ← f · p` for every frame of a block, `p` of shape `SHAPE`.

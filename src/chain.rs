@@ -515,12 +515,11 @@ pub(crate) struct Body {
     /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::padded`].
     pub(crate) pre4: crate::padded::Stored,
     pub(crate) axis4: crate::padded::C4,
-    /// The in-place steps spelled out, for the common shape (axis z, `pre` and `post` at most a
-    /// translation and a rotation about x): no dispatch on kinds left in the kernels.
-    pub(crate) z_steps: Option<ZSteps>,
-    /// For a general `pre` (applied as a full product) with the joint about z: the steps after
-    /// it.
-    pub(crate) z_after_general: Option<ZTail>,
+    /// `pre` as shape codes when it is at most a translation and a rotation about x (DH rows,
+    /// most URDF arms): the kernels take one jump instead of matching on its kind.
+    pub(crate) pre_steps: Option<CheapPlacement>,
+    /// `M(θ, d) · post` as shape codes when the joint is about z and `post` is cheap.
+    pub(crate) z_tail: Option<ZTail>,
     /// The cases of the rate recursion that apply: [`Body::NO_POST`], [`Body::SLIDES`],
     /// [`Body::ABOUT_Z`], [`Body::ON_PARENT_Z`].
     pub(crate) rate_shape: u8,
@@ -551,15 +550,8 @@ impl RateTerm {
     }
 }
 
-/// The in-place evaluation of a body about its z axis, `f ← f · pre · M(θ, d) · post`, with the
-/// kinds of `pre`, `post` and of the motion's terms resolved at load time.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct ZSteps {
-    pub(crate) pre: CheapPlacement,
-    pub(crate) tail: ZTail,
-}
-
-/// The steps after `pre` of a body about its z axis, `f ← f · M(θ, d) · post`.
+/// The steps after `pre` of a body about its z axis, `f ← f · M(θ, d) · post`, with the kinds of
+/// the motion's terms and of `post` resolved at load time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ZTail {
     /// The kind of d (bits 0–1) and of θ (bits 2–3): [`ZTail::ZERO`], [`ZTail::CONSTANT`] or
@@ -652,15 +644,6 @@ impl CheapPlacement {
     }
 }
 
-impl ZSteps {
-    fn new(pre: &Placement, motion: &Motion, post: &Placement) -> Option<ZSteps> {
-        Some(ZSteps {
-            pre: CheapPlacement::new(pre)?,
-            tail: ZTail::new(motion, post)?,
-        })
-    }
-}
-
 impl ZTail {
     /// A term that is zero (its step is skipped), another constant, or read from `q`.
     pub(crate) const ZERO: u8 = 0;
@@ -726,11 +709,8 @@ impl Body {
             joint,
             pre4: crate::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
-            z_steps: ZSteps::new(&pre, &motion, &post),
-            z_after_general: match pre {
-                Placement::General(_) => ZTail::new(&motion, &post),
-                _ => None,
-            },
+            pre_steps: CheapPlacement::new(&pre),
+            z_tail: ZTail::new(&motion, &post),
             rate_shape: (u8::from(no_post) * Body::NO_POST)
                 | (u8::from(matches!(motion.d, Term::Var { .. })) * Body::SLIDES)
                 | (u8::from(about_z) * Body::ABOUT_Z)
@@ -1730,10 +1710,11 @@ mod tests {
         // evaluated in place without dispatch; the fingers, after the hand's fixed frame turned
         // about z, in place with dispatch on kinds.
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
+        let coded = |b: &Body| b.pre_steps.is_some() && b.z_tail.is_some();
         let ur5 = Chain::from_file(root.join("ur5.yaml")).unwrap();
-        assert!(ur5.bodies.iter().all(|b| b.z_steps.is_some()));
+        assert!(ur5.bodies.iter().all(coded));
         let panda = Chain::from_file(root.join("panda.urdf")).unwrap();
-        let shapes: Vec<bool> = panda.bodies.iter().map(|b| b.z_steps.is_some()).collect();
+        let shapes: Vec<bool> = panda.bodies.iter().map(coded).collect();
         assert_eq!(
             shapes,
             [true, true, true, true, true, true, true, false, false]
@@ -1747,27 +1728,15 @@ mod tests {
         assert!(!ur5.bodies.iter().any(general));
         let tiago = Chain::from_file(reference.join("tiago_no_hand.urdf")).unwrap();
         assert!(tiago.bodies.iter().any(general));
-        // After a general origin, a joint about z takes its steps from shape codes too: every
-        // joint of the SO-101, whose origins all turn about two or three axes. A body has at most
-        // one of the two shapes.
+        // After a general origin (matched on its kind), a joint about z takes its steps from
+        // shape codes: every joint of the SO-101, whose origins all turn about two or three axes.
         let so101 = Chain::from_file(reference.join("so101.urdf")).unwrap();
         assert!(
             so101
                 .bodies
                 .iter()
-                .all(|b| general(b) && b.z_after_general.is_some())
+                .all(|b| general(b) && b.pre_steps.is_none() && b.z_tail.is_some())
         );
-        for chain in [&panda, &ur5, &tiago, &so101] {
-            for body in &chain.bodies {
-                assert!(body.z_steps.is_none() || body.z_after_general.is_none());
-                assert_eq!(
-                    body.z_after_general.is_some(),
-                    general(body)
-                        && body.motion.axis == crate::joint::Axis::Z
-                        && CheapPlacement::new(&body.post).is_some()
-                );
-            }
-        }
         // Seven sines for seven turning joints: one vector of lanes.
         assert_eq!(panda.theta_gather.len(), 1);
         // The flag the kernels test instead of the parent's index: set on every body whose

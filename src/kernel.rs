@@ -11,7 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::arith::Arith;
-use crate::chain::{Body, CheapPlacement, Placement, ZSteps, ZTail};
+use crate::chain::{Body, CheapPlacement, Placement, ZTail};
 use crate::joint::{Axis, Term};
 use crate::trig;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -752,22 +752,6 @@ fn apply_motion<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, q: &[N], sin_co
     rotate_columns::<N, A>(&mut f.r, &m.axis, s, c);
 }
 
-/// The in-place order for the shape [`ZSteps`] describes: the operations of the general in-place
-/// order (`place`, `apply_motion`) without matching on kinds, and a translation along x as one
-/// multiply–add per entry rather than three whose other two add exact zeros.
-#[inline(always)]
-fn z_steps<N: Num, A: Arith>(
-    mut f: Frame<N>,
-    body: &Body,
-    steps: &ZSteps,
-    q: &[N],
-    sin_cos: (N, N),
-) -> Frame<N> {
-    cheap_place::<N, A>(&mut f, &steps.pre);
-    z_tail::<N, A>(&mut f, body, &steps.tail, q, sin_cos);
-    f
-}
-
 /// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes.
 #[inline(always)]
 fn z_tail<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, tail: &ZTail, q: &[N], sin_cos: (N, N)) {
@@ -883,6 +867,11 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 /// product with constant coefficients (broadcast from memory), which measured faster than
 /// composing a local frame `pre · M · post` built off the dependency chain (whose entries must be
 /// broadcast from registers: docs/performance.md, "How a joint is evaluated").
+///
+/// `pre` and the steps after it take shape codes where the body has them ([`Body::pre_steps`],
+/// [`Body::z_tail`]): the operations of `place` and `apply_motion` without matching on kinds, and
+/// a translation along x as one multiply–add per entry rather than three whose other two add
+/// exact zeros.
 #[inline(always)]
 pub(crate) fn pose_step<N: Num, A: Arith>(
     parent: Option<&Frame<N>>,
@@ -894,11 +883,11 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
         Some(f) => *f,
         None => Frame::splat(&crate::transform::Transform::IDENTITY),
     };
-    if let Some(steps) = &body.z_steps {
-        return z_steps::<N, A>(f, body, steps, q, sin_cos);
+    match &body.pre_steps {
+        Some(p) => cheap_place::<N, A>(&mut f, p),
+        None => place::<N, A>(&mut f, &body.pre),
     }
-    place::<N, A>(&mut f, &body.pre);
-    if let Some(tail) = &body.z_after_general {
+    if let Some(tail) = &body.z_tail {
         z_tail::<N, A>(&mut f, body, tail, q, sin_cos);
     } else {
         apply_motion::<N, A>(&mut f, body, q, sin_cos);

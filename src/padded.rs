@@ -8,7 +8,7 @@
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
 use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZSteps, ZTail};
+use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZTail};
 use crate::joint::{Axis, Term};
 use crate::kernel::term_value;
 use crate::transform::Transform;
@@ -234,20 +234,6 @@ fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: 
     }
 }
 
-/// The in-place order for the shape [`ZSteps`] describes (see `kernel::z_steps`).
-#[inline(always)]
-fn z_steps<A: Arith>(
-    mut f: [A::Col; 4],
-    body: &Body,
-    steps: &ZSteps,
-    q: &[f64],
-    sin_cos: (f64, f64),
-) -> [A::Col; 4] {
-    cheap_place::<A>(&mut f, &steps.pre);
-    z_tail::<A>(&mut f, body, &steps.tail, q, sin_cos);
-    f
-}
-
 /// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes (see `kernel::z_tail`).
 #[inline(always)]
 fn z_tail<A: Arith>(
@@ -335,11 +321,11 @@ pub(crate) fn pose_step<A: Arith>(
     sin_cos: (f64, f64),
 ) -> Frame4<A::Col> {
     let mut f = columns_or_world(parent);
-    if let Some(steps) = &body.z_steps {
-        return Frame4(z_steps::<A>(f, body, steps, q, sin_cos));
+    match &body.pre_steps {
+        Some(p) => cheap_place::<A>(&mut f, p),
+        None => place::<A>(&mut f, &body.pre),
     }
-    place::<A>(&mut f, &body.pre);
-    if let Some(tail) = &body.z_after_general {
+    if let Some(tail) = &body.z_tail {
         z_tail::<A>(&mut f, body, tail, q, sin_cos);
     } else {
         apply_motion::<A>(&mut f, body, q, sin_cos);
