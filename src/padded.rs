@@ -125,21 +125,16 @@ pub(crate) fn link_pose_generic<A: Arith>(body: &Stored, offset: &Placement) -> 
 
 crate::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &Stored, offset: &Placement) -> Transform => link_pose_generic);
 
-/// `c₀ u₀ + c₁ u₁ + c₂ u₂ + base`, innermost term first (the order of
-/// `kernel::apply_const_add`); `u` holds each coefficient in every entry.
+/// `c₀ u₀ + c₁ u₁ + c₂ u₂ + base` for constant coefficients `u`, innermost term first (the order
+/// of `kernel::apply_const_add`).
 #[inline(always)]
-fn combine<C: Col>(c: &[C; 4], u: [C; 3], base: C) -> C {
+fn combine_const<C: Col>(c: &[C; 4], u: [f64; 3], base: C) -> C {
+    let u = [C::splat(u[0]), C::splat(u[1]), C::splat(u[2])];
     C::mul_add(
         c[0],
         u[0],
         C::mul_add(c[1], u[1], C::mul_add(c[2], u[2], base)),
     )
-}
-
-/// [`combine`] with constant coefficients.
-#[inline(always)]
-fn combine_const<C: Col>(c: &[C; 4], u: [f64; 3], base: C) -> C {
-    combine(c, [C::splat(u[0]), C::splat(u[1]), C::splat(u[2])], base)
 }
 
 /// Columns `i`, `j` turned by the angle with sine `s` and cosine `c` (see `kernel::plane`).
