@@ -154,6 +154,43 @@ fn limits_and_axes_are_written_only_where_they_apply() {
     assert_eq!(spin.limits(), [None]);
 }
 
+/// A joint locked by its limits (`[0, 0]`) is written as `<limit lower="0" upper="0" effort="0"
+/// velocity="0"/>`, every value of which is also what urdf-rs puts in place of a missing
+/// `<limit>`: the written file still loads, with the joint locked as in the table, while a
+/// revolute joint with no `<limit>` at all stays an error.
+#[test]
+fn a_joint_locked_at_zero_survives_the_round_trip() {
+    let chain = Chain::from_dh_yaml_str(
+        "convention: standard\njoints:\n  \
+         - {name: locked, type: revolute, a: 1, alpha: 0, d: 0, theta: 0, limits: [0, 0]}\n  \
+         - {name: free, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0, limits: [0, 0.5]}\n",
+    )
+    .unwrap();
+    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    assert!(
+        text.contains("<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>"),
+        "{text}"
+    );
+    let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let locked = urdf.joint(urdf.joint_id("locked").unwrap());
+    let original = chain.joint(chain.joint_id("locked").unwrap());
+    assert_eq!(locked.limits(), original.limits());
+    assert!(
+        urdf.warnings().iter().any(|w| w.contains("'locked'")),
+        "{:?}",
+        urdf.warnings()
+    );
+
+    let without = text.replace(
+        "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>",
+        "",
+    );
+    let e = Chain::from_urdf_str(&without).unwrap_err();
+    let message = kinechain::cli::error_chain(&e);
+    assert!(message.contains("joint 'locked'"), "{message}");
+    assert!(message.contains("no <limit> element"), "{message}");
+}
+
 /// Names are written as XML attribute values: `&`, `<`, `>` and `"` in them come back unchanged.
 #[test]
 fn names_with_markup_characters_survive_the_round_trip() {

@@ -28,7 +28,11 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     for link in &robot.links {
         b.link(link.name.clone());
     }
-    for j in &robot.joints {
+    let limit_elements = joints_have_limit(source);
+    // Counted in the same order as urdf-rs reads them; should the counts differ, a `<limit>` is
+    // taken as missing when all its values are zero, as urdf-rs fills a missing one.
+    let aligned = limit_elements.len() == robot.joints.len();
+    for (k, j) in robot.joints.iter().enumerate() {
         let field = |field: &str, problem| LoadErrorKind::Field {
             joint: Some(j.name.clone()),
             field: field.to_string(),
@@ -70,8 +74,12 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         }
         if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
             let l = &j.limit;
-            // urdf-rs fills a missing <limit> with zeros; a real one needs a velocity.
-            if l.lower == 0.0 && l.upper == 0.0 && l.velocity == 0.0 && l.effort == 0.0 {
+            let present = if aligned {
+                limit_elements[k]
+            } else {
+                [l.lower, l.upper, l.velocity, l.effort] != [0.0; 4]
+            };
+            if !present {
                 return Err(field(
                     "limit",
                     FieldProblem::MissingLimit {
@@ -380,6 +388,35 @@ fn check_root(source: &str) -> Result<(), LoadErrorKind> {
         other => format!("line {line}: the root element is <{other}>; a URDF file's is <robot>"),
     };
     Err(LoadErrorKind::Urdf { message })
+}
+
+/// For each `<joint>` under `<robot>`, in the order of the file, whether it holds a `<limit>`
+/// element: urdf-rs fills a missing one with zeros, which cannot be told from
+/// `<limit lower="0" upper="0" effort="0" velocity="0"/>` (a joint locked at 0, as `kinechain
+/// convert` writes it) by the values alone.
+fn joints_have_limit(source: &str) -> Vec<bool> {
+    let mut found = Vec::new();
+    // Whether the element open at depth 1 is a joint.
+    let mut in_joint = false;
+    for (_, tag, depth) in nested_tags(source) {
+        if closes(tag) {
+            continue;
+        }
+        match (depth, element_name(tag)) {
+            (1, "joint") => {
+                found.push(false);
+                in_joint = true;
+            }
+            (1, _) => in_joint = false,
+            (2, "limit") if in_joint => {
+                if let Some(last) = found.last_mut() {
+                    *last = true;
+                }
+            }
+            _ => {}
+        }
+    }
+    found
 }
 
 /// The elements URDF defines inside `<joint>`, each with its attributes when they take part in
