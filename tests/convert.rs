@@ -157,7 +157,7 @@ fn limits_and_axes_are_written_only_where_they_apply() {
 /// A joint locked by its limits (`[0, 0]`) is written as `<limit lower="0" upper="0" effort="0"
 /// velocity="0"/>`, every value of which is also what urdf-rs puts in place of a missing
 /// `<limit>`: the written file still loads, with the joint locked as in the table, while a
-/// revolute joint with no `<limit>` at all stays an error.
+/// revolute joint with no `<limit>` at all (or one in a comment) stays an error.
 #[test]
 fn a_joint_locked_at_zero_survives_the_round_trip() {
     let chain = Chain::from_dh_yaml_str(
@@ -185,10 +185,16 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
         "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>",
         "",
     );
-    let e = Chain::from_urdf_str(&without).unwrap_err();
-    let message = kinechain::cli::error_chain(&e);
-    assert!(message.contains("joint 'locked'"), "{message}");
-    assert!(message.contains("no <limit> element"), "{message}");
+    let commented = text.replace(
+        "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>",
+        "<!-- <limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/> -->",
+    );
+    for text in [without, commented] {
+        let e = Chain::from_urdf_str(&text).unwrap_err();
+        let message = kinechain::cli::error_chain(&e);
+        assert!(message.contains("joint 'locked'"), "{message}");
+        assert!(message.contains("no <limit> element"), "{message}");
+    }
 }
 
 /// Names are written as XML attribute values: `&`, `<`, `>` and `"` in them come back unchanged.
