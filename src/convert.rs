@@ -11,8 +11,8 @@
 //! joint from a new root link. Limits are carried over; mimic joints keep their mimic element.
 //!
 //! The model holds kinematics only: links are written without `<inertial>` (URDF's massless
-//! frame), and a `<limit>`'s required effort and velocity as 0. Fixed and continuous joints get no
-//! `<limit>`, and fixed joints no `<axis>`.
+//! frame), and a `<limit>`'s required effort and velocity as 0, which a comment at the top of the
+//! file states. Fixed and continuous joints get no `<limit>`, and fixed joints no `<axis>`.
 
 use crate::chain::{Chain, JointSpec};
 use crate::joint::{JointKind, Limits, normalize_axis};
@@ -240,12 +240,18 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
         write_joint(&mut w, js)?;
     }
     Ok(format!(
-        "<robot name=\"{}\">\n{}{}</robot>\n",
+        "<robot name=\"{}\">\n{KINEMATICS_ONLY}{}{}</robot>\n",
         escaped(chain.name())?,
         w.links,
         w.joints
     ))
 }
+
+/// The comment at the top of every file [`to_urdf`] writes, so that a reader of the file alone
+/// (a planner taking its velocity limits, say) learns that the zeros are not data.
+const KINEMATICS_ONLY: &str = "  <!-- Kinematics only, as written by kinechain convert: links carry no \
+     mass or inertia, and each limit's effort and velocity are 0 because the model has none \
+     (URDF requires the attributes). -->\n";
 
 /// What the URDF `text` holds that [`to_urdf`] does not write, since the model keeps kinematics
 /// only: visual and collision elements, links' masses and inertias, joints' effort and velocity

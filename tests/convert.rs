@@ -124,6 +124,13 @@ fn limits_and_axes_are_written_only_where_they_apply() {
     )
     .unwrap();
     let text = kinechain::convert::to_urdf(&chain).unwrap();
+    // The file says itself that its zero efforts and velocities are not data.
+    assert!(
+        text.lines().nth(1).is_some_and(
+            |l| l.contains("<!-- Kinematics only") && l.contains("effort and velocity are 0")
+        ),
+        "{text}"
+    );
     // Each joint's element, by name.
     let block = |name: &str| {
         let start = text
