@@ -22,16 +22,16 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         }
     })?;
     let mut b = ChainBuilder::new(robot.name.clone());
-    for warning in ignored_parts(source) {
+    let scan = scan_parts(source);
+    for warning in scan.warnings {
         b.warn(warning);
     }
     for link in &robot.links {
         b.link(link.name.clone());
     }
-    let limit_elements = joints_have_limit(source);
     // Counted in the same order as urdf-rs reads them; should the counts differ, a `<limit>` is
     // taken as missing when all its values are zero, as urdf-rs fills a missing one.
-    let aligned = limit_elements.len() == robot.joints.len();
+    let aligned = scan.joint_has_limit.len() == robot.joints.len();
     for (k, j) in robot.joints.iter().enumerate() {
         let field = |field: &str, problem| LoadErrorKind::Field {
             joint: Some(j.name.clone()),
@@ -75,7 +75,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
             let l = &j.limit;
             let present = if aligned {
-                limit_elements[k]
+                scan.joint_has_limit[k]
             } else {
                 [l.lower, l.upper, l.velocity, l.effort] != [0.0; 4]
             };
@@ -390,35 +390,6 @@ fn check_root(source: &str) -> Result<(), LoadErrorKind> {
     Err(LoadErrorKind::Urdf { message })
 }
 
-/// For each `<joint>` under `<robot>`, in the order of the file, whether it holds a `<limit>`
-/// element: urdf-rs fills a missing one with zeros, which cannot be told from
-/// `<limit lower="0" upper="0" effort="0" velocity="0"/>` (a joint locked at 0, as `kinechain
-/// convert` writes it) by the values alone.
-fn joints_have_limit(source: &str) -> Vec<bool> {
-    let mut found = Vec::new();
-    // Whether the element open at depth 1 is a joint.
-    let mut in_joint = false;
-    for (_, tag, depth) in nested_tags(source) {
-        if closes(tag) {
-            continue;
-        }
-        match (depth, element_name(tag)) {
-            (1, "joint") => {
-                found.push(false);
-                in_joint = true;
-            }
-            (1, _) => in_joint = false,
-            (2, "limit") if in_joint => {
-                if let Some(last) = found.last_mut() {
-                    *last = true;
-                }
-            }
-            _ => {}
-        }
-    }
-    found
-}
-
 /// The elements URDF defines inside `<joint>`, each with its attributes when they take part in
 /// the kinematics (`None`: dynamics, calibration and safety data, which vendors extend with
 /// attributes of their own, are not checked).
@@ -445,7 +416,7 @@ const TOP_LEVEL: [&str; 7] = [
     "sensor",
 ];
 
-/// Most warnings [`ignored_parts`] lists one by one; the rest are counted.
+/// Most warnings [`scan_parts`] lists one by one; the rest are counted.
 const MAX_PART_WARNINGS: usize = 20;
 
 /// Warnings for what the parser skips without a word: an element under `<robot>` that URDF does
@@ -455,7 +426,13 @@ const MAX_PART_WARNINGS: usize = 20;
 /// `<joint>`, whose contents URDF defines as elements only (a stray character left by an edit).
 /// Elements and attributes with a namespace prefix (`xacro:`) are not checked. One pass over the
 /// text, lines counted as it goes.
-fn ignored_parts(source: &str) -> Vec<String> {
+///
+/// The same pass notes, for each `<joint>` under `<robot>` in the order of the file, whether it
+/// holds a `<limit>` element: urdf-rs fills a missing one with zeros, which cannot be told from
+/// `<limit lower="0" upper="0" effort="0" velocity="0"/>` (a joint locked at 0, as `kinechain
+/// convert` writes it) by the values alone.
+fn scan_parts(source: &str) -> Scanned {
+    let mut joint_has_limit = Vec::new();
     // (byte offset, message without its line), and how many more there were.
     let mut found: Vec<(usize, String)> = Vec::new();
     let mut more = 0usize;
@@ -505,6 +482,7 @@ fn ignored_parts(source: &str) -> Vec<String> {
                     });
                 }
                 holder = Some((label, "joint"));
+                joint_has_limit.push(false);
             }
             1 => {
                 holder = (name == "link").then(|| {
@@ -520,6 +498,11 @@ fn ignored_parts(source: &str) -> Vec<String> {
             }
             2 => {
                 if let Some((label, "joint")) = &holder {
+                    if name == "limit"
+                        && let Some(has) = joint_has_limit.last_mut()
+                    {
+                        *has = true;
+                    }
                     match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
                         Some((_, None)) => {}
                         Some((_, Some(allowed))) => {
@@ -555,7 +538,18 @@ fn ignored_parts(source: &str) -> Vec<String> {
             "{more} more elements or attributes are not URDF and are ignored"
         ));
     }
-    warnings
+    Scanned {
+        warnings,
+        joint_has_limit,
+    }
+}
+
+/// What [`scan_parts`] finds in a URDF text.
+struct Scanned {
+    /// Parts the parser skips without a word, each a warning with its line.
+    warnings: Vec<String>,
+    /// For each `<joint>` under `<robot>`, in the order of the file: whether it holds a `<limit>`.
+    joint_has_limit: Vec<bool>,
 }
 
 /// `urdf-rs` reads `xyz`/`rpy` attributes by dropping tokens that are not numbers
