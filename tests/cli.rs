@@ -63,6 +63,16 @@ fn ok_text(args: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// A command that succeeded without writing anything to stderr (not even a warning).
+fn assert_quiet_success(out: &Output) {
+    assert!(out.status.success(), "{out:?}");
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn position(result: &Value, link: &str) -> [f64; 3] {
     let pose = &result["links"][link]["pose"];
     [0, 1, 2].map(|i| pose[i][3].as_f64().unwrap())
@@ -647,13 +657,7 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
         .unwrap();
     assert!(first.starts_with("{\"links\""), "{first}");
     // The reader is dropped here, closing the pipe.
-    let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{out:?}");
-    assert!(
-        out.stderr.is_empty(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_quiet_success(&child.wait_with_output().unwrap());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -965,13 +969,7 @@ fn converting_a_urdf_says_what_is_not_written() {
     }
     // The written file has nothing more to drop, and a DH table never had any of it.
     for robot in [written.to_str().unwrap(), "robots/puma560.yaml"] {
-        let out = kinechain(&["convert", robot]);
-        assert!(out.status.success());
-        assert!(
-            out.stderr.is_empty(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_quiet_success(&kinechain(&["convert", robot]));
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
