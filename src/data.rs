@@ -1,6 +1,7 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
 use crate::chain::Chain;
+use crate::kernel::{LANES, Lanes};
 use crate::padded::Rates;
 use crate::transform::Transform;
 
@@ -27,10 +28,12 @@ pub struct Data {
     pub(crate) world_from_body: Vec<crate::padded::Stored>,
     /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
     pub(crate) rates: Vec<Rates>,
-    /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain
-    /// (padded to a whole number of lanes).
-    pub(crate) sin: Vec<f64>,
-    pub(crate) cos: Vec<f64>,
+    /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain, in
+    /// whole vectors of lanes (read as one run of `f64` through [`Lanes::flat`]): aligned to their
+    /// size, so that the vectorised stores never straddle a cache line or a page, wherever the
+    /// allocator puts them.
+    pub(crate) sin: Vec<Lanes>,
+    pub(crate) cos: Vec<Lanes>,
     /// Scratch: bodies on the path to a queried link, or dirty flags of an incremental update.
     pub(crate) path: Vec<usize>,
     pub(crate) dirty: Vec<bool>,
@@ -47,13 +50,13 @@ impl Data {
     #[must_use]
     pub fn new(chain: &Chain) -> Self {
         let n = chain.bodies.len();
-        // Whole chunks of lanes, and at least one entry for the slot constant-θ bodies read.
-        let trig = chain.theta_gather.len().max(1) * crate::kernel::LANES;
+        // Whole chunks of lanes, at least one (constant-θ bodies read slot 0).
+        let trig = chain.theta_gather.len().max(1);
         Data {
             world_from_body: vec![crate::padded::stored(&Transform::IDENTITY); n],
             rates: vec![Rates::ZERO; n],
-            sin: vec![0.0; trig],
-            cos: vec![1.0; trig],
+            sin: vec![Lanes([0.0; LANES]); trig],
+            cos: vec![Lanes([1.0; LANES]); trig],
             path: Vec::with_capacity(n),
             dirty: vec![true; n],
             last_q: vec![0.0; chain.dof()],

@@ -65,6 +65,25 @@ pub(crate) const LANES: usize = 8;
 #[repr(C, align(64))]
 pub(crate) struct Lanes(pub(crate) [f64; LANES]);
 
+impl Lanes {
+    /// The values of `chunks`, one chunk after the other.
+    #[inline(always)]
+    pub(crate) fn flat(chunks: &[Lanes]) -> &[f64] {
+        // SAFETY: `Lanes` is `repr(C)` around `[f64; LANES]`, of size `8 · LANES` (a multiple of
+        // its alignment, so no padding): a slice of it is `LANES · len` initialised `f64`.
+        unsafe { std::slice::from_raw_parts(chunks.as_ptr().cast(), LANES * chunks.len()) }
+    }
+
+    /// [`Lanes::flat`], writable.
+    #[inline(always)]
+    pub(crate) fn flat_mut(chunks: &mut [Lanes]) -> &mut [f64] {
+        // SAFETY: as in `flat`; every bit pattern is a valid `f64`.
+        unsafe { std::slice::from_raw_parts_mut(chunks.as_mut_ptr().cast(), LANES * chunks.len()) }
+    }
+}
+
+const _: () = assert!(size_of::<Lanes>() == LANES * size_of::<f64>());
+
 macro_rules! lanewise {
     ($trait:ident, $method:ident, $op:tt) => {
         impl $trait for Lanes {

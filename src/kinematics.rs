@@ -38,7 +38,7 @@ use crate::chain::{Body, Chain, DenseLimits, LinkId, Placement};
 use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
 use crate::joint::{Motion, Term};
-use crate::kernel;
+use crate::kernel::{self, Lanes};
 use crate::padded::{self, Frame4, Rates4};
 use crate::transform::{Transform, add3, cross3, scale3};
 use nalgebra::Vector3;
@@ -831,8 +831,8 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[..chunks],
         q,
-        &mut data.sin,
-        &mut data.cos,
+        Lanes::flat_mut(&mut data.sin),
+        Lanes::flat_mut(&mut data.cos),
     );
     compose_prefix::<A>(chain, data, q, n)
 }
@@ -851,7 +851,7 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
     // Sliced to `n` first, so that indexing by `k < n` needs no bounds checks.
     let frames = &mut data.world_from_body[..n];
     let (bodies, slots) = (&chain.bodies[..n], &chain.trig_slot[..n]);
-    let (sin, cos) = same_length(&data.sin, &data.cos);
+    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
     let mut f = Frame4::<A::Col>::identity();
     for (k, (body, &slot)) in bodies.iter().zip(slots).enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
@@ -880,8 +880,8 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[..chunks],
         q,
-        &mut data.sin,
-        &mut data.cos,
+        Lanes::flat_mut(&mut data.sin),
+        Lanes::flat_mut(&mut data.cos),
     );
     // The path is a run of the leading serial bodies (no index list), then the rest of the path
     // (for a branch), listed from the body back towards the base.
@@ -896,7 +896,7 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         None => Frame4::identity(),
     };
     let frames = &mut data.world_from_body;
-    let (sin, cos) = same_length(&data.sin, &data.cos);
+    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
     for &k in data.path.iter().rev() {
         // Each next body's parent is the previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
@@ -957,15 +957,15 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[chunk..],
         q,
-        &mut data.sin[start..],
-        &mut data.cos[start..],
+        &mut Lanes::flat_mut(&mut data.sin)[start..],
+        &mut Lanes::flat_mut(&mut data.cos)[start..],
     );
     let frames = &mut data.world_from_body;
     let mut f = match first.checked_sub(1) {
         Some(p) => Frame4::load(&frames[p]),
         None => Frame4::identity(),
     };
-    let (sin, cos) = same_length(&data.sin, &data.cos);
+    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
     let bodies = chain.bodies[first..].iter().zip(&chain.trig_slot[first..]);
     for (k, (body, &slot)) in (first..).zip(bodies) {
         let sin_cos = (sin[slot], cos[slot]);
@@ -1018,12 +1018,17 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_dot: &[f64],
     q_ddot: &[f64],
 ) {
-    kernel::all_sin_cos::<A>(&chain.theta_gather, q, &mut data.sin, &mut data.cos);
+    kernel::all_sin_cos::<A>(
+        &chain.theta_gather,
+        q,
+        Lanes::flat_mut(&mut data.sin),
+        Lanes::flat_mut(&mut data.cos),
+    );
     // Sliced to the number of bodies first, so that indexing by body needs no bounds checks.
     let n = chain.bodies.len();
     let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
     let slots = &chain.trig_slot[..n];
-    let (sin, cos) = same_length(&data.sin, &data.cos);
+    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
     let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
     for (k, (body, &slot)) in chain.bodies.iter().zip(slots).enumerate() {
         // The previous body's state stays in registers; only branches read a parent from memory.
