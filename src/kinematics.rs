@@ -1203,7 +1203,7 @@ mod tests {
             let mut data = unchecked(&chain);
             forward_kinematics(&chain, &mut data, &q0).expect("finite");
             let parent = chain.bodies[first].parent.expect("a moving parent");
-            let unset = padded::stored(&Transform::IDENTITY).map(|c| c.map(|_| f64::NAN));
+            let unset = padded::Stored([[f64::NAN; 4]; 4]);
             for (k, frame) in data.world_from_body.iter_mut().enumerate().take(first) {
                 if k != parent {
                     *frame = unset;
