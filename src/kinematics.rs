@@ -837,10 +837,11 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -
     compose_prefix::<A>(chain, data, q, n)
 }
 
-/// `a` and `b` cut to the shorter one's length (`data.sin` and `data.cos`, of one length), so
-/// that one comparison checks an index into both.
+/// The values of `a` and `b` (`data.sin` and `data.cos`, of one length), cut to the shorter
+/// one's length so that one comparison checks an index into both.
 #[inline(always)]
-fn same_length<'a>(a: &'a [f64], b: &'a [f64]) -> (&'a [f64], &'a [f64]) {
+fn same_length<'a>(a: &'a [Lanes], b: &'a [Lanes]) -> (&'a [f64], &'a [f64]) {
+    let (a, b) = (Lanes::flat(a), Lanes::flat(b));
     let m = a.len().min(b.len());
     (&a[..m], &b[..m])
 }
@@ -851,7 +852,7 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
     // Sliced to `n` first, so that indexing by `k < n` needs no bounds checks.
     let frames = &mut data.world_from_body[..n];
     let (bodies, slots) = (&chain.bodies[..n], &chain.trig_slot[..n]);
-    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     let mut f = Frame4::<A::Col>::identity();
     for (k, (body, &slot)) in bodies.iter().zip(slots).enumerate() {
         // The previous body's frame stays in registers; only branches read a parent from memory.
@@ -896,7 +897,7 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         None => Frame4::identity(),
     };
     let frames = &mut data.world_from_body;
-    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     for &k in data.path.iter().rev() {
         // Each next body's parent is the previous one, whose frame stays in registers.
         let body = &chain.bodies[k];
@@ -953,19 +954,18 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
 #[inline(always)]
 fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
     let chunk = chain.turning_before[first] / kernel::LANES;
-    let start = chunk * kernel::LANES;
     kernel::all_sin_cos::<A>(
         &chain.theta_gather[chunk..],
         q,
-        &mut Lanes::flat_mut(&mut data.sin)[start..],
-        &mut Lanes::flat_mut(&mut data.cos)[start..],
+        Lanes::flat_mut(&mut data.sin[chunk..]),
+        Lanes::flat_mut(&mut data.cos[chunk..]),
     );
     let frames = &mut data.world_from_body;
     let mut f = match first.checked_sub(1) {
         Some(p) => Frame4::load(&frames[p]),
         None => Frame4::identity(),
     };
-    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     let bodies = chain.bodies[first..].iter().zip(&chain.trig_slot[first..]);
     for (k, (body, &slot)) in (first..).zip(bodies) {
         let sin_cos = (sin[slot], cos[slot]);
@@ -1028,7 +1028,7 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     let n = chain.bodies.len();
     let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
     let slots = &chain.trig_slot[..n];
-    let (sin, cos) = same_length(Lanes::flat(&data.sin), Lanes::flat(&data.cos));
+    let (sin, cos) = same_length(&data.sin, &data.cos);
     let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
     for (k, (body, &slot)) in chain.bodies.iter().zip(slots).enumerate() {
         // The previous body's state stays in registers; only branches read a parent from memory.
