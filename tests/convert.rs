@@ -174,10 +174,8 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
     )
     .unwrap();
     let text = kinechain::convert::to_urdf(&chain).unwrap();
-    assert!(
-        text.contains("<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>"),
-        "{text}"
-    );
+    let locked_limit = "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>";
+    assert!(text.contains(locked_limit), "{text}");
     let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
     let locked = urdf.joint(urdf.joint_id("locked").unwrap());
     let original = chain.joint(chain.joint_id("locked").unwrap());
@@ -188,14 +186,8 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
         urdf.warnings()
     );
 
-    let without = text.replace(
-        "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>",
-        "",
-    );
-    let commented = text.replace(
-        "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>",
-        "<!-- <limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/> -->",
-    );
+    let without = text.replace(locked_limit, "");
+    let commented = text.replace(locked_limit, &format!("<!-- {locked_limit} -->"));
     for text in [without, commented] {
         let e = Chain::from_urdf_str(&text).unwrap_err();
         let message = kinechain::cli::error_chain(&e);
