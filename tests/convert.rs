@@ -185,6 +185,17 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
         "{:?}",
         urdf.warnings()
     );
+    // The sliding joint after it keeps its own limits and draws no warning.
+    let free = urdf.joint(urdf.joint_id("free").unwrap());
+    assert_eq!(
+        free.limits(),
+        chain.joint(chain.joint_id("free").unwrap()).limits()
+    );
+    assert!(
+        !urdf.warnings().iter().any(|w| w.contains("'free'")),
+        "{:?}",
+        urdf.warnings()
+    );
 
     let without = text.replace(locked_limit, "");
     let commented = text.replace(locked_limit, &format!("<!-- {locked_limit} -->"));
