@@ -256,7 +256,9 @@ const KINEMATICS_ONLY: &str = "  <!-- Kinematics only, as written by kinechain c
 /// What the URDF `text` holds that [`to_urdf`] does not write, since the model keeps kinematics
 /// only: visual and collision elements, links' masses and inertias, joints' effort and velocity
 /// limits, dynamics, calibration and safety controllers, and materials. `None` when it holds none
-/// of these (a file that `to_urdf` wrote, for one) or cannot be read.
+/// of these (a file that `to_urdf` wrote, for one) or cannot be read. (For the command line's
+/// `convert`, which says so.)
+#[cfg(feature = "cli")]
 pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
     let robot = urdf_rs::read_from_string(text).ok()?;
     let count = |n: usize, what: &str| (n > 0).then(|| format!("{n} {what}"));
