@@ -256,8 +256,8 @@ const KINEMATICS_ONLY: &str = "  <!-- Kinematics only, as written by kinechain c
 /// What the URDF `text` holds that [`to_urdf`] does not write, since the model keeps kinematics
 /// only: visual and collision elements, links' masses and inertias, joints' effort and velocity
 /// limits, dynamics, calibration and safety controllers, and materials. `None` when it holds none
-/// of these (a file that `to_urdf` wrote, for one) or cannot be read. (For the command line's
-/// `convert`, which says so.)
+/// of these (a file that `to_urdf` wrote, for one) or cannot be read. The command line's
+/// `convert` prints it, so that the user knows what the written file leaves out.
 #[cfg(feature = "cli")]
 pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
     let robot = urdf_rs::read_from_string(text).ok()?;
