@@ -304,7 +304,7 @@ fn lane_pose(
     let Some(b) = l.body else {
         return l.offset.to_transform();
     };
-    padded::link_pose(&padded::Stored(body_columns(b)), &l.offset)
+    padded::link_pose(&body_columns(b), &l.offset)
 }
 
 /// The padded columns of configuration `index`'s frame in `f`, the frames of its chunk.

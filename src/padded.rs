@@ -99,7 +99,7 @@ impl<C: Col> Frame4<C> {
     // inlined into a large dispatched function, `map` can compile to a call of its own that
     // passes every vector through memory.
     #[inline(always)]
-    pub(crate) fn load(s: &Stored) -> Self {
+    pub(crate) fn load(s: &[C4; 4]) -> Self {
         Frame4([
             C::load(&s[0]),
             C::load(&s[1]),
@@ -137,13 +137,13 @@ impl<C: Col> Frame4<C> {
 /// permutes, and a read cost 3–9 ns more on Zen 4 (Panda modified DH `tcp`, Panda URDF
 /// `panda_hand_tcp`; the same for links without an offset).
 #[inline(always)]
-pub(crate) fn link_pose_generic<A: Arith>(body: &Stored, offset: &Placement) -> Transform {
+pub(crate) fn link_pose_generic<A: Arith>(body: &[C4; 4], offset: &Placement) -> Transform {
     let mut f = Frame4::<A::Col>::load(body);
     place::<A>(&mut f.0, offset);
     f.to_transform()
 }
 
-crate::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &Stored, offset: &Placement) -> Transform => link_pose_generic);
+crate::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &[C4; 4], offset: &Placement) -> Transform => link_pose_generic);
 
 /// `c₀ u₀ + c₁ u₁ + c₂ u₂ + base` for constant coefficients `u`, innermost term first (the order
 /// of `kernel::apply_const_add`).
