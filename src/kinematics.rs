@@ -42,6 +42,7 @@ use crate::kernel::{self, Lanes};
 use crate::padded::{self, Frame4, Rates4};
 use crate::transform::{Transform, add3, cross3, scale3};
 use nalgebra::Vector3;
+use std::ops::Range;
 
 /// Angular velocity and linear velocity of a link-frame origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -828,13 +829,21 @@ fn poses_path_admitted_generic<A: Arith>(
 #[inline(always)]
 fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
     let chunks = chain.turning_before[n].div_ceil(kernel::LANES);
-    kernel::all_sin_cos::<A>(
-        &chain.theta_gather[..chunks],
-        q,
-        Lanes::flat_mut(&mut data.sin),
-        Lanes::flat_mut(&mut data.cos),
-    );
+    sin_cos_chunks::<A>(chain, data, q, 0..chunks);
     compose_prefix::<A>(chain, data, q, n)
+}
+
+/// `sin`/`cos` of the angles gathered in chunks `chunks` of [`Chain::theta_gather`], into the
+/// same chunks of `data.sin` and `data.cos`.
+#[inline(always)]
+fn sin_cos_chunks<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], chunks: Range<usize>) {
+    let from = chunks.start;
+    kernel::all_sin_cos::<A>(
+        &chain.theta_gather[chunks],
+        q,
+        Lanes::flat_mut(&mut data.sin[from..]),
+        Lanes::flat_mut(&mut data.cos[from..]),
+    );
 }
 
 /// The values of `a` and `b` (`data.sin` and `data.cos`, of one length), cut to the shorter
@@ -878,12 +887,7 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
     let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
-    kernel::all_sin_cos::<A>(
-        &chain.theta_gather[..chunks],
-        q,
-        Lanes::flat_mut(&mut data.sin),
-        Lanes::flat_mut(&mut data.cos),
-    );
+    sin_cos_chunks::<A>(chain, data, q, 0..chunks);
     // The path is a run of the leading serial bodies (no index list), then the rest of the path
     // (for a branch), listed from the body back towards the base.
     data.path.clear();
@@ -954,12 +958,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
 #[inline(always)]
 fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
     let chunk = chain.turning_before[first] / kernel::LANES;
-    kernel::all_sin_cos::<A>(
-        &chain.theta_gather[chunk..],
-        q,
-        Lanes::flat_mut(&mut data.sin[chunk..]),
-        Lanes::flat_mut(&mut data.cos[chunk..]),
-    );
+    sin_cos_chunks::<A>(chain, data, q, chunk..chain.theta_gather.len());
     let frames = &mut data.world_from_body;
     let mut f = match first.checked_sub(1) {
         Some(p) => Frame4::load(&frames[p]),
@@ -1018,12 +1017,7 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_dot: &[f64],
     q_ddot: &[f64],
 ) {
-    kernel::all_sin_cos::<A>(
-        &chain.theta_gather,
-        q,
-        Lanes::flat_mut(&mut data.sin),
-        Lanes::flat_mut(&mut data.cos),
-    );
+    sin_cos_chunks::<A>(chain, data, q, 0..chain.theta_gather.len());
     // Sliced to the number of bodies first, so that indexing by body needs no bounds checks.
     let n = chain.bodies.len();
     let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
