@@ -4,6 +4,7 @@
 use crate::batch::{BatchData, forward_kinematics_batch};
 use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
+use crate::error::error_chain;
 use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, check_q, forward_accelerations,
@@ -264,19 +265,6 @@ pub fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
-}
-
-/// `e: source: source…` on one line.
-#[must_use]
-pub fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut source = e.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text.replace('\n', " ")
 }
 
 fn load(path: &PathBuf) -> Result<Chain, CliError> {

@@ -4,6 +4,31 @@
 use crate::transform::NotRigid;
 use std::path::{Path, PathBuf};
 
+/// An error and its sources on one line, `error: source: source…`, with any line breaks of
+/// their messages turned into spaces.
+///
+/// Each error of this crate displays only its own layer (a [`LoadError`] says which file, its
+/// source what went wrong in it), as Rust errors do; this is the whole story for a log line or
+/// a message to a user.
+///
+/// ```
+/// let e = kinechain::Chain::from_file("no/such/robot.urdf").unwrap_err();
+/// assert_eq!(e.to_string(), "cannot load no/such/robot.urdf");
+/// let line = kinechain::error::error_chain(&e);
+/// assert!(line.starts_with("cannot load no/such/robot.urdf: "), "{line}");
+/// ```
+#[must_use]
+pub fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text.replace('\n', " ")
+}
+
 /// A robot file could not be turned into a [`Chain`](crate::Chain).
 ///
 /// Its message names the file; its source ([`LoadError::kind`]) says what went wrong.

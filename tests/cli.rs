@@ -974,6 +974,28 @@ fn converting_a_urdf_says_what_is_not_written() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A loader's warning (here |alpha| = 90 with `angle_unit: rad`, likely degrees) reaches stderr
+/// with the file's name, and the command still succeeds.
+#[test]
+fn a_load_warning_is_printed_with_the_file() {
+    let dir = scratch_dir("warn");
+    let path = dir.join("degrees.yaml");
+    std::fs::write(
+        &path,
+        "convention: standard\njoints:\n  - {name: j1, type: revolute, a: 0.1, alpha: 90, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let out = kinechain(&["info", path]);
+    assert!(out.status.success(), "{out:?}");
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with(&format!("warning: {path}: ")) && stderr.contains("degrees"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn convert_and_render_write_files() {
     let dir = scratch_dir("convert");

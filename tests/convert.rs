@@ -15,7 +15,7 @@ fn converted(name: &str) -> (Chain, Chain, std::path::PathBuf) {
     let path = dir.join(name.replace(".yaml", ".urdf"));
     std::fs::write(&path, &text).unwrap();
     let urdf = Chain::from_file(&path)
-        .unwrap_or_else(|e| panic!("{name}: {}\n{text}", kinechain::cli::error_chain(&e)));
+        .unwrap_or_else(|e| panic!("{name}: {}\n{text}", kinechain::error::error_chain(&e)));
     (original, urdf, path)
 }
 
@@ -192,7 +192,7 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
     let commented = text.replace(locked_limit, &format!("<!-- {locked_limit} -->"));
     for text in [without, commented] {
         let e = Chain::from_urdf_str(&text).unwrap_err();
-        let message = kinechain::cli::error_chain(&e);
+        let message = kinechain::error::error_chain(&e);
         assert!(message.contains("joint 'locked'"), "{message}");
         assert!(message.contains("no <limit> element"), "{message}");
     }

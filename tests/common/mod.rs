@@ -221,7 +221,7 @@ pub fn reference_chain(path: &Path, reference: &Value) -> Chain {
     } else {
         Chain::from_dh_yaml_str(&model_yaml(reference))
     };
-    chain.unwrap_or_else(|e| panic!("{}: {}", path.display(), kinechain::cli::error_chain(&e)))
+    chain.unwrap_or_else(|e| panic!("{}: {}", path.display(), kinechain::error::error_chain(&e)))
 }
 
 /// A `{joint: value}` map of a sample (`q`, `qd` or `qdd`) in the chain's `q` order.
