@@ -7,7 +7,7 @@
 //! and `M` is the joint's motion (eq. 2.119). Links are frames fixed to a body (or to the world)
 //! at a constant offset, so a fixed joint costs nothing unless its link is asked for.
 
-use crate::error::{ModelError, NameError, StateError};
+use crate::error::{ModelError, NameError, StateError, closest_name};
 use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
 use crate::transform::{NotRigid, Transform};
 use nalgebra::{Matrix4, Unit, Vector3};
@@ -939,6 +939,7 @@ impl Chain {
             .map(|&i| LinkId(i))
             .ok_or_else(|| NameError::UnknownLink {
                 name: name.to_string(),
+                suggestion: closest_name(name, self.links.iter().map(Link::name)),
             })
     }
 
@@ -952,6 +953,7 @@ impl Chain {
             .map(|&i| JointId(i))
             .ok_or_else(|| NameError::UnknownJoint {
                 name: name.to_string(),
+                suggestion: closest_name(name, self.joints.iter().map(Joint::name)),
             })
     }
 
@@ -1260,6 +1262,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
                     joint: j.name.clone(),
                     role,
                     link: name.to_string(),
+                    suggestion: closest_name(name, spec.links.iter().map(String::as_str)),
                 })
         };
         let parent = find(&j.parent, "parent")?;
@@ -1357,6 +1360,10 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
                 ModelError::UnknownMimicTarget {
                     joint: js.name.clone(),
                     target: target_name.clone(),
+                    suggestion: closest_name(
+                        target_name,
+                        spec.joints.iter().map(|j| j.name.as_str()),
+                    ),
                 }
             })?;
             let tj = &spec.joints[t];

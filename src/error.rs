@@ -242,7 +242,7 @@ pub enum ModelError {
         what: &'static str,
     },
     /// A joint refers to a link that does not exist.
-    #[error("joint '{joint}': {role} link '{link}' does not exist")]
+    #[error("joint '{joint}': {role} link '{link}' does not exist{}", did_you_mean(.suggestion))]
     UnknownLink {
         /// The joint.
         joint: String,
@@ -250,6 +250,9 @@ pub enum ModelError {
         role: &'static str,
         /// The missing link.
         link: String,
+        /// The declared link whose name is closest, if it is close enough to be a likely typo
+        /// (see [`closest_name`]).
+        suggestion: Option<String>,
     },
     /// A link is the child of two joints.
     #[error("link '{link}' is the child of two joints, '{first}' and '{second}'")]
@@ -277,12 +280,15 @@ pub enum ModelError {
     #[error("model has no links")]
     NoLinks,
     /// A mimic joint refers to a joint that does not exist.
-    #[error("joint '{joint}' mimics joint '{target}', which does not exist")]
+    #[error("joint '{joint}' mimics joint '{target}', which does not exist{}", did_you_mean(.suggestion))]
     UnknownMimicTarget {
         /// The mimic joint.
         joint: String,
         /// The missing joint.
         target: String,
+        /// The declared joint whose name is closest, if it is close enough to be a likely typo
+        /// (see [`closest_name`]).
+        suggestion: Option<String>,
     },
     /// A mimic joint refers to a joint that cannot drive it (fixed or cylindrical).
     #[error(
@@ -419,15 +425,86 @@ fn hint(value: f64, lower: f64, upper: f64) -> &'static str {
 #[non_exhaustive]
 pub enum NameError {
     /// No link has this name.
-    #[error("no link named '{name}'")]
+    #[error("no link named '{name}'{}", did_you_mean(.suggestion))]
     UnknownLink {
         /// The name asked for.
         name: String,
+        /// The chain's link whose name is closest, when it is close enough to be a likely typo
+        /// (see [`closest_name`]).
+        suggestion: Option<String>,
     },
     /// No joint has this name.
-    #[error("no joint named '{name}'")]
+    #[error("no joint named '{name}'{}", did_you_mean(.suggestion))]
     UnknownJoint {
         /// The name asked for.
         name: String,
+        /// The chain's joint whose name is closest, when it is close enough to be a likely typo
+        /// (see [`closest_name`]).
+        suggestion: Option<String>,
     },
+}
+
+/// ` (did you mean 'x'?)` for a suggested name, nothing without one.
+pub(crate) fn did_you_mean(suggestion: &Option<String>) -> String {
+    suggestion
+        .as_ref()
+        .map(|s| format!(" (did you mean '{s}'?)"))
+        .unwrap_or_default()
+}
+
+/// Of `candidates`, the one closest to `name` in edit distance (insertions, deletions and
+/// substitutions of characters, letter case ignored), if that distance is at most a third of
+/// `name`'s length (and at least 1) and no other candidate is as close: what a misspelt name
+/// most likely meant. With several equally close candidates there is no telling, and `None`.
+///
+/// ```
+/// use kinechain::error::closest_name;
+/// let links = ["base_link", "shoulder_link", "tool0", "tool1"];
+/// assert_eq!(closest_name("shoulder_lnk", links).as_deref(), Some("shoulder_link"));
+/// assert_eq!(closest_name("Tool0", links).as_deref(), Some("tool0"));
+/// assert_eq!(closest_name("tool2", links), None); // tool0 and tool1 are as close
+/// assert_eq!(closest_name("elbow", links), None);
+/// ```
+#[must_use]
+pub fn closest_name<'a>(
+    name: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<String> {
+    let name: Vec<char> = name.chars().flat_map(char::to_lowercase).collect();
+    let most = (name.len() / 3).max(1);
+    // The closest candidate so far, and whether another one is as close.
+    let mut best: Option<(usize, &str, bool)> = None;
+    // One row of the edit-distance table, reused for every candidate.
+    let mut row: Vec<usize> = Vec::new();
+    for candidate in candidates {
+        let d = edit_distance(&name, candidate, &mut row);
+        match best {
+            _ if d > most => {}
+            Some((b, _, ref mut tied)) if d == b => *tied = true,
+            Some((b, _, _)) if d > b => {}
+            _ => best = Some((d, candidate, false)),
+        }
+    }
+    match best {
+        Some((_, c, false)) => Some(c.to_string()),
+        _ => None,
+    }
+}
+
+/// Levenshtein distance between `a` (already lowercase) and `b` (lowercased here), with `row`
+/// as scratch space.
+fn edit_distance(a: &[char], b: &str, row: &mut Vec<usize>) -> usize {
+    row.clear();
+    row.extend(0..=a.len());
+    for (j, cb) in b.chars().flat_map(char::to_lowercase).enumerate() {
+        // `diagonal` is the previous row's entry left of the one being replaced.
+        let mut diagonal = row[0];
+        row[0] = j + 1;
+        for (i, &ca) in a.iter().enumerate() {
+            let substitute = diagonal + usize::from(ca != cb);
+            diagonal = row[i + 1];
+            row[i + 1] = substitute.min(row[i] + 1).min(diagonal + 1);
+        }
+    }
+    row[a.len()]
 }

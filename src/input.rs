@@ -3,6 +3,7 @@
 //! (`{"j1": 0.1, "j5": [0.2, 0.05]}`; a cylindrical joint takes `[θ, d]`).
 
 use crate::chain::Chain;
+use crate::error::{NameError, did_you_mean};
 use crate::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
@@ -68,12 +69,15 @@ pub enum InputError {
         found: &'static str,
     },
     /// An object names a joint the chain does not have.
-    #[error("{what}: no joint named '{name}'")]
+    #[error("{what}: no joint named '{name}'{}", did_you_mean(.suggestion))]
     UnknownJoint {
         /// `q`, `qd` or `qdd`.
         what: &'static str,
         /// The name given.
         name: String,
+        /// The chain's joint whose name is closest, if it is close enough to be a likely typo
+        /// (see [`closest_name`](crate::error::closest_name)).
+        suggestion: Option<String>,
     },
     /// An object names a joint that takes no entry of `q` (fixed or mimic).
     #[error("{what}: joint '{name}' is {reason} and takes no value")]
@@ -172,9 +176,13 @@ pub fn joint_vector_from_json(
         Value::Object(map) => {
             let mut out = vec![0.0; chain.dof()];
             for (name, v) in map {
-                let id = chain.joint_id(name).map_err(|_| InputError::UnknownJoint {
+                let id = chain.joint_id(name).map_err(|e| InputError::UnknownJoint {
                     what,
                     name: name.clone(),
+                    suggestion: match e {
+                        NameError::UnknownJoint { suggestion, .. } => suggestion,
+                        NameError::UnknownLink { .. } => None,
+                    },
                 })?;
                 let joint = chain.joint(id);
                 let Some(index) = joint.q_index() else {

@@ -412,7 +412,8 @@ fn urdf_topology_errors_name_the_joint_or_link() {
         &ModelError::UnknownLink {
             joint: "j1".into(),
             role: "child",
-            link: "ghost".into()
+            link: "ghost".into(),
+            suggestion: None
         }
     );
     assert!(matches!(
@@ -420,6 +421,27 @@ fn urdf_topology_errors_name_the_joint_or_link() {
         ModelError::TwoParents { link, first, second } if link == "b" && first == "j2" && second == "j3"
     ));
     assert_eq!(model(&load("urdf/no_links.urdf")), &ModelError::NoLinks);
+    // A misspelt link name is most likely the declared link one letter away.
+    let misspelt = r#"<robot name="r"><link name="base"/><link name="forearm"/>
+        <joint name="j1" type="revolute"><parent link="base"/><child link="foreram"/>
+        <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#;
+    let e = Chain::from_urdf_str(misspelt).unwrap_err();
+    let e = model(&e);
+    assert!(
+        matches!(&e, ModelError::UnknownLink { link, suggestion: Some(s), .. } if link == "foreram" && s == "forearm"),
+        "{e:?}"
+    );
+    assert!(e.to_string().ends_with("(did you mean 'forearm'?)"), "{e}");
+    let mimic = r#"<robot name="r"><link name="base"/><link name="a"/><link name="b"/>
+        <joint name="elbow" type="revolute"><parent link="base"/><child link="a"/>
+        <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+        <joint name="follower" type="revolute"><parent link="a"/><child link="b"/><mimic joint="Elbow"/>
+        <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#;
+    let e = Chain::from_urdf_str(mimic).unwrap_err();
+    assert!(
+        matches!(model(&e), ModelError::UnknownMimicTarget { target, suggestion: Some(s), .. } if target == "Elbow" && s == "elbow"),
+        "{e:?}"
+    );
 }
 
 #[test]
@@ -432,7 +454,8 @@ fn urdf_mimic_errors() {
         model(&load("urdf/mimic_missing.urdf")),
         &ModelError::UnknownMimicTarget {
             joint: "ja".into(),
-            target: "nowhere".into()
+            target: "nowhere".into(),
+            suggestion: None
         }
     );
 }

@@ -8,7 +8,7 @@ use kinechain::input::{
     BatchLine, InputError, joint_vector_from_json, joint_vector_from_str, parse_batch_line,
 };
 use kinechain::{
-    Chain, Data, LimitPolicy, StateError, forward_accelerations, forward_kinematics,
+    Chain, Data, LimitPolicy, NameError, StateError, forward_accelerations, forward_kinematics,
     forward_kinematics_to, forward_velocities,
 };
 use serde_json::json;
@@ -426,4 +426,46 @@ fn data_of_another_chain_is_a_programming_error() {
     let planar = robot("planar3.yaml");
     let mut data = Data::new(&planar);
     let _ = forward_kinematics(&puma, &mut data, &[0.0; 6]);
+}
+
+/// An unknown name draws a suggestion only when one name of the chain is clearly the closest:
+/// one or two letters off (a third of the name's length), letter case ignored, and no other
+/// name as close.
+#[test]
+fn unknown_names_suggest_only_a_clear_typo() {
+    let panda = robot("panda.urdf");
+    let suggestion = |e: NameError| match e {
+        NameError::UnknownLink { suggestion, .. } | NameError::UnknownJoint { suggestion, .. } => {
+            suggestion
+        }
+        other => panic!("{other:?}"),
+    };
+    for (name, expected) in [
+        ("panda_hnd", Some("panda_hand")),
+        ("PANDA_HAND_TCP", Some("panda_hand_tcp")),
+        ("panda_link9", None), // panda_link0 … panda_link8 are all one letter away
+        ("gripper", None),
+    ] {
+        let e = panda.link_id(name).unwrap_err();
+        assert_eq!(suggestion(e.clone()).as_deref(), expected, "{name}");
+        let hint = expected.map(|s| format!(" (did you mean '{s}'?)"));
+        assert_eq!(
+            e.to_string(),
+            format!("no link named '{name}'{}", hint.unwrap_or_default())
+        );
+    }
+    for (name, expected) in [
+        ("panda_jiont4", Some("panda_joint4")),
+        ("panda_joint9", None),
+        ("elbow", None),
+    ] {
+        let e = panda.joint_id(name).unwrap_err();
+        assert_eq!(suggestion(e).as_deref(), expected, "{name}");
+        // A joint vector keyed by name carries the same suggestion.
+        let e = joint_vector_from_json(&panda, &json!({ name: 0.0 }), "q").unwrap_err();
+        assert!(
+            matches!(&e, InputError::UnknownJoint { suggestion, .. } if suggestion.as_deref() == expected),
+            "{e:?}"
+        );
+    }
 }
