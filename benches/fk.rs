@@ -4,8 +4,6 @@
 //! `cargo bench --bench fk` (ids like `fk/pose/panda`); the run-time-against-error table is
 //! `cargo bench --bench table`.
 
-mod naive;
-
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use kinechain::measure::configurations;
 use kinechain::{
@@ -130,6 +128,7 @@ fn k_baseline(c: &mut Criterion) {
 
 /// The textbook method: multiply eq. (2.129)-style 4×4 matrices with `nalgebra::Matrix4`.
 fn naive_baseline(c: &mut Criterion) {
+    use kinechain::joint::{DhConvention, dh_transform};
     use kinechain::nalgebra::Matrix4;
     // The Panda arm's modified DH table (robots/panda_mdh.yaml): (a, alpha, d).
     let rows: [(f64, f64, f64); 7] = [
@@ -153,7 +152,7 @@ fn naive_baseline(c: &mut Criterion) {
             let q = black_box(&qs[i]);
             let mut t = Matrix4::<f64>::identity();
             for (k, &(a, alpha, d)) in rows.iter().enumerate() {
-                let m = naive::dh_matrix(true, a, alpha, d, q[k]);
+                let m = dh_transform(DhConvention::Modified, a, alpha, d, q[k]);
                 t *= m;
                 out[k + 1] = t;
             }

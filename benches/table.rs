@@ -12,7 +12,6 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
-mod naive;
 
 use common::*;
 use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision};
@@ -261,64 +260,17 @@ fn rows_for(path: &Path) -> Vec<Row> {
 
     // The textbook method for DH models: products of 4×4 nalgebra matrices (eq. 2.129 or the
     // standard form), sin/cos from the standard library.
-    if reference["model"]["kind"] == "dh" {
-        let m = &reference["model"];
-        let modified = m["convention"] == "modified";
-        let base = Matrix4::from_fn(|i, j| matrix4(&m["base"])[i][j]);
-        let tool = Matrix4::from_fn(|i, j| matrix4(&m["tool"])[i][j]);
-        let rows: Vec<(bool, f64, f64, f64, f64)> = m["joints"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|j| {
-                let revolute = j["type"] == "revolute";
-                (
-                    revolute,
-                    num(&j["a"]),
-                    num(&j["alpha"]),
-                    num(&j["d"]),
-                    num(&j["theta"]),
-                )
-            })
-            .collect();
-        let offsets: Vec<f64> = m["joints"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|j| num(&j["offset"]))
-            .collect();
-        let eval = move |q: &[f64], out: &mut Vec<Matrix4<f64>>| {
-            out.clear();
-            let mut t = base;
-            out.push(t);
-            for (k, &(revolute, a, alpha, d, theta)) in rows.iter().enumerate() {
-                let (th, dd) = if revolute {
-                    (q[k] + offsets[k], d)
-                } else {
-                    (theta, q[k] + offsets[k])
-                };
-                let a_i = naive::dh_matrix(modified, a, alpha, dd, th);
-                t *= a_i;
-                out.push(t);
-            }
-            out.push(t * tool);
-        };
+    if let Some(product) = DhProduct::of(&reference) {
+        let index: Vec<usize> = names.iter().map(|name| product.index(name)).collect();
+        let eval = move |q: &[f64], out: &mut Vec<Matrix4<f64>>| product.poses(q, out);
         let mut out = Vec::new();
         let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
             .iter()
             .map(|q| {
                 eval(q, &mut out);
-                // Link names of DH references: link0..linkn, tool.
-                names
+                index
                     .iter()
-                    .map(|name| {
-                        let i = if name == "tool" {
-                            out.len() - 1
-                        } else {
-                            name.trim_start_matches("link").parse().unwrap()
-                        };
-                        std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)]))
-                    })
+                    .map(|&i| std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)])))
                     .collect()
             })
             .collect();

@@ -94,7 +94,7 @@ fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
     let v = normalize_axis(axis).unwrap_or([0.0, 0.0, 1.0]);
     let u = Unit::new_unchecked(Vector3::from(v));
     Transform::from_parts(
-        &crate::joint::rotation_about(&u, theta),
+        &crate::rotation::rotation_matrix(&u, theta),
         &(u.into_inner() * d),
     )
 }

@@ -2,7 +2,8 @@
 //! along it, the cylindrical joint of Shabana eq. (2.119) of which revolute and prismatic joints
 //! are the special cases with `d` or `θ` constant.
 
-use nalgebra::{Matrix3, Matrix4, Unit, Vector3};
+use crate::rotation::{rotation_matrix, skew};
+use nalgebra::{Matrix4, Unit, Vector3};
 
 /// The closed set of joint kinds kinechain models.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -192,18 +193,58 @@ impl Motion {
     }
 }
 
-/// The skew matrix `[v]x` of eq. (2.6): `[v]x u = v × u`.
-#[must_use]
-pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+/// Which Denavit–Hartenberg convention a row follows (see [`dh_transform`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DhConvention {
+    /// Distal: joint `i` turns about z of frame `i − 1`, `T = Rz(θ) Tz(d) Tx(a) Rx(α)`.
+    Standard,
+    /// Proximal (Craig), the form of eq. 2.129: `T = Rx(α) Tx(a) Rz(θ) Tz(d)`, where `a` and `α`
+    /// are Craig's `a_{i−1}`, `α_{i−1}`.
+    Modified,
 }
 
-/// Rodrigues' formula (eq. 2.112): `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`.
+/// The 4×4 transform `parent_from_link` of one Denavit–Hartenberg row, written out entry by entry
+/// (eq. 2.129 for the modified convention). For a revolute joint θ is `q` plus the row's offset,
+/// for a prismatic one `d` is.
+///
+/// The chain does not multiply these matrices: a DH file loads into a constant placement and a
+/// joint about z (eq. 2.119), which composes in fewer operations and gives the same transform
+/// within rounding.
+///
+/// ```
+/// use kinechain::joint::{DhConvention, dh_transform};
+/// // Modified DH: the x-axis twist and offset come first, so θ turns about the new z.
+/// let t = dh_transform(DhConvention::Modified, 0.5, std::f64::consts::FRAC_PI_2, 0.2, 0.0);
+/// approx::assert_relative_eq!(t.fixed_view::<3, 1>(0, 3).into_owned(),
+///     kinechain::nalgebra::Vector3::new(0.5, -0.2, 0.0), epsilon = 1e-16);
+/// ```
 #[must_use]
-pub fn rotation_about(axis: &Unit<Vector3<f64>>, theta: f64) -> Matrix3<f64> {
-    let k = skew(axis);
-    let half = (0.5 * theta).sin();
-    Matrix3::identity() + k * theta.sin() + k * k * (2.0 * half * half)
+#[inline]
+pub fn dh_transform(
+    convention: DhConvention,
+    a: f64,
+    alpha: f64,
+    d: f64,
+    theta: f64,
+) -> Matrix4<f64> {
+    let (st, ct) = theta.sin_cos();
+    let (sa, ca) = alpha.sin_cos();
+    #[rustfmt::skip]
+    let t = match convention {
+        DhConvention::Modified => Matrix4::new(
+            ct,      -st,      0.0, a,
+            st * ca, ct * ca,  -sa, -d * sa,
+            st * sa, ct * sa,  ca,  d * ca,
+            0.0,     0.0,      0.0, 1.0,
+        ),
+        DhConvention::Standard => Matrix4::new(
+            ct,  -st * ca, st * sa,  a * ct,
+            st,  ct * ca,  -ct * sa, a * st,
+            0.0, sa,       ca,       d,
+            0.0, 0.0,      0.0,      1.0,
+        ),
+    };
+    t
 }
 
 /// The 4×4 transform of a joint that turns by θ about and slides by `d` along the unit axis `v`
@@ -213,7 +254,7 @@ pub fn rotation_about(axis: &Unit<Vector3<f64>>, theta: f64) -> Matrix3<f64> {
 pub fn joint_transform(axis: &Unit<Vector3<f64>>, theta: f64, d: f64) -> Matrix4<f64> {
     let mut t = Matrix4::identity();
     t.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&rotation_about(axis, theta));
+        .copy_from(&rotation_matrix(axis, theta));
     t.fixed_view_mut::<3, 1>(0, 3)
         .copy_from(&(axis.into_inner() * d));
     t
@@ -229,7 +270,7 @@ pub fn joint_transform_dot(
     d_dot: f64,
 ) -> Matrix4<f64> {
     let mut t = Matrix4::zeros();
-    let a_dot = skew(axis) * rotation_about(axis, theta) * theta_dot; // eq. (2.117)
+    let a_dot = skew(axis) * rotation_matrix(axis, theta) * theta_dot; // eq. (2.117)
     t.fixed_view_mut::<3, 3>(0, 0).copy_from(&a_dot);
     t.fixed_view_mut::<3, 1>(0, 3)
         .copy_from(&(axis.into_inner() * d_dot));
@@ -247,7 +288,7 @@ pub fn joint_transform_ddot(
     d_ddot: f64,
 ) -> Matrix4<f64> {
     let k = skew(axis);
-    let a_ddot = rotation_about(axis, theta) * (k * theta_ddot + k * k * (theta_dot * theta_dot));
+    let a_ddot = rotation_matrix(axis, theta) * (k * theta_ddot + k * k * (theta_dot * theta_dot));
     let mut t = Matrix4::zeros();
     t.fixed_view_mut::<3, 3>(0, 0).copy_from(&a_ddot);
     t.fixed_view_mut::<3, 1>(0, 3)

@@ -32,17 +32,19 @@ pub struct Singular {
 /// the rates it would return exceed 10¹² |ω|.
 pub const RATE_SINGULARITY: f64 = 1e-12;
 
-/// The skew matrix `[v]x` (eq. 2.6).
+/// The skew matrix `[v]x` of eq. 2.6: `[v]x u = v × u`.
 #[must_use]
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    crate::joint::skew(v)
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
-/// Rodrigues' formula (eq. 2.9): `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`, for a unit axis `v`.
-/// The same matrix as the exponential form `exp(θ [v]x)` (eq. 2.26).
+/// Rodrigues' formula (eq. 2.9; for a joint, eq. 2.112): `A = I + [v]x sin θ + 2 [v]x² sin²(θ/2)`,
+/// for a unit axis `v`. The same matrix as the exponential form `exp(θ [v]x)` (eq. 2.26).
 #[must_use]
 pub fn rotation_matrix(axis: &Unit<Vector3<f64>>, angle: f64) -> Matrix3<f64> {
-    crate::joint::rotation_about(axis, angle)
+    let k = skew(axis);
+    let half = (0.5 * angle).sin();
+    Matrix3::identity() + k * angle.sin() + k * k * (2.0 * half * half)
 }
 
 /// Rotation about x (a simple rotation, sec. 2.1).

@@ -175,8 +175,8 @@ fn joint_4x4_forms_equal_the_vector_forms_and_differentiate_t() {
         let u = Vector3::new(u[0], u[1], u[2]);
         let s = chain.joint_screw(joint, &q, &qd, &qdd).unwrap();
         let v = s.axis.into_inner();
-        let a = kinechain::joint::rotation_about(&s.axis, s.theta);
-        let k = kinechain::joint::skew(&v);
+        let a = kinechain::rotation::rotation_matrix(&s.axis, s.theta);
+        let k = kinechain::rotation::skew(&v);
         let uh = Vector4::new(u.x, u.y, u.z, 1.0);
         let r = v * s.d + a * u; // eq. (2.118)
         let r_dot = v * s.d_dot + k * a * u * s.theta_dot; // eq. (2.120)
