@@ -444,6 +444,20 @@ pub enum NameError {
     },
 }
 
+impl NameError {
+    /// The name the caller most likely meant, if one is clearly closest (see [`closest_name`]).
+    #[must_use]
+    pub fn suggestion(&self) -> Option<&str> {
+        match self {
+            NameError::UnknownLink { suggestion, .. }
+            | NameError::UnknownJoint { suggestion, .. } => suggestion.as_deref(),
+        }
+    }
+}
+
+/// The longest name, in characters, for which [`closest_name`] looks for a likely spelling.
+pub const MAX_SUGGESTED_NAME: usize = 256;
+
 /// ` (did you mean 'x'?)` for a suggested name, nothing without one.
 pub(crate) fn did_you_mean(suggestion: &Option<String>) -> String {
     suggestion
@@ -456,6 +470,8 @@ pub(crate) fn did_you_mean(suggestion: &Option<String>) -> String {
 /// substitutions of characters, letter case ignored), if that distance is at most a third of
 /// `name`'s length (and at least 1) and no other candidate is as close: what a misspelt name
 /// most likely meant. With several equally close candidates there is no telling, and `None`.
+/// Names longer than [`MAX_SUGGESTED_NAME`] characters get no suggestion (the distance costs the
+/// product of the two lengths, and a name read from untrusted input may be long).
 ///
 /// ```
 /// use kinechain::error::closest_name;
@@ -470,6 +486,9 @@ pub fn closest_name<'a>(
     name: &str,
     candidates: impl IntoIterator<Item = &'a str>,
 ) -> Option<String> {
+    if name.chars().count() > MAX_SUGGESTED_NAME {
+        return None;
+    }
     let name: Vec<char> = name.chars().flat_map(char::to_lowercase).collect();
     let most = (name.len() / 3).max(1);
     // The closest candidate so far, and whether another one is as close.
@@ -477,6 +496,10 @@ pub fn closest_name<'a>(
     // One row of the edit-distance table, reused for every candidate.
     let mut row: Vec<usize> = Vec::new();
     for candidate in candidates {
+        // The distance is at least the difference in length.
+        if candidate.chars().count().abs_diff(name.len()) > most {
+            continue;
+        }
         let d = edit_distance(&name, candidate, &mut row);
         match best {
             _ if d > most => {}

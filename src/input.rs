@@ -3,7 +3,7 @@
 //! (`{"j1": 0.1, "j5": [0.2, 0.05]}`; a cylindrical joint takes `[θ, d]`).
 
 use crate::chain::Chain;
-use crate::error::{NameError, did_you_mean};
+use crate::error::did_you_mean;
 use crate::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
@@ -179,10 +179,7 @@ pub fn joint_vector_from_json(
                 let id = chain.joint_id(name).map_err(|e| InputError::UnknownJoint {
                     what,
                     name: name.clone(),
-                    suggestion: match e {
-                        NameError::UnknownJoint { suggestion, .. } => suggestion,
-                        NameError::UnknownLink { .. } => None,
-                    },
+                    suggestion: e.suggestion().map(str::to_string),
                 })?;
                 let joint = chain.joint(id);
                 let Some(index) = joint.q_index() else {

@@ -434,12 +434,6 @@ fn data_of_another_chain_is_a_programming_error() {
 #[test]
 fn unknown_names_suggest_only_a_clear_typo() {
     let panda = robot("panda.urdf");
-    let suggestion = |e: NameError| match e {
-        NameError::UnknownLink { suggestion, .. } | NameError::UnknownJoint { suggestion, .. } => {
-            suggestion
-        }
-        other => panic!("{other:?}"),
-    };
     for (name, expected) in [
         ("panda_hnd", Some("panda_hand")),
         ("PANDA_HAND_TCP", Some("panda_hand_tcp")),
@@ -447,7 +441,8 @@ fn unknown_names_suggest_only_a_clear_typo() {
         ("gripper", None),
     ] {
         let e = panda.link_id(name).unwrap_err();
-        assert_eq!(suggestion(e.clone()).as_deref(), expected, "{name}");
+        assert_eq!(e.suggestion(), expected, "{name}");
+        assert!(matches!(e, NameError::UnknownLink { .. }));
         let hint = expected.map(|s| format!(" (did you mean '{s}'?)"));
         assert_eq!(
             e.to_string(),
@@ -460,7 +455,8 @@ fn unknown_names_suggest_only_a_clear_typo() {
         ("elbow", None),
     ] {
         let e = panda.joint_id(name).unwrap_err();
-        assert_eq!(suggestion(e).as_deref(), expected, "{name}");
+        assert_eq!(e.suggestion(), expected, "{name}");
+        assert!(matches!(e, NameError::UnknownJoint { .. }));
         // A joint vector keyed by name carries the same suggestion.
         let e = joint_vector_from_json(&panda, &json!({ name: 0.0 }), "q").unwrap_err();
         assert!(
@@ -468,4 +464,20 @@ fn unknown_names_suggest_only_a_clear_typo() {
             "{e:?}"
         );
     }
+    // A long name gets no suggestion, and costs no more than the length check (a quadratic
+    // distance to every joint would be slow for a name of a megabyte from a batch line).
+    let long = format!("panda_joint1{}", "x".repeat(1 << 20));
+    assert_eq!(panda.joint_id(&long).unwrap_err().suggestion(), None);
+    let near_limit = "a".repeat(kinechain::error::MAX_SUGGESTED_NAME - 1);
+    let chain = Chain::from_urdf_str(&format!(
+        r#"<robot name="r"><link name="{near_limit}b"/></robot>"#
+    ))
+    .unwrap();
+    assert_eq!(
+        chain
+            .link_id(&format!("{near_limit}c"))
+            .unwrap_err()
+            .suggestion(),
+        Some(format!("{near_limit}b").as_str())
+    );
 }
