@@ -16,7 +16,6 @@ mod common;
 use common::*;
 use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision};
 use kinechain::measure::Interleaved;
-use kinechain::nalgebra::Matrix4;
 use kinechain::{Data, Isa, LimitPolicy, LinkId, Transform, force_isa, forward_kinematics, isa};
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -262,12 +261,11 @@ fn rows_for(path: &Path) -> Vec<Row> {
     // standard form), sin/cos from the standard library.
     if let Some(product) = DhProduct::of(&reference) {
         let index: Vec<usize> = names.iter().map(|name| product.index(name)).collect();
-        let eval = move |q: &[f64], out: &mut Vec<Matrix4<f64>>| product.poses(q, out);
         let mut out = Vec::new();
         let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
             .iter()
             .map(|q| {
-                eval(q, &mut out);
+                product.poses(q, &mut out);
                 index
                     .iter()
                     .map(|&i| std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)])))
@@ -279,7 +277,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
             poses,
             call: Box::new(move || {
                 for q in qs {
-                    eval(black_box(q), &mut out);
+                    product.poses(black_box(q), &mut out);
                     black_box(&out);
                 }
             }),
