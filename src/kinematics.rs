@@ -12,6 +12,7 @@
 //!
 //! plus [`forward_kinematics_to`] (only the links on the path to one link) and
 //! [`forward_kinematics_incremental`] (only the joints whose `q` changed, and their descendants).
+//! The poses also give each link's geometric Jacobian ([`Poses::jacobian`]).
 //!
 //! # Frames and kinds
 //! Every quantity is expressed in the world (base) frame unless its name says `local`. `v` is the
@@ -156,14 +157,87 @@ impl<'a> Poses<'a> {
             .bodies
             .iter()
             .find(|b| b.joint == joint.index())?;
+        Some(self.axis_of(body))
+    }
+
+    /// A body's joint axis in the world frame: the joint-frame origin and the unit direction.
+    fn axis_of(&self, body: &Body) -> (nalgebra::Point3<f64>, Vector3<f64>) {
         let parent: Transform = match body.parent {
             Some(p) => padded::transform(&self.data.world_from_body[p]),
             None => Transform::IDENTITY,
         };
-        Some((
+        (
             parent.transform_point(&nalgebra::Point3::from(body.pre_frame.p)),
             parent.transform_vector(&Vector3::from(body.axis_in_parent)),
-        ))
+        )
+    }
+
+    /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`]
+    /// matrix `J` with `[v; ω] = J q̇`, where `v` is the velocity of the link-frame origin and `ω`
+    /// the link's angular velocity, both in the world frame (the same quantities as
+    /// [`Velocities::velocity`], in the row order Pinocchio and KDL use: linear rows first).
+    ///
+    /// Column `i` is what entry `i` of `q̇` contributes (eqs. 2.120, 2.121): for a turning joint
+    /// with world axis `z` through `p_j`, `[z × (p − p_j); z]`; for a sliding one `[z; 0]`; a
+    /// cylindrical joint fills two columns, a mimic joint adds its multiplier times its own
+    /// column to its primary's, and joints not between the base and the link leave zeros.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, Data, forward_kinematics, forward_velocities, nalgebra::DVector};
+    /// let chain = Chain::from_file("robots/puma560.yaml")?;
+    /// let mut data = Data::new(&chain);
+    /// let (q, qd) = ([0.1, -0.5, 0.3, 0.2, 0.4, 0.0], [0.3, 0.1, -0.2, 0.5, 0.0, 1.0]);
+    /// let tool = chain.link_id("tool")?;
+    /// let j = forward_kinematics(&chain, &mut data, &q)?.jacobian(tool);
+    /// let twist = j * DVector::from_row_slice(&qd);
+    /// let v = forward_velocities(&chain, &mut data, &q, &qd)?.velocity(tool);
+    /// approx::assert_relative_eq!(twist.fixed_rows::<3>(0).into_owned(), v.v, epsilon = 1e-14);
+    /// approx::assert_relative_eq!(twist.fixed_rows::<3>(3).into_owned(), v.omega, epsilon = 1e-14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn jacobian(&self, link: LinkId) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain.dof());
+        self.jacobian_into(link, &mut j);
+        j
+    }
+
+    /// [`Poses::jacobian`] written into `j`, which is resized to 6 × [`Chain::dof`] if it has
+    /// another shape (so a reused matrix allocates nothing).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
+        let dof = self.chain.dof();
+        if j.ncols() != dof {
+            *j = nalgebra::Matrix6xX::zeros(dof);
+        } else {
+            j.fill(0.0);
+        }
+        let p = self.world_from_link(link).translation();
+        let mut body = self.chain.link(link).body;
+        while let Some(b) = body {
+            let bd = &self.chain.bodies[b];
+            let (p_j, z) = self.axis_of(bd);
+            let turning = z.cross(&(p - p_j.coords));
+            for (rate, linear, angular) in [
+                (bd.theta_rate, turning, z),
+                (bd.d_rate, z, Vector3::zeros()),
+            ] {
+                if rate.scale != 0.0 {
+                    let mut column = j.column_mut(rate.index);
+                    let added = nalgebra::Vector6::new(
+                        linear.x, linear.y, linear.z, angular.x, angular.y, angular.z,
+                    ) * rate.scale;
+                    column += added;
+                }
+            }
+            body = bd.parent;
+        }
     }
 
     /// The frame a link's motion is computed for, and the link's offset from it in world axes:

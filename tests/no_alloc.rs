@@ -60,6 +60,8 @@ fn evaluations_allocate_nothing() {
         }
         let qd = vec![0.1; chain.dof()];
         let tip = chain.end_link();
+        // A Jacobian written into a matrix of the right shape, as a control loop reuses one.
+        let mut jacobian = kinechain::nalgebra::Matrix6xX::zeros(chain.dof());
         let before = allocations();
         for k in 0..100 {
             let mut q = q.clone();
@@ -67,6 +69,8 @@ fn evaluations_allocate_nothing() {
             q[0] += 1e-3 * k as f64;
             let p = forward_kinematics(&chain, &mut data, &q).unwrap();
             std::hint::black_box(p.world_from_link(tip));
+            p.jacobian_into(tip, &mut jacobian);
+            std::hint::black_box(&jacobian);
             let p = forward_kinematics_incremental(&chain, &mut data, &q).unwrap();
             std::hint::black_box(p.world_from_link(tip));
             std::hint::black_box(forward_kinematics_to(&chain, &mut data, &q, tip).unwrap());

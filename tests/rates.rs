@@ -498,3 +498,94 @@ fn end_link_twist_equals_k_jacobian_times_q_dot() {
     }
     assert!(checked > 100, "{checked}");
 }
+
+/// The geometric Jacobian of every link of every bundled robot (mimic and cylindrical joints,
+/// fixed links, links off the path of some joints): `J q̇` is the link's twist from the
+/// velocity recursion (to 1e-13 of the chain's reach per unit rate), and each column is the
+/// central difference of the link's pose in that entry of `q` (to 1e-8): its position's for the
+/// linear rows, `vee(dR/dq Rᵀ)` for the angular ones.
+#[test]
+fn jacobian_columns_are_twists_per_unit_rate() {
+    let mut rng = rng(31);
+    let mut checked = 0;
+    for (name, chain) in robots() {
+        let mut data = Data::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let reach = (0..chain.links().len())
+            .map(|l| {
+                let q = vec![0.0; chain.dof()];
+                let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+                poses
+                    .world_from_link(LinkId::from_index(&chain, l))
+                    .translation()
+                    .norm()
+            })
+            .fold(1.0, f64::max);
+        let mut j = kinechain::nalgebra::Matrix6xX::zeros(0);
+        for _ in 0..3 {
+            let q = random_q(&chain, &mut rng);
+            let qd = random_vec(chain.dof(), 1.0, &mut rng);
+            let twists: Vec<_> = {
+                let vel = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
+                (0..chain.links().len())
+                    .map(|l| vel.velocity(LinkId::from_index(&chain, l)))
+                    .collect()
+            };
+            let jacobians: Vec<_> = {
+                let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+                (0..chain.links().len())
+                    .map(|l| {
+                        poses.jacobian_into(LinkId::from_index(&chain, l), &mut j);
+                        j.clone()
+                    })
+                    .collect()
+            };
+            let h = 1e-6;
+            for i in 0..chain.dof() {
+                let mut q_plus = q.clone();
+                let mut q_minus = q.clone();
+                q_plus[i] += h;
+                q_minus[i] -= h;
+                let plus = poses_at(&chain, &mut data, &q_plus, &qd, &qd, 0.0);
+                let minus = poses_at(&chain, &mut data, &q_minus, &qd, &qd, 0.0);
+                let centre = poses_at(&chain, &mut data, &q, &qd, &qd, 0.0);
+                for l in 0..chain.links().len() {
+                    let column = jacobians[l].column(i);
+                    let dp = (plus[l].translation() - minus[l].translation()) / (2.0 * h);
+                    let dr = (plus[l].rotation() - minus[l].rotation()) / (2.0 * h)
+                        * centre[l].rotation().transpose();
+                    let omega = Vector3::new(dr[(2, 1)], dr[(0, 2)], dr[(1, 0)]);
+                    for k in 0..3 {
+                        assert!(
+                            (column[k] - dp[k]).abs() < 1e-8 * reach,
+                            "{name} link {l} q[{i}]: linear {column} against {dp}"
+                        );
+                        assert!(
+                            (column[3 + k] - omega[k]).abs() < 1e-8,
+                            "{name} link {l} q[{i}]: angular {column} against {omega}"
+                        );
+                    }
+                }
+            }
+            let qd = kinechain::nalgebra::DVector::from_column_slice(&qd);
+            let rate = qd.amax().max(1e-300);
+            for (l, (jl, twist)) in jacobians.iter().zip(&twists).enumerate() {
+                let ours = jl * &qd;
+                for k in 0..3 {
+                    assert!(
+                        (ours[k] - twist.v[k]).abs() < 1e-13 * reach * rate * chain.dof() as f64,
+                        "{name} link {l}: v {ours} against {}",
+                        twist.v
+                    );
+                    assert!(
+                        (ours[3 + k] - twist.omega[k]).abs() < 1e-13 * rate * chain.dof() as f64,
+                        "{name} link {l}: ω {ours} against {}",
+                        twist.omega
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 300, "{checked}");
+}
