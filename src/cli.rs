@@ -8,7 +8,7 @@ use crate::error::error_chain;
 use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, check_q, forward_accelerations,
-    forward_kinematics, forward_kinematics_to, forward_velocities,
+    forward_kinematics, forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -118,6 +118,10 @@ struct FkArgs {
     /// acceleration when --qd/--qdd are given (repeatable).
     #[arg(long = "point", value_name = "LINK:X,Y,Z", allow_hyphen_values = true)]
     points: Vec<String>,
+    /// The geometric Jacobian of a link: the 6 × dof matrix J with [v; ω] = J q̇, world frame,
+    /// linear rows first, columns in q order (repeatable).
+    #[arg(long = "jacobian", value_name = "LINK")]
+    jacobians: Vec<String>,
     /// Evaluate joint values outside the joints' limits instead of refusing them.
     #[arg(long)]
     ignore_limits: bool,
@@ -617,6 +621,47 @@ fn vec_json(v: &Vector3<f64>) -> Value {
     json!([v.x, v.y, v.z])
 }
 
+/// `{"LINK": [[row], … six rows]}`, rows `v_x, v_y, v_z, ω_x, ω_y, ω_z`, columns in `q` order.
+fn jacobians_json(
+    chain: &Chain,
+    links: &[LinkId],
+    jacobians: &[nalgebra::Matrix6xX<f64>],
+) -> Value {
+    let mut map = Map::new();
+    for (&l, j) in links.iter().zip(jacobians) {
+        let rows: Vec<Value> = j
+            .row_iter()
+            .map(|r| json!(r.iter().collect::<Vec<_>>()))
+            .collect();
+        map.insert(chain.link(l).name().to_string(), Value::Array(rows));
+    }
+    Value::Object(map)
+}
+
+/// `fk --format table`: each Jacobian under a heading naming its link, one row per twist
+/// component.
+fn jacobians_table(
+    chain: &Chain,
+    links: &[LinkId],
+    jacobians: &[nalgebra::Matrix6xX<f64>],
+) -> String {
+    let mut text = String::new();
+    for (&l, j) in links.iter().zip(jacobians) {
+        text.push_str(&format!(
+            "\njacobian of {} ([v; omega] = J qd, columns in q order)",
+            chain.link(l).name()
+        ));
+        for (name, row) in ["v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z"]
+            .iter()
+            .zip(j.row_iter())
+        {
+            let cells: Vec<String> = row.iter().map(|&x| format!("{:>12}", fixed(x))).collect();
+            text.push_str(&format!("\n{name:<8}{}", cells.join(" ")));
+        }
+    }
+    text
+}
+
 fn points_json(chain: &Chain, points: &[Point], results: &[PointResult]) -> Value {
     let list: Vec<Value> = points
         .iter()
@@ -886,6 +931,12 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .iter()
         .map(|p| parse_point(&chain, p))
         .collect::<Result<Vec<_>, _>>()?;
+    let jacobian_links = args
+        .jacobians
+        .iter()
+        .map(|n| chain.link_id(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut jacobians = vec![nalgebra::Matrix6xX::zeros(chain.dof()); jacobian_links.len()];
     let mut results = Vec::with_capacity(chain.links().len());
     let mut point_results = Vec::with_capacity(points.len());
     let mut emit =
@@ -900,17 +951,35 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 &mut point_results,
             )?;
             check_finite(&chain, &results, &points, &point_results)?;
+            if !jacobian_links.is_empty() {
+                // The configuration just evaluated: its poses are reused (`q` compares equal),
+                // or computed in full after a one-link evaluation.
+                let poses = forward_kinematics_incremental(&chain, data, &c.q)?;
+                for (&l, j) in jacobian_links.iter().zip(&mut jacobians) {
+                    poses.jacobian_into(l, j);
+                    if !j.iter().all(|x| x.is_finite()) {
+                        return Err(CliError::NotFinite {
+                            what: "jacobian",
+                            place: format!("link '{}'", chain.link(l).name()),
+                        });
+                    }
+                }
+            }
             let text = match args.format {
                 OutputFormat::Json => {
                     let mut value = results_json(&chain, &results, args.orientation);
                     if !points.is_empty() {
                         value["points"] = points_json(&chain, &points, &point_results);
                     }
+                    if !jacobian_links.is_empty() {
+                        value["jacobians"] = jacobians_json(&chain, &jacobian_links, &jacobians);
+                    }
                     value.to_string()
                 }
                 OutputFormat::Table => {
                     let mut text = results_table(&chain, &results, args.orientation);
                     text.push_str(&points_table(&chain, &points, &point_results));
+                    text.push_str(&jacobians_table(&chain, &jacobian_links, &jacobians));
                     text
                 }
             };
@@ -927,7 +996,8 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         // order, and everything before a bad line is written before its error.
         // (A chain without moving joints has empty configurations, which a flat batch cannot
         // count: its lines go one by one.)
-        let batchable = links.is_empty() && points.is_empty() && chain.dof() > 0;
+        let batchable =
+            links.is_empty() && points.is_empty() && jacobian_links.is_empty() && chain.dof() > 0;
         let mut pending: Vec<f64> = Vec::new();
         // The 1-based line number of each pending configuration.
         let mut pending_lines: Vec<usize> = Vec::new();
@@ -1188,7 +1258,6 @@ fn bench(
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to, single_precision,
     };
-    use crate::kinematics::forward_kinematics_incremental;
     use std::hint::black_box;
 
     let chain = &load(path)?;

@@ -1044,3 +1044,99 @@ fn convert_and_render_write_files() {
     assert!(m.contains("limits"), "{m}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--jacobian LINK` prints the link's 6 × dof Jacobian; times `--qd` it is the printed
+/// velocity of the link (a mimic finger included), in JSON, tables and batch lines alike.
+#[test]
+fn fk_jacobian_times_qd_is_the_printed_velocity() {
+    let robot = "robots/panda.urdf";
+    let (q, qd) = (
+        [0.1, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02],
+        [0.3, -0.2, 0.5, 0.1, -0.6, 0.4, 0.2, 0.05],
+    );
+    let text = |v: &[f64]| serde_json::to_string(v).unwrap();
+    for link in ["panda_hand_tcp", "panda_rightfinger"] {
+        let v = &ok_json(&[
+            "fk",
+            robot,
+            "--q",
+            &text(&q),
+            "--qd",
+            &text(&qd),
+            "--jacobian",
+            link,
+        ])[0];
+        let rows = v["jacobians"][link].as_array().unwrap();
+        assert_eq!(rows.len(), 6);
+        let twist: Vec<f64> = rows
+            .iter()
+            .map(|row| {
+                let row = row.as_array().unwrap();
+                assert_eq!(row.len(), q.len());
+                row.iter()
+                    .zip(&qd)
+                    .map(|(j, qd)| j.as_f64().unwrap() * qd)
+                    .sum()
+            })
+            .collect();
+        let printed = &v["links"][link];
+        for k in 0..3 {
+            assert!(
+                (twist[k] - printed["v"][k].as_f64().unwrap()).abs() < 1e-14,
+                "{link} v"
+            );
+            assert!(
+                (twist[3 + k] - printed["omega"][k].as_f64().unwrap()).abs() < 1e-14,
+                "{link} omega"
+            );
+        }
+    }
+    let table = ok_text(&[
+        "fk",
+        robot,
+        "--q",
+        &text(&q),
+        "--jacobian",
+        "panda_hand",
+        "--format",
+        "table",
+    ]);
+    assert!(table.contains("jacobian of panda_hand"), "{table}");
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("omega_")).count(),
+        3,
+        "{table}"
+    );
+
+    let dir = scratch_dir("jacobian");
+    let batch = dir.join("lines.jsonl");
+    std::fs::write(
+        &batch,
+        format!(
+            "{{\"q\": {}}}\n{{\"q\": {}}}\n",
+            text(&q),
+            text(&[0.5, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02])
+        ),
+    )
+    .unwrap();
+    let lines = ok_json(&[
+        "fk",
+        robot,
+        "--batch",
+        batch.to_str().unwrap(),
+        "--jacobian",
+        "panda_hand",
+    ]);
+    assert_eq!(lines.len(), 2);
+    assert!(
+        lines
+            .iter()
+            .all(|l| l["jacobians"]["panda_hand"].as_array().unwrap().len() == 6)
+    );
+    assert_ne!(lines[0]["jacobians"], lines[1]["jacobians"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        error(&["fk", robot, "--q", &text(&q), "--jacobian", "panda_hnd"])
+            .contains("no link named 'panda_hnd' (did you mean 'panda_hand'?)")
+    );
+}
