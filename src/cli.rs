@@ -622,34 +622,26 @@ fn vec_json(v: &Vector3<f64>) -> Value {
 }
 
 /// `{"LINK": [[row], … six rows]}`, rows `v_x, v_y, v_z, ω_x, ω_y, ω_z`, columns in `q` order.
-fn jacobians_json(
-    chain: &Chain,
-    links: &[LinkId],
-    jacobians: &[nalgebra::Matrix6xX<f64>],
-) -> Value {
+fn jacobians_json(chain: &Chain, jacobians: &[(LinkId, nalgebra::Matrix6xX<f64>)]) -> Value {
     let mut map = Map::new();
-    for (&l, j) in links.iter().zip(jacobians) {
+    for (l, j) in jacobians {
         let rows: Vec<Value> = j
             .row_iter()
             .map(|r| json!(r.iter().collect::<Vec<_>>()))
             .collect();
-        map.insert(chain.link(l).name().to_string(), Value::Array(rows));
+        map.insert(chain.link(*l).name().to_string(), Value::Array(rows));
     }
     Value::Object(map)
 }
 
 /// `fk --format table`: each Jacobian under a heading naming its link, one row per twist
 /// component.
-fn jacobians_table(
-    chain: &Chain,
-    links: &[LinkId],
-    jacobians: &[nalgebra::Matrix6xX<f64>],
-) -> String {
+fn jacobians_table(chain: &Chain, jacobians: &[(LinkId, nalgebra::Matrix6xX<f64>)]) -> String {
     let mut text = String::new();
-    for (&l, j) in links.iter().zip(jacobians) {
+    for (l, j) in jacobians {
         text.push_str(&format!(
             "\njacobian of {} ([v; omega] = J qd, columns in q order)",
-            chain.link(l).name()
+            chain.link(*l).name()
         ));
         for (name, row) in ["v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z"]
             .iter()
@@ -931,12 +923,12 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .iter()
         .map(|p| parse_point(&chain, p))
         .collect::<Result<Vec<_>, _>>()?;
-    let jacobian_links = args
+    // Each link asked for with its Jacobian, rewritten for every configuration.
+    let mut jacobians = args
         .jacobians
         .iter()
-        .map(|n| chain.link_id(n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut jacobians = vec![nalgebra::Matrix6xX::zeros(chain.dof()); jacobian_links.len()];
+        .map(|n| Ok((chain.link_id(n)?, nalgebra::Matrix6xX::zeros(chain.dof()))))
+        .collect::<Result<Vec<_>, CliError>>()?;
     let mut results = Vec::with_capacity(chain.links().len());
     let mut point_results = Vec::with_capacity(points.len());
     let mut emit =
@@ -951,16 +943,16 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                 &mut point_results,
             )?;
             check_finite(&chain, &results, &points, &point_results)?;
-            if !jacobian_links.is_empty() {
+            if !jacobians.is_empty() {
                 // The configuration just evaluated: its poses are reused (`q` compares equal),
                 // or computed in full after a one-link evaluation.
                 let poses = forward_kinematics_incremental(&chain, data, &c.q)?;
-                for (&l, j) in jacobian_links.iter().zip(&mut jacobians) {
-                    poses.jacobian_into(l, j);
+                for (l, j) in &mut jacobians {
+                    poses.jacobian_into(*l, j);
                     if !j.iter().all(|x| x.is_finite()) {
                         return Err(CliError::NotFinite {
                             what: "jacobian",
-                            place: format!("link '{}'", chain.link(l).name()),
+                            place: format!("link '{}'", chain.link(*l).name()),
                         });
                     }
                 }
@@ -971,15 +963,15 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                     if !points.is_empty() {
                         value["points"] = points_json(&chain, &points, &point_results);
                     }
-                    if !jacobian_links.is_empty() {
-                        value["jacobians"] = jacobians_json(&chain, &jacobian_links, &jacobians);
+                    if !jacobians.is_empty() {
+                        value["jacobians"] = jacobians_json(&chain, &jacobians);
                     }
                     value.to_string()
                 }
                 OutputFormat::Table => {
                     let mut text = results_table(&chain, &results, args.orientation);
                     text.push_str(&points_table(&chain, &points, &point_results));
-                    text.push_str(&jacobians_table(&chain, &jacobian_links, &jacobians));
+                    text.push_str(&jacobians_table(&chain, &jacobians));
                     text
                 }
             };
@@ -997,7 +989,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         // (A chain without moving joints has empty configurations, which a flat batch cannot
         // count: its lines go one by one.)
         let batchable =
-            links.is_empty() && points.is_empty() && jacobian_links.is_empty() && chain.dof() > 0;
+            links.is_empty() && points.is_empty() && args.jacobians.is_empty() && chain.dof() > 0;
         let mut pending: Vec<f64> = Vec::new();
         // The 1-based line number of each pending configuration.
         let mut pending_lines: Vec<usize> = Vec::new();
