@@ -7,8 +7,8 @@ use crate::data::{Data, LimitPolicy};
 use crate::error::error_chain;
 use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
-    AccelerationParts, LinkAcceleration, LinkVelocity, check_q, forward_accelerations,
-    forward_kinematics, forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
+    AccelerationParts, LinkAcceleration, LinkVelocity, Poses, check_q, forward_accelerations,
+    forward_kinematics, forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -515,15 +515,47 @@ fn parse_point(chain: &Chain, text: &str) -> Result<Point, CliError> {
     })
 }
 
+/// What `fk` computes for one configuration, in buffers reused from one to the next.
+struct Outputs {
+    /// Per link printed: pose and the rates asked for.
+    links: Vec<LinkResult>,
+    /// Per `--point`.
+    points: Vec<PointResult>,
+    /// Each `--jacobian` link with its matrix.
+    jacobians: Vec<(LinkId, nalgebra::Matrix6xX<f64>)>,
+}
+
+/// Writes each Jacobian of `jacobians` from `poses`; an entry too large for `f64` is an error.
+fn jacobians_from(
+    chain: &Chain,
+    poses: &Poses,
+    jacobians: &mut [(LinkId, nalgebra::Matrix6xX<f64>)],
+) -> Result<(), CliError> {
+    for (l, j) in jacobians {
+        poses.jacobian_into(*l, j);
+        if !j.iter().all(|x| x.is_finite()) {
+            return Err(CliError::NotFinite {
+                what: "jacobian",
+                place: format!("link '{}'", chain.link(*l).name()),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn evaluate(
     chain: &Chain,
     data: &mut Data,
     c: &Configuration,
     links: &[LinkId],
     points: &[Point],
-    results: &mut Vec<LinkResult>,
-    point_results: &mut Vec<PointResult>,
+    out: &mut Outputs,
 ) -> Result<(), CliError> {
+    let Outputs {
+        links: results,
+        points: point_results,
+        jacobians,
+    } = out;
     results.clear();
     point_results.clear();
     let all: Vec<LinkId>;
@@ -535,7 +567,9 @@ fn evaluate(
     };
     match (&c.qd, &c.qdd) {
         (None, Some(_)) => return Err(CliError::QddWithoutQd),
-        (None, None) if !links.is_empty() && points.is_empty() => {
+        // Only the paths to the links asked for, unless a point or a Jacobian needs the poses
+        // view of a whole evaluation.
+        (None, None) if !links.is_empty() && points.is_empty() && jacobians.is_empty() => {
             for &l in wanted {
                 let pose = forward_kinematics_to(chain, data, &c.q, l)?;
                 results.push((l, pose, None, None));
@@ -543,6 +577,7 @@ fn evaluate(
         }
         (None, None) => {
             let poses = forward_kinematics(chain, data, &c.q)?;
+            jacobians_from(chain, &poses, jacobians)?;
             results.extend(
                 wanted
                     .iter()
@@ -561,6 +596,7 @@ fn evaluate(
         }
         (Some(qd), None) => {
             let v = forward_velocities(chain, data, &c.q, qd)?;
+            jacobians_from(chain, &v.poses(), jacobians)?;
             results.extend(
                 wanted
                     .iter()
@@ -577,6 +613,7 @@ fn evaluate(
         }
         (Some(qd), Some(qdd)) => {
             let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
+            jacobians_from(chain, &a.poses(), jacobians)?;
             results.extend(wanted.iter().map(|&l| {
                 (
                     l,
@@ -923,55 +960,39 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         .iter()
         .map(|p| parse_point(&chain, p))
         .collect::<Result<Vec<_>, _>>()?;
-    // Each link asked for with its Jacobian, rewritten for every configuration.
-    let mut jacobians = args
-        .jacobians
-        .iter()
-        .map(|n| Ok((chain.link_id(n)?, nalgebra::Matrix6xX::zeros(chain.dof()))))
-        .collect::<Result<Vec<_>, CliError>>()?;
-    let mut results = Vec::with_capacity(chain.links().len());
-    let mut point_results = Vec::with_capacity(points.len());
+    let mut outputs = Outputs {
+        links: Vec::with_capacity(chain.links().len()),
+        points: Vec::with_capacity(points.len()),
+        jacobians: args
+            .jacobians
+            .iter()
+            .map(|n| Ok((chain.link_id(n)?, nalgebra::Matrix6xX::zeros(chain.dof()))))
+            .collect::<Result<Vec<_>, CliError>>()?,
+    };
     let mut emit =
         |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
-            evaluate(
-                &chain,
-                data,
-                c,
-                &links,
-                &points,
-                &mut results,
-                &mut point_results,
-            )?;
-            check_finite(&chain, &results, &points, &point_results)?;
-            if !jacobians.is_empty() {
-                // The configuration just evaluated: its poses are reused (`q` compares equal),
-                // or computed in full after a one-link evaluation.
-                let poses = forward_kinematics_incremental(&chain, data, &c.q)?;
-                for (l, j) in &mut jacobians {
-                    poses.jacobian_into(*l, j);
-                    if !j.iter().all(|x| x.is_finite()) {
-                        return Err(CliError::NotFinite {
-                            what: "jacobian",
-                            place: format!("link '{}'", chain.link(*l).name()),
-                        });
-                    }
-                }
-            }
+            evaluate(&chain, data, c, &links, &points, &mut outputs)?;
+            let Outputs {
+                links: results,
+                points: point_results,
+                jacobians,
+            } = &outputs;
+            check_finite(&chain, results, &points, point_results)?;
             let text = match args.format {
                 OutputFormat::Json => {
-                    let mut value = results_json(&chain, &results, args.orientation);
+                    let mut value = results_json(&chain, results, args.orientation);
                     if !points.is_empty() {
-                        value["points"] = points_json(&chain, &points, &point_results);
+                        value["points"] = points_json(&chain, &points, point_results);
                     }
                     if !jacobians.is_empty() {
-                        value["jacobians"] = jacobians_json(&chain, &jacobians);
+                        value["jacobians"] = jacobians_json(&chain, jacobians);
                     }
                     value.to_string()
                 }
                 OutputFormat::Table => {
-                    let mut text = results_table(&chain, &results, args.orientation);
-                    text.push_str(&points_table(&chain, &points, &point_results));
-                    text.push_str(&jacobians_table(&chain, &jacobians));
+                    let mut text = results_table(&chain, results, args.orientation);
+                    text.push_str(&points_table(&chain, &points, point_results));
+                    text.push_str(&jacobians_table(&chain, jacobians));
                     text
                 }
             };
@@ -1250,6 +1271,7 @@ fn bench(
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to, single_precision,
     };
+    use crate::kinematics::forward_kinematics_incremental;
     use std::hint::black_box;
 
     let chain = &load(path)?;

@@ -1079,6 +1079,18 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
                     .sum()
             })
             .collect();
+        // The same Jacobian when only that link's pose is asked for.
+        let alone = &ok_json(&[
+            "fk",
+            robot,
+            "--q",
+            &text(&q),
+            "--link",
+            link,
+            "--jacobian",
+            link,
+        ])[0];
+        assert_eq!(alone["jacobians"][link], v["jacobians"][link], "{link}");
         let printed = &v["links"][link];
         for k in 0..3 {
             assert!(
