@@ -464,8 +464,8 @@ fn unknown_names_suggest_only_a_clear_typo() {
             "{e:?}"
         );
     }
-    // A long name gets no suggestion, and costs no more than the length check (a quadratic
-    // distance to every joint would be slow for a name of a megabyte from a batch line).
+    // A megabyte-long name (from a batch line, say) gets no suggestion; a name of the longest
+    // length that is still compared, MAX_SUGGESTED_NAME characters, does.
     let long = format!("panda_joint1{}", "x".repeat(1 << 20));
     assert_eq!(panda.joint_id(&long).unwrap_err().suggestion(), None);
     let near_limit = "a".repeat(kinechain::error::MAX_SUGGESTED_NAME - 1);
