@@ -437,9 +437,11 @@ proptest! {
     }
 }
 
-/// The twist of every leaf link equals `k`'s Jacobian times q̇ (1e-12), for every URDF `k` loads.
+/// For every leaf link of every URDF `k` loads: the link's twist equals `k`'s Jacobian times q̇,
+/// and `Poses::jacobian` equals `k`'s Jacobian times the map from q̇ to the rates of the joints on
+/// the link's path (mimic joints follow their primary), both to 1e-12.
 #[test]
-fn end_link_twist_equals_k_jacobian_times_q_dot() {
+fn end_link_jacobian_and_twist_match_k() {
     let files = k_urdf_files();
     let mut rng = rng(9);
     let mut checked = 0;
@@ -479,7 +481,26 @@ fn end_link_twist_equals_k_jacobian_times_q_dot() {
                 arm.set_joint_positions(&positions).unwrap();
                 let jac = k::jacobian(&arm);
                 let twist = &jac * k::nalgebra::DVector::from_vec(rates);
-                let ours = vel.velocity(chain.link_id(name).unwrap());
+                let link = chain.link_id(name).unwrap();
+                let ours = vel.velocity(link);
+                // Column i of the map: the path joints' rates when only q̇[i] is 1.
+                let map = k::nalgebra::DMatrix::from_fn(ids.len(), chain.dof(), |row, i| {
+                    let mut unit = vec![0.0; chain.dof()];
+                    unit[i] = 1.0;
+                    let s = chain.joint_screw(ids[row], &q, &unit, &unit).unwrap();
+                    s.theta_dot + s.d_dot
+                });
+                let expected = &jac * map;
+                let jacobian = vel.poses().jacobian(link);
+                for (row, col) in (0..6).flat_map(|r| (0..chain.dof()).map(move |c| (r, c))) {
+                    assert!(
+                        (jacobian[(row, col)] - expected[(row, col)]).abs() < 1e-12,
+                        "{} {name} J[({row}, {col})]: {} against k's {}",
+                        path.display(),
+                        jacobian[(row, col)],
+                        expected[(row, col)]
+                    );
+                }
                 for i in 0..3 {
                     assert!(
                         (twist[i] - ours.v[i]).abs() < 1e-12,
