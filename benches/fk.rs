@@ -70,6 +70,15 @@ fn kinechain_modes(c: &mut Criterion) {
                 black_box(a.acceleration(tip));
             })
         });
+        // A user's Jacobian query: the poses, then the tool's Jacobian into a reused matrix.
+        let mut jacobian = kinechain::nalgebra::Matrix6xX::zeros(chain.dof());
+        c.bench_function(&format!("fk/jacobian/{name}"), |b| {
+            b.iter(|| {
+                let p = forward_kinematics(&chain, &mut data, black_box(next())).unwrap();
+                p.jacobian_into(tip, &mut jacobian);
+                black_box(&jacobian);
+            })
+        });
         c.bench_function(&format!("fk/end/{name}"), |b| {
             b.iter(|| {
                 black_box(forward_kinematics_to(&chain, &mut data, black_box(next()), tip).unwrap())
@@ -107,20 +116,35 @@ fn k_baseline(c: &mut Criterion) {
         let robot = k::Chain::<f64>::from_urdf_file(root.join(file)).unwrap();
         // k's joint vector (mimic joints included) for each configuration.
         let names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
-        let qs: Vec<Vec<f64>> = configurations(&chain, 64, 1)
-            .iter()
-            .map(|q| {
-                chain
-                    .positions_by_name(names.iter().map(String::as_str), q)
-                    .unwrap()
-            })
-            .collect();
+        let configs = configurations(&chain, 64, 1);
+        let by_name = |names: &[String]| -> Vec<Vec<f64>> {
+            configs
+                .iter()
+                .map(|q| {
+                    chain
+                        .positions_by_name(names.iter().map(String::as_str), q)
+                        .unwrap()
+                })
+                .collect()
+        };
+        let qs = by_name(&names);
         let mut i = 0;
         c.bench_function(&format!("k/pose/{name}"), |b| {
             b.iter(|| {
                 i = (i + 1) % qs.len();
                 robot.set_joint_positions_unchecked(black_box(&qs[i]));
                 black_box(robot.update_transforms());
+            })
+        });
+        // k's Jacobian is of a serial chain: the path from the root to the tool.
+        let arm = k::SerialChain::from_end(robot.find_link(tool_link(name)).unwrap());
+        let path: Vec<String> = arm.iter_joints().map(|j| j.name.clone()).collect();
+        let path_qs = by_name(&path);
+        c.bench_function(&format!("k/jacobian/{name}"), |b| {
+            b.iter(|| {
+                i = (i + 1) % path_qs.len();
+                arm.set_joint_positions_unchecked(black_box(&path_qs[i]));
+                black_box(k::jacobian(&arm));
             })
         });
     }

@@ -161,15 +161,33 @@ impl<'a> Poses<'a> {
     }
 
     /// A body's joint axis in the world frame: the joint-frame origin and the unit direction.
+    #[inline]
     fn axis_of(&self, body: &Body) -> (nalgebra::Point3<f64>, Vector3<f64>) {
-        let parent: Transform = match body.parent {
-            Some(p) => padded::transform(&self.data.world_from_body[p]),
-            None => Transform::IDENTITY,
-        };
-        (
-            parent.transform_point(&nalgebra::Point3::from(body.pre_frame.p)),
-            parent.transform_vector(&Vector3::from(body.axis_in_parent)),
-        )
+        let (origin, z) = self.axis_entries(body);
+        (origin.into(), z.into())
+    }
+
+    /// [`Poses::axis_of`] on plain arrays, read from the parent's stored frame in place.
+    #[inline(always)]
+    fn axis_entries(&self, body: &Body) -> ([f64; 3], [f64; 3]) {
+        match body.parent {
+            Some(p) => {
+                let parent = &self.data.world_from_body[p];
+                let r = Transform {
+                    r: [
+                        padded::cut(&parent[0]),
+                        padded::cut(&parent[1]),
+                        padded::cut(&parent[2]),
+                    ],
+                    p: [0.0; 3],
+                };
+                (
+                    add3(padded::cut(&parent[3]), r.apply(body.pre_frame.p)),
+                    r.apply(body.axis_in_parent),
+                )
+            }
+            None => (body.pre_frame.p, body.axis_in_parent),
+        }
     }
 
     /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`]
@@ -215,25 +233,23 @@ impl<'a> Poses<'a> {
         let dof = self.chain.dof();
         if j.ncols() != dof {
             *j = nalgebra::Matrix6xX::zeros(dof);
-        } else {
-            j.fill(0.0);
         }
-        let p = self.world_from_link(link).translation();
+        // Column-major: column i is entries 6i..6i + 6. Zeroed whole, then added to entry by
+        // entry (a column can take several terms: a mimic joint's, a cylindrical joint's two).
+        let columns = j.as_mut_slice();
+        columns.fill(0.0);
+        let p = self.world_from_link(link).p;
         let mut body = self.chain.link(link).body;
         while let Some(b) = body {
             let bd = &self.chain.bodies[b];
-            let (p_j, z) = self.axis_of(bd);
-            let turning = z.cross(&(p - p_j.coords));
-            for (rate, linear, angular) in [
-                (bd.theta_rate, turning, z),
-                (bd.d_rate, z, Vector3::zeros()),
-            ] {
+            let (origin, z) = self.axis_entries(bd);
+            let turning = cross3(z, [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]]);
+            for (rate, linear, angular) in [(bd.theta_rate, turning, z), (bd.d_rate, z, [0.0; 3])] {
                 if rate.scale != 0.0 {
-                    let mut column = j.column_mut(rate.index);
-                    let added = nalgebra::Vector6::new(
-                        linear.x, linear.y, linear.z, angular.x, angular.y, angular.z,
-                    ) * rate.scale;
-                    column += added;
+                    let column = &mut columns[6 * rate.index..6 * rate.index + 6];
+                    for (c, x) in column.iter_mut().zip(linear.into_iter().chain(angular)) {
+                        *c += x * rate.scale;
+                    }
                 }
             }
             body = bd.parent;
