@@ -41,7 +41,7 @@ use crate::error::StateError;
 use crate::joint::{Motion, Term};
 use crate::kernel::{self, Lanes};
 use crate::padded::{self, Frame4, Rates4};
-use crate::transform::{Transform, add3, cross3, scale3};
+use crate::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
 use std::ops::Range;
 
@@ -230,24 +230,41 @@ impl<'a> Poses<'a> {
     /// # Panics
     /// If `link` comes from another chain with more links.
     pub fn jacobian_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
+        let p = self.world_from_link(link).p;
+        self.path_columns(link, j, |bd| {
+            let (origin, z) = self.axis_entries(bd);
+            let turning = cross3(z, sub3(p, origin));
+            (join(turning, z), join(z, [0.0; 3]))
+        });
+    }
+
+    /// `j` (resized to 6 × [`Chain::dof`] if it has another shape) ← the sum, over the bodies
+    /// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
+    /// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
+    /// joint's two), and entries of joints off the path stay zero.
+    #[inline(always)]
+    fn path_columns(
+        &self,
+        link: LinkId,
+        j: &mut nalgebra::Matrix6xX<f64>,
+        mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
+    ) {
         let dof = self.chain.dof();
         if j.ncols() != dof {
             *j = nalgebra::Matrix6xX::zeros(dof);
         }
-        // Column-major: column i is entries 6i..6i + 6. Zeroed whole, then added to entry by
-        // entry (a column can take several terms: a mimic joint's, a cylindrical joint's two).
-        let columns = j.as_mut_slice();
-        columns.fill(0.0);
-        let p = self.world_from_link(link).p;
+        // Column-major: column i is entries 6i..6i + 6, zeroed whole, then added to entry by
+        // entry.
+        let entries = j.as_mut_slice();
+        entries.fill(0.0);
         let mut body = self.chain.link(link).body;
         while let Some(b) = body {
             let bd = &self.chain.bodies[b];
-            let (origin, z) = self.axis_entries(bd);
-            let turning = cross3(z, [p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]]);
-            for (rate, linear, angular) in [(bd.theta_rate, turning, z), (bd.d_rate, z, [0.0; 3])] {
+            let (turning, sliding) = columns(bd);
+            for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
                 if rate.scale != 0.0 {
-                    let column = &mut columns[6 * rate.index..6 * rate.index + 6];
-                    for (c, x) in column.iter_mut().zip(linear.into_iter().chain(angular)) {
+                    let column = &mut entries[6 * rate.index..6 * rate.index + 6];
+                    for (c, x) in column.iter_mut().zip(terms) {
                         *c += x * rate.scale;
                     }
                 }
@@ -407,6 +424,72 @@ impl<'a> Velocities<'a> {
     pub fn point(&self, link: LinkId, u_bar: &Vector3<f64>) -> PointVelocity {
         self.poses.point_velocity(link, u_bar, &Vector3::zeros())
     }
+
+    /// The time derivative `J̇` of [`Poses::jacobian`] at the evaluated state, so that the
+    /// link's angular acceleration and the classical acceleration of its origin are
+    /// `[a; α] = J q̈ + J̇ q̇` (eqs. 2.122–2.127); `J̇ q̇` is the part of
+    /// [`Accelerations::acceleration`] that does not come from `q̈`.
+    ///
+    /// Each joint axis is fixed in the frame before its joint, which turns with that frame's
+    /// angular velocity `ω_j`: a turning column `[z × (p − p_j); z]` changes at
+    /// `[ż × (p − p_j) + z × (ṗ − ṗ_j); ż]` with `ż = ω_j × z` (eq. 2.120 for `ṗ_j`, the
+    /// velocity of the axis point), a sliding column `[z; 0]` at `[ż; 0]`.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, Data, forward_accelerations, forward_velocities, nalgebra::DVector};
+    /// let chain = Chain::from_file("robots/stanford.yaml")?; // joint 3 slides
+    /// let mut data = Data::new(&chain);
+    /// let q = [0.1, -0.5, 0.6, 0.2, 0.4, 0.0];
+    /// let (qd, qdd) = ([0.3, 0.1, -0.2, 0.5, 0.0, 1.0], [0.2, -0.4, 0.1, 0.0, 0.3, -0.1]);
+    /// let tool = chain.link_id("tool")?;
+    /// let vel = forward_velocities(&chain, &mut data, &q, &qd)?;
+    /// let (j, j_dot) = (vel.poses().jacobian(tool), vel.jacobian_dot(tool));
+    /// let motion = j * DVector::from_row_slice(&qdd) + j_dot * DVector::from_row_slice(&qd);
+    /// let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd)?.acceleration(tool);
+    /// approx::assert_relative_eq!(motion.fixed_rows::<3>(0).into_owned(), acc.a, epsilon = 1e-14);
+    /// approx::assert_relative_eq!(motion.fixed_rows::<3>(3).into_owned(), acc.alpha, epsilon = 1e-14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn jacobian_dot(&self, link: LinkId) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain().dof());
+        self.jacobian_dot_into(link, &mut j);
+        j
+    }
+
+    /// [`Velocities::jacobian_dot`] written into `j`, which is resized to 6 × [`Chain::dof`] if
+    /// it has another shape (so a reused matrix allocates nothing).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_dot_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
+        let poses = &self.poses;
+        let p = poses.world_from_link(link).p;
+        let p_dot: [f64; 3] = self.velocity(link).v.into();
+        poses.path_columns(link, j, |bd| {
+            let (origin, z) = poses.axis_entries(bd);
+            // The frame before the joint: its angular velocity and its origin's velocity.
+            let (omega, origin_dot) = match bd.parent {
+                Some(parent) => {
+                    let rates = &poses.data.rates[parent];
+                    let frame_origin = padded::cut(&poses.data.world_from_body[parent][3]);
+                    let (omega, v) = (padded::cut(&rates.omega), padded::cut(&rates.v));
+                    (omega, add3(v, cross3(omega, sub3(origin, frame_origin))))
+                }
+                None => ([0.0; 3], [0.0; 3]),
+            };
+            let z_dot = cross3(omega, z);
+            let turning = add3(
+                cross3(z_dot, sub3(p, origin)),
+                cross3(z, sub3(p_dot, origin_dot)),
+            );
+            (join(turning, z_dot), join(z_dot, [0.0; 3]))
+        });
+    }
 }
 
 impl<'a> Accelerations<'a> {
@@ -489,6 +572,12 @@ impl<'a> Accelerations<'a> {
     ) -> PointMotion {
         self.poses.point_motion(link, u_bar, u_bar_dot, u_bar_ddot)
     }
+}
+
+/// Six entries: `a` then `b`.
+#[inline(always)]
+fn join(a: [f64; 3], b: [f64; 3]) -> [f64; 6] {
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
 }
 
 /// Checks length and finiteness of a joint-space vector.

@@ -60,7 +60,8 @@ fn evaluations_allocate_nothing() {
         }
         let qd = vec![0.1; chain.dof()];
         let tip = chain.end_link();
-        // A Jacobian written into a matrix of the right shape, as a control loop reuses one.
+        // A Jacobian (and its rate) written into a matrix of the right shape, as a control loop
+        // reuses one.
         let mut jacobian = kinechain::nalgebra::Matrix6xX::zeros(chain.dof());
         let before = allocations();
         for k in 0..100 {
@@ -76,6 +77,8 @@ fn evaluations_allocate_nothing() {
             std::hint::black_box(forward_kinematics_to(&chain, &mut data, &q, tip).unwrap());
             let v = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
             std::hint::black_box(v.velocity(tip));
+            v.jacobian_dot_into(tip, &mut jacobian);
+            std::hint::black_box(&jacobian);
             let a = forward_accelerations(&chain, &mut data, &q, &qd, &qd).unwrap();
             std::hint::black_box(a.acceleration(tip));
             assert_eq!(
