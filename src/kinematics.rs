@@ -170,6 +170,15 @@ impl<'a> Poses<'a> {
     /// [`Poses::axis_of`] on plain arrays, read from the parent's stored frame in place.
     #[inline(always)]
     fn axis_entries(&self, body: &Body) -> ([f64; 3], [f64; 3]) {
+        let (parent_origin, offset, z) = self.axis_parts(body);
+        (add3(parent_origin, offset), z)
+    }
+
+    /// The parts of a body's joint axis in the world frame: the origin of the frame before the
+    /// joint (the parent body's, or the world's), the joint-frame origin's offset from it in
+    /// world axes, and the unit direction.
+    #[inline(always)]
+    fn axis_parts(&self, body: &Body) -> ([f64; 3], [f64; 3], [f64; 3]) {
         match body.parent {
             Some(p) => {
                 let parent = &self.data.world_from_body[p];
@@ -182,11 +191,12 @@ impl<'a> Poses<'a> {
                     p: [0.0; 3],
                 };
                 (
-                    add3(padded::cut(&parent[3]), r.apply(body.pre_frame.p)),
+                    padded::cut(&parent[3]),
+                    r.apply(body.pre_frame.p),
                     r.apply(body.axis_in_parent),
                 )
             }
-            None => (body.pre_frame.p, body.axis_in_parent),
+            None => ([0.0; 3], body.pre_frame.p, body.axis_in_parent),
         }
     }
 
@@ -471,14 +481,15 @@ impl<'a> Velocities<'a> {
         let p = poses.world_from_link(link).p;
         let p_dot: [f64; 3] = self.velocity(link).v.into();
         poses.path_columns(link, j, |bd| {
-            let (origin, z) = poses.axis_entries(bd);
-            // The frame before the joint: its angular velocity and its origin's velocity.
+            let (parent_origin, offset, z) = poses.axis_parts(bd);
+            let origin = add3(parent_origin, offset);
+            // The frame before the joint turns at ω and its origin moves at v; the axis point
+            // at v + ω × offset (the offset in world axes, not a difference of origins).
             let (omega, origin_dot) = match bd.parent {
                 Some(parent) => {
                     let rates = &poses.data.rates[parent];
-                    let frame_origin = padded::cut(&poses.data.world_from_body[parent][3]);
                     let (omega, v) = (padded::cut(&rates.omega), padded::cut(&rates.v));
-                    (omega, add3(v, cross3(omega, sub3(origin, frame_origin))))
+                    (omega, add3(v, cross3(omega, offset)))
                 }
                 None => ([0.0; 3], [0.0; 3]),
             };
