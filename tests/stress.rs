@@ -366,3 +366,90 @@ fn a_million_incremental_updates() {
     incremental_run(1_000_000);
     println!("10⁶ incremental updates: every checked step bit-identical to a fresh evaluation");
 }
+
+/// Largest errors of the geometric Jacobian and of `J̇ q̇` of every link of `chain` at one state,
+/// against the 256-bit recursion: column `i` of `J` is the twist at `q̇ = eᵢ` (the twist is
+/// linear in `q̇`), and `J̇ q̇` is the acceleration at `q̈ = 0`. The linear rows of `J` in ulps
+/// of `reach`, its angular rows (unit axes) in ulps of 1, `J̇ q̇` in ulps of the largest
+/// component of `a` and of `α` over the links.
+fn jacobian_ulps(chain: &Chain, q: &[f64], qd: &[f64], reach: f64) -> [f64; 3] {
+    let mut data = Data::new(chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let dof = chain.dof();
+    let columns: Vec<Vec<LinkMotion>> = (0..dof)
+        .map(|i| {
+            let unit: Vec<f64> = (0..dof).map(|k| if k == i { 1.0 } else { 0.0 }).collect();
+            link_motion(chain, q, &unit, &vec![0.0; dof])
+        })
+        .collect();
+    let exact = link_motion(chain, q, qd, &vec![0.0; dof]);
+    let vel = kinechain::forward_velocities(chain, &mut data, q, qd).unwrap();
+    let qd = kinechain::nalgebra::DVector::from_row_slice(qd);
+    let (mut linear, mut angular, mut bias) = (0.0_f64, 0.0_f64, [0.0_f64; 2]);
+    let mut largest = [f64::MIN_POSITIVE; 2];
+    for (l, link) in chain.links().iter().enumerate() {
+        let id = chain.link_id(link.name()).unwrap();
+        let j = vel.poses().jacobian(id);
+        for (i, column) in columns.iter().enumerate() {
+            for k in 0..3 {
+                linear = linear.max((j[(k, i)] - column[l].v[k]).abs());
+                angular = angular.max((j[(3 + k, i)] - column[l].omega[k]).abs());
+            }
+        }
+        let j_dot_qd = vel.jacobian_dot(id) * &qd;
+        for k in 0..3 {
+            for (m, (got, want)) in [
+                (j_dot_qd[k], exact[l].a[k]),
+                (j_dot_qd[3 + k], exact[l].alpha[k]),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                bias[m] = bias[m].max((got - want).abs());
+                largest[m] = largest[m].max(want.abs());
+            }
+        }
+    }
+    [
+        linear / (reach * EPS),
+        angular / EPS,
+        (bias[0] / largest[0]).max(bias[1] / largest[1]) / EPS,
+    ]
+}
+
+/// The geometric Jacobian and `J̇ q̇` of every link, on every reference model at its samples and
+/// on every bundled robot at random states, against the 256-bit recursion: within 8 ulps, the
+/// bound the poses are held to.
+#[test]
+fn jacobians_against_the_256_bit_recursion() {
+    let mut worst = [0.0_f64; 3];
+    let mut rng = rng(41);
+    let mut check = |name: &str, chain: &Chain, q: &[f64], rng: &mut rand_chacha::ChaCha8Rng| {
+        let qd = random_vec(chain.dof(), 1.0, rng);
+        let reach = chain.reach().max(f64::MIN_POSITIVE);
+        let e = jacobian_ulps(chain, q, &qd, reach);
+        for (w, x) in worst.iter_mut().zip(e) {
+            *w = w.max(x);
+        }
+        assert!(e.iter().all(|&x| x <= 8.0), "{name}: {e:?} ulps");
+    };
+    for path in reference_files() {
+        let reference = read_json(&path);
+        let chain = reference_chain(&path, &reference);
+        for sample in reference["samples"].as_array().unwrap().iter().take(5) {
+            let q = joint_vector(&chain, &sample["q"]);
+            check(&path.display().to_string(), &chain, &q, &mut rng);
+        }
+    }
+    for path in robot_files() {
+        let chain = Chain::from_file(&path).unwrap();
+        for _ in 0..3 {
+            let q = random_q(&chain, &mut rng);
+            check(&path.display().to_string(), &chain, &q, &mut rng);
+        }
+    }
+    eprintln!(
+        "Jacobian, worst: linear rows {:.2} ulp of the reach, angular rows {:.2} ulp, J̇ q̇ {:.2} ulp",
+        worst[0], worst[1], worst[2]
+    );
+}
