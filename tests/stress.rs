@@ -417,9 +417,9 @@ fn jacobian_ulps(chain: &Chain, q: &[f64], qd: &[f64], reach: f64) -> [f64; 3] {
     ]
 }
 
-/// The geometric Jacobian and `J̇ q̇` of every link, on every reference model at its samples and
-/// on every bundled robot at random states, against the 256-bit recursion: within 8 ulps, the
-/// bound the poses are held to.
+/// The geometric Jacobian and `J̇ q̇` of every link, on every reference model at its samples, on
+/// every bundled robot and on random 10-joint chains at random states, against the 256-bit
+/// recursion: within 8 ulps, the bound the poses are held to.
 #[test]
 fn jacobians_against_the_256_bit_recursion() {
     let mut worst = [0.0_f64; 3];
@@ -447,6 +447,12 @@ fn jacobians_against_the_256_bit_recursion() {
             let q = random_q(&chain, &mut rng);
             check(&path.display().to_string(), &chain, &q, &mut rng);
         }
+    }
+    // Random 10-joint chains of revolute, prismatic and cylindrical joints on random axes.
+    for seed in 0..4 {
+        let chain = random_chain(10, 500 + seed, |_| 0.3, None);
+        let q = random_vec(chain.dof(), 3.0, &mut rng);
+        check(&format!("random chain {seed}"), &chain, &q, &mut rng);
     }
     eprintln!(
         "Jacobian, worst: linear rows {:.2} ulp of the reach, angular rows {:.2} ulp, J̇ q̇ {:.2} ulp",
