@@ -523,10 +523,9 @@ fn end_link_jacobian_and_twist_match_k() {
 
 /// The geometric Jacobian of every link of every bundled robot (mimic and cylindrical joints,
 /// fixed links, links off the path of some joints): `J q̇` is the link's twist from the
-/// velocity recursion (to 2e-15 of the chain's reach per unit rate and joint, about nine rounding
-/// errors), and each column is the
-/// central difference of the link's pose in that entry of `q` (to 1e-8): its position's for the
-/// linear rows, `vee(dR/dq Rᵀ)` for the angular ones.
+/// velocity recursion (to 2e-15 of the chain's reach per unit rate and joint, about nine
+/// rounding errors), and each column is the central difference of the link's pose in that entry
+/// of `q` (to 1e-8): its position's for the linear rows, `vee(dR/dq Rᵀ)` for the angular ones.
 #[test]
 fn jacobian_columns_are_twists_per_unit_rate() {
     let mut rng = rng(31);
@@ -615,8 +614,9 @@ fn jacobian_columns_are_twists_per_unit_rate() {
 
 /// The Jacobian's time derivative on every link of every bundled robot: `J q̈ + J̇ q̇` is the
 /// link's classical acceleration and angular acceleration from the recursion (to 2e-15 of the
-/// reach per unit rate² and joint, about nine rounding errors), and `J̇` is the central difference of `J` along `q̇`,
-/// `(J(q + h q̇) − J(q − h q̇)) / 2h` (to 1e-8 of the reach per unit rate, for h = 1e-6).
+/// reach per unit rate² and joint, about nine rounding errors), and `J̇` is the central
+/// difference of `J` along `q̇`, `(J(q + h q̇) − J(q − h q̇)) / 2h` (to 1e-8 of the reach per unit
+/// rate, for h = 1e-6, where rounding alone is about 1e-10).
 #[test]
 fn jacobian_derivative_gives_the_acceleration_and_the_jacobian_rate() {
     use kinechain::nalgebra::{DVector, Matrix6xX};
