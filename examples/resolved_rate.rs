@@ -23,17 +23,13 @@ fn pose_error(pose: &Transform, target: &Transform) -> Vector6<f64> {
 
 /// The limits of each entry of `q` (a cylindrical joint has two entries and two limits).
 fn limits_of_q(chain: &Chain) -> Vec<Option<Limits>> {
-    let mut limits = Vec::with_capacity(chain.dof());
-    let mut previous = None;
-    let mut within = 0;
-    for (joint, _) in chain.variables() {
-        within = if previous == Some(joint) {
-            within + 1
-        } else {
-            0
-        };
-        previous = Some(joint);
-        limits.push(chain.joint(joint).limits().get(within).copied().flatten());
+    let mut limits = vec![None; chain.dof()];
+    for joint in chain.joints() {
+        if let Some(first) = joint.q_index() {
+            for (k, l) in joint.limits().iter().enumerate() {
+                limits[first + k] = *l;
+            }
+        }
     }
     limits
 }
