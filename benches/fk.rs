@@ -79,6 +79,14 @@ fn kinechain_modes(c: &mut Criterion) {
                 black_box(&jacobian);
             })
         });
+        // The same with velocities and the Jacobian's rate (the bias term of [a; α] = J q̈ + J̇ q̇).
+        c.bench_function(&format!("fk/jacobian_dot/{name}"), |b| {
+            b.iter(|| {
+                let v = forward_velocities(&chain, &mut data, black_box(next()), &qd).unwrap();
+                v.jacobian_dot_into(tip, &mut jacobian);
+                black_box(&jacobian);
+            })
+        });
         c.bench_function(&format!("fk/end/{name}"), |b| {
             b.iter(|| {
                 black_box(forward_kinematics_to(&chain, &mut data, black_box(next()), tip).unwrap())
