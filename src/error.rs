@@ -496,8 +496,15 @@ pub fn closest_name<'a>(
     // One row of the edit-distance table, reused for every candidate.
     let mut row: Vec<usize> = Vec::new();
     for candidate in candidates {
-        // The distance is at least the difference in length.
-        if candidate.chars().count().abs_diff(name.len()) > most {
+        // The distance is at least the difference in length, counted as the distance counts
+        // (after lowercasing, which can lengthen a name: 'İ' becomes two characters).
+        if candidate
+            .chars()
+            .flat_map(char::to_lowercase)
+            .count()
+            .abs_diff(name.len())
+            > most
+        {
             continue;
         }
         let d = edit_distance(&name, candidate, &mut row);

@@ -464,6 +464,14 @@ fn unknown_names_suggest_only_a_clear_typo() {
             "{e:?}"
         );
     }
+    // Lengths are compared after lowercasing, as the distance is: each 'İ' of this link's name
+    // lowercases to two characters, so the misspelt name's ten are one letter from its ten.
+    let dotted = Chain::from_urdf_str(r#"<robot name="r"><link name="İİİİab"/></robot>"#).unwrap();
+    let misspelt: String = "İİİİac".chars().flat_map(char::to_lowercase).collect();
+    assert_eq!(
+        dotted.link_id(&misspelt).unwrap_err().suggestion(),
+        Some("İİİİab")
+    );
     // A megabyte-long name (from a batch line, say) gets no suggestion; a name of the longest
     // length that is still compared, MAX_SUGGESTED_NAME characters, does.
     let long = format!("panda_joint1{}", "x".repeat(1 << 20));
