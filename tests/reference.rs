@@ -41,8 +41,10 @@ fn poses_match_the_reference_for_every_model_sample_and_link() {
 }
 
 /// The textbook evaluation of a DH table, a product of eq. 2.129 matrices
-/// (`joint::dh_transform`), agrees with the independent software's poses as closely as the
-/// chain does, for both conventions (and the Stanford arm's prismatic row).
+/// (`joint::dh_transform`), agrees with the independent software's poses for both conventions
+/// (and the Stanford arm's prismatic row) to 2e-14 of the reach: the double-precision reference
+/// is within 1e-14 of exact on these robots (its README), and the product adds a few ulps
+/// (measured: at most 2.2e-16).
 #[test]
 fn products_of_dh_matrices_match_the_reference() {
     let mut models = 0;
@@ -60,7 +62,7 @@ fn products_of_dh_matrices_match_the_reference() {
                 let m = &out[product.index(name)];
                 let pose = Transform::try_from_homogeneous(m).unwrap();
                 let e = pose_error(&pose, &matrix4(&link["pose"]));
-                assert!(e / scale < 1e-12, "{}: {name}: {e:e}", path.display());
+                assert!(e / scale < 2e-14, "{}: {name}: {e:e}", path.display());
             }
         }
         models += 1;
