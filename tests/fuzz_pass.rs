@@ -143,6 +143,8 @@ fn dh_yaml_loader() {
     run("dh_yaml", 150, |text| {
         if let Ok(chain) = Chain::from_dh_yaml_str(text) {
             checks::evaluate(&chain, &checks::zero(&chain));
+            checks::evaluate(&chain, &checks::turned(&chain));
+            checks::convert(&chain);
         }
     });
 }
@@ -152,6 +154,8 @@ fn urdf_loader() {
     run("urdf", 150, |text| {
         if let Ok(chain) = Chain::from_urdf_str(text) {
             checks::evaluate(&chain, &checks::zero(&chain));
+            checks::evaluate(&chain, &checks::turned(&chain));
+            checks::convert(&chain);
         }
     });
 }
