@@ -7,8 +7,8 @@ use crate::data::{Data, LimitPolicy};
 use crate::error::error_chain;
 use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
-    AccelerationParts, LinkAcceleration, LinkVelocity, Poses, check_q, forward_accelerations,
-    forward_kinematics, forward_kinematics_to, forward_velocities,
+    AccelerationParts, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
+    forward_accelerations, forward_kinematics, forward_kinematics_to, forward_velocities,
 };
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
@@ -119,7 +119,8 @@ struct FkArgs {
     #[arg(long = "point", value_name = "LINK:X,Y,Z", allow_hyphen_values = true)]
     points: Vec<String>,
     /// The geometric Jacobian of a link: the 6 × dof matrix J with [v; ω] = J q̇, world frame,
-    /// linear rows first, columns in q order (repeatable).
+    /// linear rows first, columns in q order (repeatable). With --qd, also its time derivative
+    /// J̇, so that [a; α] = J q̈ + J̇ q̇.
     #[arg(long = "jacobian", value_name = "LINK")]
     jacobians: Vec<String>,
     /// Evaluate joint values outside the joints' limits instead of refusing them.
@@ -521,23 +522,45 @@ struct Outputs {
     links: Vec<LinkResult>,
     /// Per `--point`.
     points: Vec<PointResult>,
-    /// Each `--jacobian` link with its matrix.
-    jacobians: Vec<(LinkId, nalgebra::Matrix6xX<f64>)>,
+    /// Per `--jacobian` link.
+    jacobians: Vec<JacobianResult>,
 }
 
-/// Writes each Jacobian of `jacobians` from `poses`; an entry too large for `f64` is an error.
+/// One `--jacobian` link's matrices, in buffers reused from one configuration to the next.
+struct JacobianResult {
+    link: LinkId,
+    j: nalgebra::Matrix6xX<f64>,
+    /// `J̇`, current when `with_rate` (the configuration has `qd`).
+    j_dot: nalgebra::Matrix6xX<f64>,
+    with_rate: bool,
+}
+
+/// Writes each Jacobian of `jacobians` from `poses`, and its time derivative from `velocities`
+/// when given; an entry too large for `f64` is an error.
 fn jacobians_from(
     chain: &Chain,
     poses: &Poses,
-    jacobians: &mut [(LinkId, nalgebra::Matrix6xX<f64>)],
+    velocities: Option<&Velocities>,
+    jacobians: &mut [JacobianResult],
 ) -> Result<(), CliError> {
-    for (l, j) in jacobians {
-        poses.jacobian_into(*l, j);
-        if !j.iter().all(|x| x.is_finite()) {
+    for r in jacobians {
+        let place = || format!("link '{}'", chain.link(r.link).name());
+        poses.jacobian_into(r.link, &mut r.j);
+        if !r.j.iter().all(|x| x.is_finite()) {
             return Err(CliError::NotFinite {
                 what: "jacobian",
-                place: format!("link '{}'", chain.link(*l).name()),
+                place: place(),
             });
+        }
+        r.with_rate = velocities.is_some();
+        if let Some(v) = velocities {
+            v.jacobian_dot_into(r.link, &mut r.j_dot);
+            if !r.j_dot.iter().all(|x| x.is_finite()) {
+                return Err(CliError::NotFinite {
+                    what: "jacobian rate",
+                    place: place(),
+                });
+            }
         }
     }
     Ok(())
@@ -577,7 +600,7 @@ fn evaluate(
         }
         (None, None) => {
             let poses = forward_kinematics(chain, data, &c.q)?;
-            jacobians_from(chain, &poses, jacobians)?;
+            jacobians_from(chain, &poses, None, jacobians)?;
             results.extend(
                 wanted
                     .iter()
@@ -596,7 +619,7 @@ fn evaluate(
         }
         (Some(qd), None) => {
             let v = forward_velocities(chain, data, &c.q, qd)?;
-            jacobians_from(chain, &v.poses(), jacobians)?;
+            jacobians_from(chain, &v.poses(), Some(&v), jacobians)?;
             results.extend(
                 wanted
                     .iter()
@@ -613,7 +636,7 @@ fn evaluate(
         }
         (Some(qd), Some(qdd)) => {
             let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
-            jacobians_from(chain, &a.poses(), jacobians)?;
+            jacobians_from(chain, &a.poses(), Some(&a.velocities()), jacobians)?;
             results.extend(wanted.iter().map(|&l| {
                 (
                     l,
@@ -658,34 +681,49 @@ fn vec_json(v: &Vector3<f64>) -> Value {
     json!([v.x, v.y, v.z])
 }
 
-/// `{"LINK": [[row], … six rows]}`, rows `v_x, v_y, v_z, ω_x, ω_y, ω_z`, columns in `q` order.
-fn jacobians_json(chain: &Chain, jacobians: &[(LinkId, nalgebra::Matrix6xX<f64>)]) -> Value {
-    let mut map = Map::new();
-    for (l, j) in jacobians {
-        let rows: Vec<Value> = j
-            .row_iter()
+/// Adds `"jacobians": {"LINK": [[row], … six rows]}` to `value`, rows `v_x, v_y, v_z, ω_x, ω_y,
+/// ω_z`, columns in `q` order; with rates, `"jacobian_dots"` the same way for `J̇`.
+fn jacobians_json(chain: &Chain, jacobians: &[JacobianResult], value: &mut Value) {
+    let rows = |m: &nalgebra::Matrix6xX<f64>| -> Value {
+        m.row_iter()
             .map(|r| json!(r.iter().collect::<Vec<_>>()))
+            .collect()
+    };
+    let name = |r: &JacobianResult| chain.link(r.link).name().to_string();
+    value["jacobians"] = jacobians.iter().map(|r| (name(r), rows(&r.j))).collect();
+    if jacobians.iter().any(|r| r.with_rate) {
+        value["jacobian_dots"] = jacobians
+            .iter()
+            .map(|r| (name(r), rows(&r.j_dot)))
             .collect();
-        map.insert(chain.link(*l).name().to_string(), Value::Array(rows));
     }
-    Value::Object(map)
 }
 
-/// `fk --format table`: each Jacobian under a heading naming its link, one row per twist
-/// component.
-fn jacobians_table(chain: &Chain, jacobians: &[(LinkId, nalgebra::Matrix6xX<f64>)]) -> String {
+/// `fk --format table`: each Jacobian (and `J̇`, with rates) under a heading naming its link,
+/// one row per twist component.
+fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult]) -> String {
     let mut text = String::new();
-    for (l, j) in jacobians {
-        text.push_str(&format!(
-            "\njacobian of {} ([v; omega] = J qd, columns in q order)",
-            chain.link(*l).name()
-        ));
+    let mut block = |heading: String, m: &nalgebra::Matrix6xX<f64>| {
+        text.push_str(&heading);
         for (name, row) in ["v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z"]
             .iter()
-            .zip(j.row_iter())
+            .zip(m.row_iter())
         {
             let cells: Vec<String> = row.iter().map(|&x| format!("{:>12}", fixed(x))).collect();
             text.push_str(&format!("\n{name:<8}{}", cells.join(" ")));
+        }
+    };
+    for r in jacobians {
+        let link = chain.link(r.link).name();
+        block(
+            format!("\njacobian of {link} ([v; omega] = J qd, columns in q order)"),
+            &r.j,
+        );
+        if r.with_rate {
+            block(
+                format!("\njacobian rate of {link} ([a; alpha] = J qdd + Jdot qd)"),
+                &r.j_dot,
+            );
         }
     }
     text
@@ -966,7 +1004,14 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         jacobians: args
             .jacobians
             .iter()
-            .map(|n| Ok((chain.link_id(n)?, nalgebra::Matrix6xX::zeros(chain.dof()))))
+            .map(|n| {
+                Ok(JacobianResult {
+                    link: chain.link_id(n)?,
+                    j: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    with_rate: false,
+                })
+            })
             .collect::<Result<Vec<_>, CliError>>()?,
     };
     let mut emit =
@@ -985,7 +1030,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
                         value["points"] = points_json(&chain, &points, point_results);
                     }
                     if !jacobians.is_empty() {
-                        value["jacobians"] = jacobians_json(&chain, jacobians);
+                        jacobians_json(&chain, jacobians, &mut value);
                     }
                     value.to_string()
                 }

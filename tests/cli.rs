@@ -1047,6 +1047,22 @@ fn convert_and_render_write_files() {
 
 /// `--jacobian LINK` prints the link's 6 × dof Jacobian; times `--qd` it is the printed
 /// velocity of the link (a mimic finger included), in JSON, tables and batch lines alike.
+/// The matrix printed as `rows` (a JSON array of six rows) times `x`.
+fn times(rows: &Value, x: &[f64]) -> Vec<f64> {
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 6);
+    rows.iter()
+        .map(|row| {
+            let row = row.as_array().unwrap();
+            assert_eq!(row.len(), x.len());
+            row.iter()
+                .zip(x)
+                .map(|(j, x)| j.as_f64().unwrap() * x)
+                .sum()
+        })
+        .collect()
+}
+
 #[test]
 fn fk_jacobian_times_qd_is_the_printed_velocity() {
     let robot = "robots/panda.urdf";
@@ -1066,19 +1082,9 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
             "--jacobian",
             link,
         ])[0];
-        let rows = v["jacobians"][link].as_array().unwrap();
-        assert_eq!(rows.len(), 6);
-        let twist: Vec<f64> = rows
-            .iter()
-            .map(|row| {
-                let row = row.as_array().unwrap();
-                assert_eq!(row.len(), q.len());
-                row.iter()
-                    .zip(&qd)
-                    .map(|(j, qd)| j.as_f64().unwrap() * qd)
-                    .sum()
-            })
-            .collect();
+        let twist = times(&v["jacobians"][link], &qd);
+        // With rates, J̇ as well; without (below), none.
+        assert!(v.get("jacobian_dots").is_some(), "{v}");
         // The same Jacobian when only that link's pose is asked for.
         let alone = &ok_json(&[
             "fk",
@@ -1091,6 +1097,7 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
             link,
         ])[0];
         assert_eq!(alone["jacobians"][link], v["jacobians"][link], "{link}");
+        assert!(alone.get("jacobian_dots").is_none(), "{alone}");
         let printed = &v["links"][link];
         for k in 0..3 {
             assert!(
@@ -1150,5 +1157,67 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
     assert!(
         error(&["fk", robot, "--q", &text(&q), "--jacobian", "panda_hnd"])
             .contains("no link named 'panda_hnd' (did you mean 'panda_hand'?)")
+    );
+}
+
+/// `J q̈ + J̇ q̇` from the printed matrices is the printed acceleration: `J̇` is the derivative
+/// of the printed `J` that the acceleration recursion implies.
+#[test]
+fn fk_jacobian_rate_gives_the_printed_acceleration() {
+    let robot = "robots/panda.urdf";
+    let (q, qd, qdd) = (
+        [0.1, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02],
+        [0.3, -0.2, 0.5, 0.1, -0.6, 0.4, 0.2, 0.05],
+        [-0.4, 0.6, 0.1, -0.3, 0.5, -0.2, 0.3, -0.1],
+    );
+    let text = |v: &[f64]| serde_json::to_string(v).unwrap();
+    for link in ["panda_hand_tcp", "panda_leftfinger"] {
+        let v = &ok_json(&[
+            "fk",
+            robot,
+            "--q",
+            &text(&q),
+            "--qd",
+            &text(&qd),
+            "--qdd",
+            &text(&qdd),
+            "--jacobian",
+            link,
+        ])[0];
+        let (j_qdd, j_dot_qd) = (
+            times(&v["jacobians"][link], &qdd),
+            times(&v["jacobian_dots"][link], &qd),
+        );
+        let printed = &v["links"][link];
+        // The library's bound (2e-15 of the 1.4 m reach per unit rate² and joint, 8 joints,
+        // rates up to 0.6) and the rounding of the two printed products.
+        for k in 0..3 {
+            for (i, name) in [(k, "a"), (3 + k, "alpha")] {
+                let want = printed[name][k].as_f64().unwrap();
+                let got = j_qdd[i] + j_dot_qd[i];
+                assert!(
+                    (got - want).abs() < 2e-14,
+                    "{link} {name}: {got} against {want}"
+                );
+            }
+        }
+    }
+    let table = ok_text(&[
+        "fk",
+        robot,
+        "--q",
+        &text(&q),
+        "--qd",
+        &text(&qd),
+        "--jacobian",
+        "panda_hand",
+        "--format",
+        "table",
+    ]);
+    assert!(table.contains("jacobian rate of panda_hand"), "{table}");
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("omega_")).count(),
+        6,
+        "{table}"
     );
 }

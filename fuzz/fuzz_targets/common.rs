@@ -30,7 +30,11 @@ pub fn evaluate(chain: &Chain, q: &[f64]) {
     let full: Vec<Transform> = ids.iter().map(|&id| poses.world_from_link(id)).collect();
     for (pose, link) in full.iter().zip(chain.links()) {
         // Overflow to infinity is possible for absurd finite inputs (1e300 m links); NaN is not.
-        assert!(!entries(pose).any(f64::is_nan), "NaN pose for {}", link.name());
+        assert!(
+            !entries(pose).any(f64::is_nan),
+            "NaN pose for {}",
+            link.name()
+        );
     }
     let moderate = full.iter().all(|p| entries(p).all(|x| x.abs() < MODERATE));
     for &id in &ids {
@@ -79,7 +83,10 @@ pub fn evaluate(chain: &Chain, q: &[f64]) {
                 let j = acc.velocities().jacobian_dot(id);
                 let v = acc.velocity(id);
                 let bounded = v.omega.iter().chain(v.v.iter()).all(|x| x.abs() < MODERATE);
-                assert!(!bounded || !j.iter().any(|x| x.is_nan()), "NaN Jacobian rate");
+                assert!(
+                    !bounded || !j.iter().any(|x| x.is_nan()),
+                    "NaN Jacobian rate"
+                );
             }
         }
     }
@@ -96,7 +103,9 @@ pub fn convert(chain: &Chain) {
 
 /// Bit for bit, NaN included.
 fn same(a: &Transform, b: &Transform) -> bool {
-    entries(a).zip(entries(b)).all(|(x, y)| x.to_bits() == y.to_bits())
+    entries(a)
+        .zip(entries(b))
+        .all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 fn entries(t: &Transform) -> impl Iterator<Item = f64> {
