@@ -1063,12 +1063,15 @@ fn times(rows: &Value, x: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// `J q̇` from the printed Jacobian is the printed velocity, and `J q̈ + J̇ q̇` with the printed
+/// `J̇` the printed acceleration.
 #[test]
-fn fk_jacobian_times_qd_is_the_printed_velocity() {
+fn fk_jacobians_give_the_printed_velocity_and_acceleration() {
     let robot = "robots/panda.urdf";
-    let (q, qd) = (
+    let (q, qd, qdd) = (
         [0.1, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02],
         [0.3, -0.2, 0.5, 0.1, -0.6, 0.4, 0.2, 0.05],
+        [-0.4, 0.6, 0.1, -0.3, 0.5, -0.2, 0.3, -0.1],
     );
     let text = |v: &[f64]| serde_json::to_string(v).unwrap();
     for link in ["panda_hand_tcp", "panda_rightfinger"] {
@@ -1079,12 +1082,16 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
             &text(&q),
             "--qd",
             &text(&qd),
+            "--qdd",
+            &text(&qdd),
             "--jacobian",
             link,
         ])[0];
         let twist = times(&v["jacobians"][link], &qd);
-        // With rates, J̇ as well; without (below), none.
-        assert!(v.get("jacobian_dots").is_some(), "{v}");
+        let (j_qdd, j_dot_qd) = (
+            times(&v["jacobians"][link], &qdd),
+            times(&v["jacobian_dots"][link], &qd),
+        );
         // The same Jacobian when only that link's pose is asked for.
         let alone = &ok_json(&[
             "fk",
@@ -1098,16 +1105,22 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
         ])[0];
         assert_eq!(alone["jacobians"][link], v["jacobians"][link], "{link}");
         assert!(alone.get("jacobian_dots").is_none(), "{alone}");
+        // The library's bounds (2e-15 of the 1.4 m reach per unit rate (squared, for J̇ q̇)
+        // and joint; 8 joints, rates up to 0.6) and the rounding of the printed products.
         let printed = &v["links"][link];
         for k in 0..3 {
-            assert!(
-                (twist[k] - printed["v"][k].as_f64().unwrap()).abs() < 1e-14,
-                "{link} v"
-            );
-            assert!(
-                (twist[3 + k] - printed["omega"][k].as_f64().unwrap()).abs() < 1e-14,
-                "{link} omega"
-            );
+            for (i, name, got, bound) in [
+                (k, "v", twist[k], 1e-14),
+                (3 + k, "omega", twist[3 + k], 1e-14),
+                (k, "a", j_qdd[k] + j_dot_qd[k], 2e-14),
+                (3 + k, "alpha", j_qdd[3 + k] + j_dot_qd[3 + k], 2e-14),
+            ] {
+                let want = printed[name][k].as_f64().unwrap();
+                assert!(
+                    (got - want).abs() < bound,
+                    "{link} {name}[{i}]: {got} against {want}"
+                );
+            }
         }
     }
     let table = ok_text(&[
@@ -1115,15 +1128,18 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
         robot,
         "--q",
         &text(&q),
+        "--qd",
+        &text(&qd),
         "--jacobian",
         "panda_hand",
         "--format",
         "table",
     ]);
     assert!(table.contains("jacobian of panda_hand"), "{table}");
+    assert!(table.contains("jacobian rate of panda_hand"), "{table}");
     assert_eq!(
         table.lines().filter(|l| l.starts_with("omega_")).count(),
-        3,
+        6,
         "{table}"
     );
 
@@ -1157,67 +1173,5 @@ fn fk_jacobian_times_qd_is_the_printed_velocity() {
     assert!(
         error(&["fk", robot, "--q", &text(&q), "--jacobian", "panda_hnd"])
             .contains("no link named 'panda_hnd' (did you mean 'panda_hand'?)")
-    );
-}
-
-/// `J q̈ + J̇ q̇` from the printed matrices is the printed acceleration: `J̇` is the derivative
-/// of the printed `J` that the acceleration recursion implies.
-#[test]
-fn fk_jacobian_rate_gives_the_printed_acceleration() {
-    let robot = "robots/panda.urdf";
-    let (q, qd, qdd) = (
-        [0.1, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02],
-        [0.3, -0.2, 0.5, 0.1, -0.6, 0.4, 0.2, 0.05],
-        [-0.4, 0.6, 0.1, -0.3, 0.5, -0.2, 0.3, -0.1],
-    );
-    let text = |v: &[f64]| serde_json::to_string(v).unwrap();
-    for link in ["panda_hand_tcp", "panda_leftfinger"] {
-        let v = &ok_json(&[
-            "fk",
-            robot,
-            "--q",
-            &text(&q),
-            "--qd",
-            &text(&qd),
-            "--qdd",
-            &text(&qdd),
-            "--jacobian",
-            link,
-        ])[0];
-        let (j_qdd, j_dot_qd) = (
-            times(&v["jacobians"][link], &qdd),
-            times(&v["jacobian_dots"][link], &qd),
-        );
-        let printed = &v["links"][link];
-        // The library's bound (2e-15 of the 1.4 m reach per unit rate² and joint, 8 joints,
-        // rates up to 0.6) and the rounding of the two printed products.
-        for k in 0..3 {
-            for (i, name) in [(k, "a"), (3 + k, "alpha")] {
-                let want = printed[name][k].as_f64().unwrap();
-                let got = j_qdd[i] + j_dot_qd[i];
-                assert!(
-                    (got - want).abs() < 2e-14,
-                    "{link} {name}: {got} against {want}"
-                );
-            }
-        }
-    }
-    let table = ok_text(&[
-        "fk",
-        robot,
-        "--q",
-        &text(&q),
-        "--qd",
-        &text(&qd),
-        "--jacobian",
-        "panda_hand",
-        "--format",
-        "table",
-    ]);
-    assert!(table.contains("jacobian rate of panda_hand"), "{table}");
-    assert_eq!(
-        table.lines().filter(|l| l.starts_with("omega_")).count(),
-        6,
-        "{table}"
     );
 }
