@@ -170,7 +170,8 @@ pub enum CliError {
         "{what} of {place} overflows f64 (not finite): the joint values or rates are too large"
     )]
     NotFinite {
-        /// The quantity (`pose`, `omega`, `v`, `alpha`, `a`, `velocity`, `acceleration`).
+        /// The quantity (`pose`, `omega`, `v`, `alpha`, `a`, `velocity`, `acceleration`, `jacobian`,
+        /// `jacobian rate`).
         what: &'static str,
         /// `link 'NAME'` or `point NAME (x, y, z)`.
         place: String,

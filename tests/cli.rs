@@ -680,6 +680,18 @@ fn results_that_overflow_are_errors() {
     assert!(m.contains("pose of link 'link2' overflows"), "{m}");
     let m = error(&["fk", robot, "--q", "[1, 1]", "--qd", "[1e308, 1e308]"]);
     assert!(m.contains("v of link 'link2' overflows"), "{m}");
+    // A turning rate whose lever arm takes the velocity, and so J̇, past the range.
+    let args = [
+        "fk",
+        "robots/planar3.yaml",
+        "--q",
+        "[0, 0, 0]",
+        "--jacobian",
+        "link3",
+    ];
+    let m = error(&[&args[..], &["--qd", "[1e308, 0, 0]"]].concat());
+    assert!(m.contains("jacobian rate of link 'link3' overflows"), "{m}");
+    ok_json(&[&args[..], &["--qd", "[1e307, 0, 0]"]].concat());
     let m = error(&[
         "fk",
         robot,
