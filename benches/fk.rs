@@ -226,8 +226,8 @@ fn batches(c: &mut Criterion) {
 fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
     use kinechain::batch::{
-        BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_par,
-        forward_kinematics_batch_to, single_precision,
+        BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_fold,
+        forward_kinematics_batch_par, forward_kinematics_batch_to, single_precision,
     };
     let qs: Vec<f64> = configurations(chain, n, 2).concat();
     let mut data = BatchData::new(chain);
@@ -246,6 +246,24 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     for (id, evaluate) in all_links {
         group.bench_function(id, |b| {
             b.iter(|| black_box(evaluate(chain, &mut data, black_box(&qs)).unwrap().len()))
+        });
+    }
+    // Every link's poses, folded block by block while in cache (the fold only counts them).
+    for (id, parallel) in [("fold_1_thread", false), ("fold_all_threads", true)] {
+        group.bench_function(id, |b| {
+            b.iter(|| {
+                let count = |n: usize, _, poses: BatchPoses<'_>| n + poses.len();
+                forward_kinematics_batch_fold(
+                    chain,
+                    black_box(&qs),
+                    LimitPolicy::Ignore,
+                    parallel,
+                    || 0,
+                    count,
+                    |a, b| a + b,
+                )
+                .unwrap()
+            })
         });
     }
     // Only the end link's pose, per configuration.

@@ -289,6 +289,120 @@ pub fn forward_kinematics_batch_par<'a>(
     Ok(BatchPoses { chain, data })
 }
 
+/// Bytes of frames a block of [`forward_kinematics_batch_fold`] writes at most (unless one chunk
+/// of eight configurations needs more): they stay in a core's second-level cache while the
+/// block is folded.
+const FOLD_BLOCK_BYTES: usize = 256 * 1024;
+
+/// Configurations per block of [`forward_kinematics_batch_fold`] for `chain`: a multiple of
+/// [`LANES`] whose frames fit [`FOLD_BLOCK_BYTES`] (one chunk for a chain too long for two).
+#[must_use]
+pub fn fold_block_len(chain: &Chain) -> usize {
+    let chunk_bytes = chain.bodies.len().max(1) * std::mem::size_of::<Frame<Lanes>>();
+    (FOLD_BLOCK_BYTES / chunk_bytes).max(1) * LANES
+}
+
+/// Poses of every link for each configuration of `qs` (row-major), folded block by block into a
+/// result while each block's frames are still in cache: `fold(acc, first, poses)` receives the
+/// poses of configurations `first .. first + poses.len()` ([`fold_block_len`] per block, fewer
+/// in the last), and with `parallel` the blocks are spread over rayon's global pool, each thread
+/// folding its own run of blocks from `identity()` into buffers of its own, and the threads'
+/// results are combined with `reduce` in the order of their blocks (so `reduce` must be
+/// associative, and `identity()` neutral for it). Batches of fewer than [`PARALLEL_WORK`] joint
+/// evaluations stay on the calling thread.
+///
+/// For large batches this is the fast way to use every link's pose: [`forward_kinematics_batch`]
+/// keeps every frame of the batch (96 bytes per body and configuration), and beyond a few
+/// thousand configurations it is bound by writing them to memory, which two threads share; here
+/// the frames never leave the cache. The poses are those of [`forward_kinematics_batch`], bit for
+/// bit.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it, and
+/// with `parallel` some after it, may have been folded; their result is dropped.
+///
+/// # Examples
+/// ```
+/// use kinechain::{Chain, LimitPolicy, batch::forward_kinematics_batch_fold};
+/// let chain = Chain::from_file("robots/planar3.yaml")?;
+/// let tip = chain.link_id("link3")?;
+/// let qs: Vec<f64> = (0..1000).flat_map(|i| [0.001 * i as f64, 0.0, 0.0]).collect();
+/// // The highest point the tip reaches.
+/// let highest = forward_kinematics_batch_fold(
+///     &chain,
+///     &qs,
+///     LimitPolicy::Enforce,
+///     true,
+///     || f64::NEG_INFINITY,
+///     |top, _first, poses| {
+///         (0..poses.len()).fold(top, |top, i| top.max(poses.world_from_link(i, tip).translation().y))
+///     },
+///     f64::max,
+/// )?;
+/// approx::assert_relative_eq!(highest, 9.0 * 0.999f64.sin());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn forward_kinematics_batch_fold<T: Send>(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    parallel: bool,
+    identity: impl Fn() -> T + Sync + Send,
+    fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
+    reduce: impl Fn(T, T) -> T + Sync + Send,
+) -> Result<T, BatchError> {
+    // The length is checked once for the whole batch, so that blocks hold whole configurations.
+    configurations(chain, qs)?;
+    let block = fold_block_len(chain);
+    let rows = block * chain.dof();
+    let buffers = || {
+        let mut data = BatchData::new(chain);
+        data.set_limit_policy(policy);
+        data
+    };
+    // Folds block `i` into `acc`.
+    let step = |data: &mut BatchData, acc: T, (i, qs): (usize, &[f64])| {
+        let first = i * block;
+        match forward_kinematics_batch(chain, data, qs) {
+            Ok(poses) => Ok(fold(acc, first, poses)),
+            Err(e) => Err(BatchError {
+                index: first + e.index,
+                ..e
+            }),
+        }
+    };
+    if !(parallel && worth_parallel(qs, chain.dof(), chain.bodies.len())) {
+        let mut data = buffers();
+        return qs
+            .chunks(rows)
+            .enumerate()
+            .try_fold(identity(), |acc, block| step(&mut data, acc, block));
+    }
+    // Each of a thread's runs of blocks allocates and fills its own buffers: at most about
+    // four runs per thread.
+    let runs = 4 * rayon::current_num_threads();
+    qs.par_chunks(rows)
+        .enumerate()
+        .with_min_len(qs.len().div_ceil(rows).div_ceil(runs))
+        .fold(
+            || (buffers(), Ok(identity())),
+            // Once a block fails, the rest of this thread's run is skipped.
+            |(mut data, acc), block| {
+                let acc = acc.and_then(|acc| step(&mut data, acc, block));
+                (data, acc)
+            },
+        )
+        .map(|(_, acc)| acc)
+        .reduce(
+            || Ok(identity()),
+            // The earlier run's error comes first: a run stops at its first bad block.
+            |a, b| match (a, b) {
+                (Ok(a), Ok(b)) => Ok(reduce(a, b)),
+                (Err(e), _) | (Ok(_), Err(e)) => Err(e),
+            },
+        )
+}
+
 /// The pose of `link` in configuration `index` of `len`, from `body_columns(b)`, the padded
 /// columns of the frame of the link's body `b` in that configuration.
 #[inline]

@@ -4,9 +4,10 @@ mod common;
 
 use common::*;
 use kinechain::batch::{
-    BatchData, forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
+    BatchData, BatchError, fold_block_len, forward_kinematics_batch, forward_kinematics_batch_fold,
+    forward_kinematics_batch_par, forward_kinematics_batch_to,
 };
-use kinechain::{Chain, LimitPolicy, StateError};
+use kinechain::{Chain, LimitPolicy, LinkId, StateError, Transform};
 
 #[test]
 fn batches_equal_single_evaluations_bit_for_bit() {
@@ -258,4 +259,106 @@ fn batches_of_a_chain_without_moving_joints_are_refused() {
     let mut data = kinechain::Data::new(&chain);
     let poses = kinechain::forward_kinematics(&chain, &mut data, &[]).unwrap();
     assert_eq!(poses.world_from_link(tool).translation().z, 1.0);
+}
+
+/// Every link's poses of the blocks a batch is folded in, in order.
+type Blocks = Vec<(usize, Vec<Transform>)>;
+
+/// `forward_kinematics_batch_fold` collecting every pose, block by block.
+fn folded(chain: &Chain, qs: &[f64], parallel: bool) -> Result<Blocks, BatchError> {
+    let links: Vec<LinkId> = (0..chain.links().len())
+        .map(|l| chain.link_id(chain.links()[l].name()).unwrap())
+        .collect();
+    forward_kinematics_batch_fold(
+        chain,
+        qs,
+        LimitPolicy::Ignore,
+        parallel,
+        Vec::new,
+        |mut blocks: Blocks, first, poses| {
+            let all = (0..poses.len())
+                .flat_map(|i| links.iter().map(move |&l| poses.world_from_link(i, l)))
+                .collect();
+            blocks.push((first, all));
+            blocks
+        },
+        |mut a, b| {
+            a.extend(b);
+            a
+        },
+    )
+}
+
+/// Folding a batch block by block, on one thread or on the pool, hands every configuration's
+/// poses over once, in blocks of `fold_block_len` in order, with the bits of the whole batch.
+#[test]
+fn folded_blocks_equal_the_batch_bit_for_bit() {
+    let mut rng = rng(9);
+    for (file, n) in [
+        ("panda.urdf", 2_500),
+        ("ur5.yaml", 3_500),
+        ("snake50.yaml", 450),
+    ] {
+        let chain = Chain::from_file(robots_dir().join(file)).unwrap();
+        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let mut data = BatchData::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        let whole = forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
+        let block = fold_block_len(&chain);
+        assert_eq!(block % 8, 0, "{file}");
+        assert!(
+            n > 3 * block,
+            "{file}: {n} configurations in blocks of {block}"
+        );
+        for parallel in [false, true] {
+            let blocks = folded(&chain, &qs, parallel).unwrap();
+            assert_eq!(blocks.len(), n.div_ceil(block), "{file}");
+            for (b, (first, poses)) in blocks.iter().enumerate() {
+                assert_eq!(*first, b * block, "{file}");
+                let links = chain.links().len();
+                assert_eq!(poses.len(), block.min(n - first) * links, "{file}");
+                for (k, pose) in poses.iter().enumerate() {
+                    let (i, l) = (first + k / links, k % links);
+                    let want =
+                        whole.world_from_link(i, chain.link_id(chain.links()[l].name()).unwrap());
+                    assert_eq!(
+                        *pose, want,
+                        "{file}, configuration {i}, parallel {parallel}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// A folded batch names its first bad configuration, whichever block and thread meets it, and
+/// refuses a batch of incomplete rows before folding anything.
+#[test]
+fn folded_batches_name_the_first_bad_configuration() {
+    let chain = Chain::from_file(robots_dir().join("panda.urdf")).unwrap();
+    let block = fold_block_len(&chain);
+    let n = 9 * block;
+    let mut rng = rng(10);
+    let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
+    let dof = chain.dof();
+    for bad in [
+        [0, 7 * block + 3],
+        [3 * block + 1, 7 * block],
+        [n - 1, n - 1],
+    ] {
+        let mut qs = qs.clone();
+        for (k, &i) in bad.iter().enumerate() {
+            qs[i * dof + k] = f64::NAN;
+        }
+        for parallel in [false, true] {
+            let e = folded(&chain, &qs, parallel).unwrap_err();
+            assert_eq!(e.index, bad[0], "parallel {parallel}");
+            assert!(matches!(e.source, StateError::NonFinite { .. }), "{e:?}");
+        }
+    }
+    for parallel in [false, true] {
+        let e = folded(&chain, &qs[..qs.len() - 1], parallel).unwrap_err();
+        assert_eq!(e.index, n - 1);
+        assert!(matches!(e.source, StateError::WrongLength { .. }), "{e:?}");
+    }
 }
