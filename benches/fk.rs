@@ -266,6 +266,24 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
             })
         });
     }
+    // Reading every link's pose of every configuration of an evaluated batch (no evaluation).
+    let links: Vec<_> = (0..chain.links().len())
+        .map(|l| chain.link_id(chain.links()[l].name()).unwrap())
+        .collect();
+    let mut read_data = BatchData::new(chain);
+    read_data.set_limit_policy(LimitPolicy::Ignore);
+    let poses = forward_kinematics_batch(chain, &mut read_data, &qs).unwrap();
+    group.bench_function("read_all_links", |b| {
+        b.iter(|| {
+            let mut sum = 0.0;
+            for i in 0..poses.len() {
+                for &l in &links {
+                    sum += poses.world_from_link(i, l).translation().x;
+                }
+            }
+            black_box(sum)
+        })
+    });
     // Only the end link's pose, per configuration.
     let end = chain.end_link();
     for (id, parallel) in [("end_link_1_thread", false), ("end_link_all_threads", true)] {

@@ -40,6 +40,9 @@ pub(crate) trait Col: Copy {
     /// All four entries.
     fn store(self, out: &mut [f64; 4]);
     fn splat(x: f64) -> Self;
+    /// The vector of `e`, put together in registers (for entries loaded one by one: a vector
+    /// load of entries just stored one by one waits for every store).
+    fn from_entries(e: [f64; 4]) -> Self;
     /// `a * b + c`, entry by entry.
     fn mul_add(a: Self, b: Self, c: Self) -> Self;
     fn mul(a: Self, b: Self) -> Self;
@@ -146,6 +149,10 @@ impl<A: Arith> Col for Portable<A> {
     #[inline(always)]
     fn splat(x: f64) -> Self {
         Portable([x; 4], std::marker::PhantomData)
+    }
+    #[inline(always)]
+    fn from_entries(e: [f64; 4]) -> Self {
+        Portable(e, std::marker::PhantomData)
     }
     #[inline(always)]
     fn mul_add(a: Self, b: Self, c: Self) -> Self {
@@ -257,6 +264,11 @@ impl Col for Avx {
     fn splat(x: f64) -> Self {
         use std::arch::x86_64::_mm256_set1_pd;
         Avx(unsafe { _mm256_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn from_entries(e: [f64; 4]) -> Self {
+        use std::arch::x86_64::_mm256_set_pd;
+        Avx(unsafe { _mm256_set_pd(e[3], e[2], e[1], e[0]) })
     }
     #[inline(always)]
     fn mul_add(a: Self, b: Self, c: Self) -> Self {

@@ -6,7 +6,7 @@
 //! configuration, to the last bit on the same instruction set.
 
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, ZTail};
+use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZTail};
 use crate::data::LimitPolicy;
 use crate::error::StateError;
 use crate::joint::Term;
@@ -186,11 +186,9 @@ impl BatchPoses<'_> {
     #[must_use]
     #[inline]
     pub fn world_from_link(&self, index: usize, link: LinkId) -> Transform {
-        lane_pose(self.chain, self.data.len, link, index, |b| {
-            lane_columns(
-                &self.data.frames[(index / LANES) * self.data.bodies + b],
-                index,
-            )
+        lane_pose(self.chain, self.data.len, link, index, |b, offset| {
+            let f = &self.data.frames[(index / LANES) * self.data.bodies + b];
+            lane_link_pose(f, index % LANES, offset)
         })
     }
 }
@@ -403,36 +401,37 @@ pub fn forward_kinematics_batch_fold<T: Send>(
         )
 }
 
-/// The pose of `link` in configuration `index` of `len`, from `body_columns(b)`, the padded
-/// columns of the frame of the link's body `b` in that configuration.
+/// The pose of `link` in configuration `index` of `len`: `pose(b, offset)`, the frame of the
+/// link's body `b` in that configuration followed by the link's offset.
 #[inline]
-fn lane_pose(
+pub(crate) fn lane_pose(
     chain: &Chain,
     len: usize,
     link: LinkId,
     index: usize,
-    body_columns: impl FnOnce(usize) -> [[f64; 4]; 4],
+    pose: impl FnOnce(usize, &Placement) -> Transform,
 ) -> Transform {
     assert!(index < len, "configuration {index} of {len}");
     let l = chain.link(link);
     let Some(b) = l.body else {
         return l.offset.to_transform();
     };
-    padded::link_pose(&body_columns(b), &l.offset)
+    pose(b, &l.offset)
 }
 
-/// The padded columns of configuration `index`'s frame in `f`, the frames of its chunk.
-#[inline]
-fn lane_columns(f: &Frame<Lanes>, index: usize) -> [[f64; 4]; 4] {
-    let lane = index % LANES;
-    let column = |c: &[Lanes; 3]| [c[0].0[lane], c[1].0[lane], c[2].0[lane], 0.0];
-    [
-        column(&f.r[0]),
-        column(&f.r[1]),
-        column(&f.r[2]),
-        column(&f.p),
-    ]
+/// `f`'s frame in lane `lane` followed by `offset`, as [`padded::link_pose`] composes it.
+#[inline(always)]
+fn lane_link_pose_generic<A: Arith>(
+    f: &Frame<Lanes>,
+    lane: usize,
+    offset: &Placement,
+) -> Transform {
+    let lane = lane % LANES;
+    let column = |c: usize| if c < 3 { &f.r[c] } else { &f.p };
+    padded::link_pose_from_entries::<A>(|c, i| column(c)[i].0[lane], offset)
 }
+
+fma_dispatch!(avx2 fn lane_link_pose(f: &Frame<Lanes>, lane: usize, offset: &Placement) -> Transform => lane_link_pose_generic);
 
 /// Runs `eval(check, buffers, c0, out)` for each group of `per_item` chunks of `qs` (its
 /// first chunk `c0`, in chunks of [`LANES`]) and its output `out` on rayon's pool (one pass over
@@ -527,8 +526,8 @@ impl BatchLinkPoses<'_> {
     #[must_use]
     #[inline]
     pub fn world_from_link(&self, index: usize) -> Transform {
-        lane_pose(self.chain, self.data.len, self.link, index, |_| {
-            lane_columns(&self.data.link_frames[index / LANES], index)
+        lane_pose(self.chain, self.data.len, self.link, index, |_, offset| {
+            lane_link_pose(&self.data.link_frames[index / LANES], index % LANES, offset)
         })
     }
 }

@@ -41,11 +41,12 @@ use super::{
     transpose_chunk, worth_parallel,
 };
 use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, LinkId};
+use crate::chain::{Body, Chain, LinkId, Placement};
 use crate::data::LimitPolicy;
 use crate::joint::Term;
 use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
 use crate::kinematics::all_valid;
+use crate::padded;
 use crate::transform::Transform;
 use crate::trig;
 use rayon::prelude::*;
@@ -452,11 +453,9 @@ impl BatchPoses<'_> {
     #[must_use]
     #[inline]
     pub fn world_from_link(&self, index: usize, link: LinkId) -> Transform {
-        lane_pose(self.chain, self.data.len, link, index, |b| {
-            lane_columns(
-                &self.data.frames[(index / WIDTH) * self.data.bodies + b],
-                index,
-            )
+        lane_pose(self.chain, self.data.len, link, index, |b, offset| {
+            let f = &self.data.frames[(index / WIDTH) * self.data.bodies + b];
+            lane_link_pose(f, index % WIDTH, offset)
         })
     }
 }
@@ -477,31 +476,22 @@ impl BatchLinkPoses<'_> {
     #[must_use]
     #[inline]
     pub fn world_from_link(&self, index: usize) -> Transform {
-        lane_pose(self.chain, self.data.len, self.link, index, |_| {
-            lane_columns(&self.data.link_frames[index / WIDTH], index)
+        lane_pose(self.chain, self.data.len, self.link, index, |_, offset| {
+            lane_link_pose(&self.data.link_frames[index / WIDTH], index % WIDTH, offset)
         })
     }
 }
 
-/// The padded `f64` columns of configuration `index`'s frame in `f`, the frames of its chunk.
-#[inline]
-fn lane_columns(f: &Frame<F16>, index: usize) -> [[f64; 4]; 4] {
-    let lane = index % WIDTH;
-    let column = |c: &[F16; 3]| {
-        [
-            f64::from(c[0].0[lane]),
-            f64::from(c[1].0[lane]),
-            f64::from(c[2].0[lane]),
-            0.0,
-        ]
-    };
-    [
-        column(&f.r[0]),
-        column(&f.r[1]),
-        column(&f.r[2]),
-        column(&f.p),
-    ]
+/// `f`'s frame in lane `lane`, widened to `f64`, followed by `offset`, as
+/// [`padded::link_pose`] composes it.
+#[inline(always)]
+fn lane_link_pose_generic<A: Arith>(f: &Frame<F16>, lane: usize, offset: &Placement) -> Transform {
+    let lane = lane % WIDTH;
+    let column = |c: usize| if c < 3 { &f.r[c] } else { &f.p };
+    padded::link_pose_from_entries::<A>(|c, i| f64::from(column(c)[i].0[lane]), offset)
 }
+
+fma_dispatch!(avx2 fn lane_link_pose(f: &Frame<F16>, lane: usize, offset: &Placement) -> Transform => lane_link_pose_generic);
 
 /// Chunk `c` of `qs` (configurations `16c..16c + 16`; the last chunk repeats its last
 /// configuration in the unused lanes): its joint values in `f64` lanes in `q64` (entries of
