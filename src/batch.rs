@@ -293,7 +293,8 @@ pub fn forward_kinematics_batch_par<'a>(
 const FOLD_BLOCK_BYTES: usize = 256 * 1024;
 
 /// Configurations per block of [`forward_kinematics_batch_fold`] for `chain`: a multiple of
-/// [`LANES`] whose frames fit [`FOLD_BLOCK_BYTES`] (one chunk for a chain too long for two).
+/// eight (the configurations of one pass through the kernels) whose frames, 96 bytes per body
+/// and configuration, fill at most 256 KiB (eight for a chain too long for that).
 #[must_use]
 pub fn fold_block_len(chain: &Chain) -> usize {
     let chunk_bytes = chain.bodies.len().max(1) * std::mem::size_of::<Frame<Lanes>>();
