@@ -648,7 +648,7 @@ const PREFETCH_CHUNKS: usize = BLOCK;
 /// Asks the processor to bring the first `len` entries of `x` (at most) into the cache, one
 /// request per 64-byte line; no effect on other architectures.
 #[inline(always)]
-pub(crate) fn prefetch(x: &[f64], len: usize) {
+fn prefetch(x: &[f64], len: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
