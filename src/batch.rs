@@ -14,7 +14,7 @@ use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num, by_shape};
 use crate::kinematics::{all_valid, check_q};
 use crate::padded;
 use crate::transform::Transform;
-use rayon::prelude::*;
+use std::sync::{Mutex, PoisonError};
 
 /// `len` and `is_empty` of result views whose `data` counts the batch's configurations.
 macro_rules! batch_len {
@@ -37,19 +37,21 @@ macro_rules! batch_len {
     };
 }
 
+mod claims;
 pub mod single_precision;
 
 batch_len!(BatchPoses, BatchLinkPoses);
 
 /// Work, in joint evaluations (configurations × moving joints on the evaluated path, fixed
 /// joints folded), below which [`forward_kinematics_batch_par`] and a parallel
-/// [`forward_kinematics_batch_to`] stay on the calling thread: waking rayon's pool and joining
-/// costs more than a second thread saves. On 2-vCPU VMs (AVX2 and AVX-512 kernels, ≈3 ns per
-/// joint and configuration) two threads broke even at 40–60 µs of one thread's work; this is
-/// about 60 µs: 3 334 configurations of a six-joint arm, 200 of a hundred-joint chain.
-pub const PARALLEL_WORK: usize = 20_000;
+/// [`forward_kinematics_batch_to`] stay on the calling thread: waking a thread of rayon's pool
+/// costs more than it saves. On a 2-vCPU VM (AVX-512 kernels, ≈1.7 ns per joint and
+/// configuration) two threads broke even at about 2 000 joint evaluations, 3–4 µs of one
+/// thread's work, on the UR5, the Panda and a 50-joint chain, and gained 1.1–1.5× at 3 000 to
+/// 4 600; this is 500 configurations of a six-joint arm, 30 of a hundred-joint chain.
+pub const PARALLEL_WORK: usize = 3_000;
 
-/// Work, in joint evaluations, of the smallest task a parallel batch is split into (a few µs).
+/// Work, in joint evaluations, of the smallest claim a parallel batch is split into (≈2 µs).
 const TASK_WORK: usize = 1024;
 
 /// Whether `qs` (rows of `dof` entries) with `bodies` evaluated per configuration is worth
@@ -248,11 +250,15 @@ pub fn forward_kinematics_batch<'a>(
     Ok(BatchPoses { chain, data })
 }
 
-/// As [`forward_kinematics_batch`], with the chunks of eight configurations spread over the
-/// threads of rayon's global pool (set its size with `RAYON_NUM_THREADS` or
-/// `rayon::ThreadPoolBuilder`). Results are identical to the single-threaded call. A batch of
-/// fewer than [`PARALLEL_WORK`] joint evaluations (configurations × moving joints) runs on the
-/// calling thread.
+/// As [`forward_kinematics_batch`], with the chunks of eight configurations shared between the
+/// calling thread and `n - 1` threads of rayon's pool, `n` being its size
+/// (`rayon::current_num_threads()`: the global pool's, set with `RAYON_NUM_THREADS` or
+/// `rayon::ThreadPoolBuilder`, or the pool the call is made from). Each thread evaluates an
+/// equal, contiguous share of the batch in runs of chunks, then takes the last runs left in
+/// the others' shares, so a thread that starts late or is paused does less, and a batch
+/// evaluated again into the same `data` is mostly written by the same cores. Results are
+/// identical to the single-threaded call. A batch of fewer than [`PARALLEL_WORK`] joint
+/// evaluations (configurations × moving joints) runs on the calling thread.
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`] (the same configuration is named); no result is returned.
@@ -277,7 +283,8 @@ pub fn forward_kinematics_batch_par<'a>(
         qs,
         1,
         bodies,
-        data.frames[..chunks * chain.bodies.len()].par_chunks_mut(bodies),
+        &mut data.frames[..chunks * chain.bodies.len()],
+        bodies,
         || vec![Lanes::splat(0.0); chain.dof()],
         |check, q_lanes, c, frames| chunk_poses(chain, check, frames, q_lanes, qs, c),
     );
@@ -304,11 +311,12 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 /// Poses of every link for each configuration of `qs` (row-major), folded block by block into a
 /// result while each block's frames are still in cache: `fold(acc, first, poses)` receives the
 /// poses of configurations `first .. first + poses.len()` ([`fold_block_len`] per block, fewer
-/// in the last), and with `parallel` the blocks are spread over rayon's global pool, each thread
-/// folding its own run of blocks from `identity()` into buffers of its own, and the threads'
-/// results are combined with `reduce` in the order of their blocks (so `reduce` must be
-/// associative, and `identity()` neutral for it). Batches of fewer than [`PARALLEL_WORK`] joint
-/// evaluations stay on the calling thread.
+/// in the last). With `parallel` the blocks are shared between the calling thread and rayon's
+/// pool, as [`forward_kinematics_batch_par`] shares chunks, in runs of consecutive blocks (about
+/// 32 runs per thread), each thread evaluating into buffers of its own; each run is folded from
+/// `identity()`, and the runs' results are combined with `reduce` in the order of their blocks
+/// (so `reduce` must be associative, and `identity()` neutral for it). Batches of fewer than
+/// [`PARALLEL_WORK`] joint evaluations stay on the calling thread.
 ///
 /// For large batches this is the fast way to use every link's pose: [`forward_kinematics_batch`]
 /// keeps every frame of the batch (96 bytes per body and configuration), and beyond a few
@@ -377,29 +385,26 @@ pub fn forward_kinematics_batch_fold<T: Send>(
             .enumerate()
             .try_fold(identity(), |acc, block| step(&mut data, acc, block));
     }
-    // Each of a thread's runs of blocks allocates and fills its own buffers: at most about
-    // four runs per thread.
-    let runs = 4 * rayon::current_num_threads();
-    qs.par_chunks(rows)
-        .enumerate()
-        .with_min_len(qs.len().div_ceil(rows).div_ceil(runs))
-        .fold(
-            || (buffers(), Ok(identity())),
-            // Once a block fails, the rest of this thread's run is skipped.
-            |(mut data, acc), block| {
-                let acc = acc.and_then(|acc| step(&mut data, acc, block));
-                (data, acc)
-            },
-        )
-        .map(|(_, acc)| acc)
-        .reduce(
-            || Ok(identity()),
-            // The earlier run's error comes first: a run stops at its first bad block.
-            |a, b| match (a, b) {
-                (Ok(a), Ok(b)) => Ok(reduce(a, b)),
-                (Err(e), _) | (Ok(_), Err(e)) => Err(e),
-            },
-        )
+    // Claims of whole blocks, about CLAIMS_PER_THREAD per thread; each thread evaluates into
+    // one set of buffers, each claim folds from `identity()`.
+    let blocks = qs.len().div_ceil(rows);
+    let participants = rayon::current_num_threads().max(1);
+    let per_claim = blocks.div_ceil(participants * claims::CLAIMS_PER_THREAD);
+    let claim_rows = per_claim * rows;
+    let folded = claims::claimed_in_order(
+        blocks.div_ceil(per_claim),
+        buffers,
+        |data: &mut BatchData, c| {
+            let claim = &qs[c * claim_rows..((c + 1) * claim_rows).min(qs.len())];
+            claim
+                .chunks(rows)
+                .enumerate()
+                .try_fold(identity(), |acc, (i, block)| {
+                    step(data, acc, (c * per_claim + i, block))
+                })
+        },
+    )?;
+    Ok(folded.into_iter().reduce(reduce).unwrap_or_else(identity))
 }
 
 /// The pose of `link` in configuration `index` of `len`: `pose(b, offset)`, the frame of the
@@ -435,38 +440,50 @@ fn lane_link_pose_generic<A: Arith>(
 fma_dispatch!(avx2 fn lane_link_pose(f: &Frame<Lanes>, lane: usize, offset: &Placement) -> Transform => lane_link_pose_generic);
 
 /// Runs `eval(check, buffers, c0, out)` for each group of `per_item` chunks of `qs` (its
-/// first chunk `c0`, in chunks of [`LANES`]) and its output `out` on rayon's pool (one pass over
-/// the batch and one fork–join), `bodies` being the bodies evaluated per configuration and
-/// `buffers` each task's scratch, made by `scratch` once per task. Each group is checked by the
-/// kernel on its lanes, or, when the limits do not allow that, by its task before evaluation.
-/// False when some configuration is invalid.
+/// first chunk `c0`, in chunks of [`LANES`]) and its output `out`, the next `item_len` entries of
+/// `outs`, on the calling thread and rayon's pool, which claim runs of groups until none is left
+/// ([`claims::claimed_in_order`]); `bodies` are the bodies evaluated per configuration, and
+/// `buffers` each thread's scratch, made by `scratch`. Each group is checked by the kernel on
+/// its lanes, or, when the limits do not allow that, before evaluation. False when some
+/// configuration is invalid (the groups after it may then be left unevaluated).
 #[allow(clippy::too_many_arguments)]
-fn par_chunks_checked<T: Send, S>(
+fn par_chunks_checked<U: Send, S>(
     chain: &Chain,
     policy: LimitPolicy,
     qs: &[f64],
     per_item: usize,
     bodies: usize,
-    outs: impl IndexedParallelIterator<Item = T>,
-    scratch: impl Fn() -> S + Sync + Send,
-    eval: impl Fn(Option<LaneCheck<'_>>, &mut S, usize, T) -> bool + Sync + Send,
+    outs: &mut [U],
+    item_len: usize,
+    scratch: impl Fn() -> S + Sync,
+    eval: impl Fn(Option<LaneCheck<'_>>, &mut S, usize, &mut [U]) -> bool + Sync,
 ) -> bool {
     let dof = chain.dof();
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
-    // Items per task: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
-    // chunk of a chain of 128 joints or more).
-    let per_task = TASK_WORK.div_ceil(per_item * LANES * bodies.max(1));
-    outs.enumerate()
-        .with_min_len(per_task)
-        .map_init(scratch, |buffers, (i, out)| {
+    // Groups per claim: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
+    // chunk of a chain of 128 joints or more), and about CLAIMS_PER_THREAD claims per thread.
+    let groups = outs.len().div_ceil(item_len);
+    let per_claim = TASK_WORK
+        .div_ceil(per_item * LANES * bodies.max(1))
+        .max(groups.div_ceil(rayon::current_num_threads().max(1) * claims::CLAIMS_PER_THREAD));
+    let pieces: Vec<Mutex<&mut [U]>> = outs
+        .chunks_mut(per_claim * item_len)
+        .map(Mutex::new)
+        .collect();
+    claims::claimed_in_order(pieces.len(), scratch, |buffers, c| {
+        let mut piece = pieces[c].lock().unwrap_or_else(PoisonError::into_inner);
+        for (j, out) in piece.chunks_mut(item_len).enumerate() {
+            let i = c * per_claim + j;
             let group = &qs[i * rows..((i + 1) * rows).min(qs.len())];
-            if check.is_none() && !all_valid(chain, group, policy) {
-                return false;
+            let valid = check.is_some() || all_valid(chain, group, policy);
+            if !(valid && eval(check, buffers, i * per_item, out)) {
+                return Err(());
             }
-            eval(check, buffers, i * per_item, out)
-        })
-        .reduce(|| true, |a, b| a & b)
+        }
+        Ok(())
+    })
+    .is_ok()
 }
 
 /// What a chunk kernel checks on its lanes after transposing them: every entry finite, and
@@ -536,9 +553,9 @@ impl BatchLinkPoses<'_> {
 /// The pose of one link for each configuration of `qs` (row-major): only the joints between
 /// the base and that link are evaluated, and only that link's pose is kept (one frame per
 /// configuration written to memory instead of one per joint, which is what bounds a large
-/// batch of all poses). On the calling thread, or with `parallel` over rayon's global pool
-/// (batches of fewer than [`PARALLEL_WORK`] joint evaluations always run on the calling
-/// thread). The poses are the
+/// batch of all poses). On the calling thread, or with `parallel` on it and rayon's pool, as
+/// [`forward_kinematics_batch_par`] shares a batch (batches of fewer than [`PARALLEL_WORK`]
+/// joint evaluations always run on the calling thread). The poses are the
 /// same, bit for bit, as [`forward_kinematics_batch`] gives for the link.
 ///
 /// # Errors
@@ -582,7 +599,8 @@ pub fn forward_kinematics_batch_to<'a>(
             qs,
             per_item,
             path.len(),
-            data.link_frames[..chunks].par_chunks_mut(per_item),
+            &mut data.link_frames[..chunks],
+            per_item,
             || vec![Lanes::splat(0.0); per_item * chain.dof()],
             |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
         );

@@ -1277,6 +1277,11 @@ fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliEr
 /// The most configurations `bench` takes.
 const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
 
+/// Joint evaluations of the batch that `bench`'s two-thread rows time (≈70 µs of one thread's
+/// work, some 5 000 configurations of a seven-joint arm): well above
+/// [`crate::batch::PARALLEL_WORK`], yet small enough to stay in cache.
+const THREADED_ROWS_WORK: usize = 40_000;
+
 /// `--configurations`: a whole number from 2 to [`MAX_BENCH_CONFIGURATIONS`].
 fn configuration_count(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
@@ -1373,11 +1378,11 @@ fn bench(
     }
     let [(position, rotation), (position32, rotation32)] = errors;
 
-    // The multi-threaded rows evaluate the configurations `copies` times over in one batch: twice
-    // the work from which the pool is used, counted on the end link's path.
+    // The multi-threaded rows evaluate the configurations `copies` times over in one batch of
+    // THREADED_ROWS_WORK joint evaluations on the end link's path.
     let mut end_path = Vec::new();
     chain.body_path(chain.link(end).body, &mut end_path);
-    let copies = (2 * crate::batch::PARALLEL_WORK)
+    let copies = THREADED_ROWS_WORK
         .div_ceil(qs.len().max(1) * end_path.len().max(1))
         .max(1);
     let big: Vec<f64> = (0..copies).flat_map(|_| flat.iter().copied()).collect();

@@ -407,8 +407,8 @@ fn bench_prints_times_ratios_and_errors() {
     // reach that the reference tests allow.
     assert!(text.contains("kinechain, batch f32, 1 thread"), "{text}");
     assert!(ulps_before(&text, " f32 ulp of the reach") < 16.0, "{text}");
-    // The two-thread rows name their batch, large enough for the pool: twice the threshold on the
-    // path of the end link (a finger: seven arm joints and its own).
+    // The two-thread rows name their batch, large enough for the pool: over twice the threshold
+    // on the path of the end link (a finger: seven arm joints and its own).
     let size: usize = text
         .split("batch of ")
         .nth(1)

@@ -49,7 +49,6 @@ use crate::kinematics::all_valid;
 use crate::padded;
 use crate::transform::Transform;
 use crate::trig;
-use rayon::prelude::*;
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// Number of configurations evaluated together.
@@ -293,8 +292,8 @@ pub fn forward_kinematics_batch<'a>(
     all_links(chain, data, qs, false)
 }
 
-/// As [`forward_kinematics_batch`], with the chunks of sixteen configurations spread over the
-/// threads of rayon's global pool, as [`super::forward_kinematics_batch_par`] does (batches
+/// As [`forward_kinematics_batch`], with the chunks of sixteen configurations shared between the
+/// calling thread and rayon's pool, as [`super::forward_kinematics_batch_par`] does (batches
 /// of fewer than [`super::PARALLEL_WORK`] joint evaluations run on the calling thread). Results
 /// are identical to the single-threaded call.
 ///
@@ -343,7 +342,7 @@ fn all_links<'a>(
 
 /// The pose of one link for each configuration of `qs` (row-major), computed in `f32`: only the
 /// joints between the base and that link are evaluated, and only that link's pose is kept. On
-/// the calling thread, or with `parallel` over rayon's global pool (batches of fewer than
+/// the calling thread, or with `parallel` on it and rayon's pool (batches of fewer than
 /// [`super::PARALLEL_WORK`] joint evaluations always run on the calling thread).
 ///
 /// # Errors
@@ -392,9 +391,9 @@ pub fn forward_kinematics_batch_to<'a>(
 }
 
 /// Runs `eval(check, scratch, c, out)` for every chunk `c` of sixteen configurations of `qs`,
-/// `out` its `width` frames of `outs`: on rayon's pool when `parallel` (each task with scratch
-/// buffers of its own; `bodies` evaluated per configuration, for the size of a task), else on the
-/// calling thread with `scratch`. The error of the first bad configuration if `eval` (or a task's
+/// `out` its `width` frames of `outs`: on the calling thread and rayon's pool when `parallel`
+/// (each thread with scratch buffers of its own; `bodies` evaluated per configuration, for the
+/// size of a run), else on the calling thread with `scratch`. The error of the first bad configuration if `eval` (or a task's
 /// check) rejects one.
 #[allow(clippy::too_many_arguments)]
 fn run_chunks(
@@ -417,7 +416,8 @@ fn run_chunks(
             qs,
             2,
             bodies,
-            outs.par_chunks_mut(width),
+            outs,
+            width,
             || Scratch::new(dof),
             |check, s, c0, out| eval(check, s, c0 / 2, out),
         )
