@@ -205,10 +205,11 @@ fn naive_baseline(c: &mut Criterion) {
 }
 
 /// Batches of 4 096 configurations (`fk/batch/...`, where waking the second thread is a visible
-/// part of a 150 µs call) and of 65 536 (`fk/batch_large/...`, where the threads' scaling is
+/// part of a 45–65 µs call) and of 65 536 (`fk/batch_large/...`, where the threads' scaling is
 /// measured: the frames of all links then no longer fit the cache), and 512 configurations of a
-/// 50-joint chain (`fk/batch_long/snake50`: the pool is used from 20 000 joint evaluations, so a
-/// long chain is split over the threads at a few hundred configurations); criterion reports time
+/// 50-joint chain (`fk/batch_long/snake50`: the pool is used from `batch::PARALLEL_WORK` joint
+/// evaluations, so a long chain is split over the threads at a few dozen configurations);
+/// criterion reports time
 /// per batch and configurations per second (`thrpt`).
 fn batches(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -348,10 +349,11 @@ fn arithmetic(n: u64) -> f64 {
     x.iter().sum()
 }
 
-/// What two threads can gain on this machine at all: the same independent arithmetic on one
-/// thread and split over rayon's pool, in the same run as `fk/batch_large`. A virtual machine's
-/// second core may share a physical core (and its floating-point units) with the first, which
-/// caps the ratio of any kernel below 2.
+/// What two threads give independent work on this machine through rayon's fork–join: the same
+/// arithmetic on one thread and split over rayon's pool, in the same run as `fk/batch_large`. A
+/// virtual machine's second core may share a physical core (and its floating-point units) with
+/// the first, which this shows. The batches, which share their work with the calling thread
+/// instead of waiting for the pool to wake and join, can exceed it.
 fn machine_baseline(c: &mut Criterion) {
     const ROUNDS: u64 = 200_000;
     let mut group = c.benchmark_group("machine/arithmetic");

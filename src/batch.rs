@@ -46,7 +46,7 @@ batch_len!(BatchPoses, BatchLinkPoses);
 /// joints folded), below which [`forward_kinematics_batch_par`] and a parallel
 /// [`forward_kinematics_batch_to`] stay on the calling thread: waking a thread of rayon's pool
 /// costs more than it saves. On a 2-vCPU VM (AVX-512 kernels, ≈1.7 ns per joint and
-/// configuration) two threads broke even at about 2 000 joint evaluations, 3–4 µs of one
+/// configuration) two threads broke even at about 2 000 joint evaluations, 2.5–4 µs of one
 /// thread's work, on the UR5, the Panda and a 50-joint chain, and gained 1.1–1.5× at 3 000 to
 /// 4 600; this is 500 configurations of a six-joint arm, 30 of a hundred-joint chain.
 pub const PARALLEL_WORK: usize = 3_000;

@@ -103,6 +103,49 @@ fn large_parallel_batches_equal_the_single_threaded_batch() {
     }
 }
 
+/// Parallel batches share their work with the pool they are called from, also from inside one
+/// of its tasks and with more threads than cores; the results are the calling thread's, bit for
+/// bit.
+#[test]
+fn parallel_batches_in_a_pool_and_in_its_tasks_equal_the_single_threaded_batch() {
+    use rayon::prelude::*;
+    let chain = Chain::from_file(robots_dir().join("ur5.yaml")).unwrap();
+    let mut rng = rng(12);
+    let qs: Vec<f64> = (0..1_501)
+        .flat_map(|_| random_q(&chain, &mut rng))
+        .collect();
+    let tool = chain.link_id("tool0").unwrap();
+    let mut data = BatchData::new(&chain);
+    data.set_limit_policy(LimitPolicy::Ignore);
+    let whole = forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
+    let want: Vec<Transform> = (0..whole.len())
+        .map(|i| whole.world_from_link(i, tool))
+        .collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(5)
+        .build()
+        .unwrap();
+    let runs: Vec<(Vec<Transform>, Vec<Transform>)> = pool.install(|| {
+        (0..4)
+            .into_par_iter()
+            .map(|_| {
+                let mut data = BatchData::new(&chain);
+                data.set_limit_policy(LimitPolicy::Ignore);
+                let all = forward_kinematics_batch_par(&chain, &mut data, &qs).unwrap();
+                let all: Vec<Transform> = (0..all.len())
+                    .map(|i| all.world_from_link(i, tool))
+                    .collect();
+                let one = forward_kinematics_batch_to(&chain, &mut data, &qs, tool, true).unwrap();
+                let one = (0..one.len()).map(|i| one.world_from_link(i)).collect();
+                (all, one)
+            })
+            .collect()
+    });
+    for (all, one) in runs {
+        assert!(all == want && one == want);
+    }
+}
+
 #[test]
 fn one_link_batches_equal_the_full_batch() {
     let mut rng = rng(6);
@@ -114,7 +157,7 @@ fn one_link_batches_equal_the_full_batch() {
     ] {
         let chain = Chain::from_file(robots_dir().join(file)).unwrap();
         // Enough configurations for the parallel path on every link (a path of one body needs
-        // 20 000), and a partial last chunk.
+        // `batch::PARALLEL_WORK`), in dozens of runs per thread, and a partial last chunk.
         let qs: Vec<f64> = (0..20_003)
             .flat_map(|_| random_q(&chain, &mut rng))
             .collect();
