@@ -1279,7 +1279,8 @@ const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
 
 /// Joint evaluations of the batch that `bench`'s two-thread rows time (≈70 µs of one thread's
 /// work, some 5 000 configurations of a seven-joint arm): well above
-/// [`crate::batch::PARALLEL_WORK`], yet small enough to stay in cache.
+/// [`crate::batch::PARALLEL_WORK`], yet small enough for its frames to stay in the last-level
+/// cache.
 const THREADED_ROWS_WORK: usize = 40_000;
 
 /// `--configurations`: a whole number from 2 to [`MAX_BENCH_CONFIGURATIONS`].

@@ -4,8 +4,8 @@ mod common;
 
 use common::*;
 use kinechain::batch::{
-    BatchData, BatchError, fold_block_len, forward_kinematics_batch, forward_kinematics_batch_fold,
-    forward_kinematics_batch_par, forward_kinematics_batch_to,
+    BatchData, BatchError, BatchPoses, fold_block_len, forward_kinematics_batch,
+    forward_kinematics_batch_fold, forward_kinematics_batch_par, forward_kinematics_batch_to,
 };
 use kinechain::{Chain, LimitPolicy, LinkId, StateError, Transform};
 
@@ -115,12 +115,17 @@ fn parallel_batches_in_a_pool_and_in_its_tasks_equal_the_single_threaded_batch()
         .flat_map(|_| random_q(&chain, &mut rng))
         .collect();
     let tool = chain.link_id("tool0").unwrap();
-    let mut data = BatchData::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
-    let whole = forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
-    let want: Vec<Transform> = (0..whole.len())
-        .map(|i| whole.world_from_link(i, tool))
-        .collect();
+    let unchecked = || {
+        let mut data = BatchData::new(&chain);
+        data.set_limit_policy(LimitPolicy::Ignore);
+        data
+    };
+    let tool_poses = |poses: BatchPoses<'_>| -> Vec<Transform> {
+        (0..poses.len())
+            .map(|i| poses.world_from_link(i, tool))
+            .collect()
+    };
+    let want = tool_poses(forward_kinematics_batch(&chain, &mut unchecked(), &qs).unwrap());
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(5)
         .build()
@@ -129,12 +134,8 @@ fn parallel_batches_in_a_pool_and_in_its_tasks_equal_the_single_threaded_batch()
         (0..4)
             .into_par_iter()
             .map(|_| {
-                let mut data = BatchData::new(&chain);
-                data.set_limit_policy(LimitPolicy::Ignore);
-                let all = forward_kinematics_batch_par(&chain, &mut data, &qs).unwrap();
-                let all: Vec<Transform> = (0..all.len())
-                    .map(|i| all.world_from_link(i, tool))
-                    .collect();
+                let mut data = unchecked();
+                let all = tool_poses(forward_kinematics_batch_par(&chain, &mut data, &qs).unwrap());
                 let one = forward_kinematics_batch_to(&chain, &mut data, &qs, tool, true).unwrap();
                 let one = (0..one.len()).map(|i| one.world_from_link(i)).collect();
                 (all, one)
