@@ -385,11 +385,10 @@ pub fn forward_kinematics_batch_fold<T: Send>(
             .enumerate()
             .try_fold(identity(), |acc, block| step(&mut data, acc, block));
     }
-    // Claims of whole blocks, about CLAIMS_PER_THREAD per thread; each thread evaluates into
-    // one set of buffers, each claim folds from `identity()`.
+    // Claims of whole blocks; each thread evaluates into one set of buffers, each claim folds
+    // from `identity()`.
     let blocks = qs.len().div_ceil(rows);
-    let participants = rayon::current_num_threads().max(1);
-    let per_claim = blocks.div_ceil(participants * claims::CLAIMS_PER_THREAD);
+    let per_claim = claims::claim_len(blocks, 1);
     let claim_rows = per_claim * rows;
     let folded = claims::claimed_in_order(
         blocks.div_ceil(per_claim),
@@ -462,11 +461,11 @@ fn par_chunks_checked<U: Send, S>(
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
     // Groups per claim: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
-    // chunk of a chain of 128 joints or more), and about CLAIMS_PER_THREAD claims per thread.
-    let groups = outs.len().div_ceil(item_len);
-    let per_claim = TASK_WORK
-        .div_ceil(per_item * LANES * bodies.max(1))
-        .max(groups.div_ceil(rayon::current_num_threads().max(1) * claims::CLAIMS_PER_THREAD));
+    // chunk of a chain of 128 joints or more).
+    let per_claim = claims::claim_len(
+        outs.len().div_ceil(item_len),
+        TASK_WORK.div_ceil(per_item * LANES * bodies.max(1)),
+    );
     let pieces: Vec<Mutex<&mut [U]>> = outs
         .chunks_mut(per_claim * item_len)
         .map(Mutex::new)

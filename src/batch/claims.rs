@@ -17,7 +17,15 @@ use std::sync::{Mutex, PoisonError};
 
 /// Claims each thread aims for: the work left when the first thread runs out of claims is at most
 /// about one claim per thread.
-pub(crate) const CLAIMS_PER_THREAD: usize = 32;
+const CLAIMS_PER_THREAD: usize = 32;
+
+/// Items per claim when `items` are shared: at least `at_least`, and few enough for about
+/// [`CLAIMS_PER_THREAD`] claims per thread of rayon's current pool.
+pub(crate) fn claim_len(items: usize, at_least: usize) -> usize {
+    at_least
+        .max(items.div_ceil(rayon::current_num_threads() * CLAIMS_PER_THREAD))
+        .max(1)
+}
 
 /// Checks the caller makes for running helpers before it blocks (about a millisecond of
 /// spinning, or more yielding).

@@ -393,8 +393,8 @@ pub fn forward_kinematics_batch_to<'a>(
 /// Runs `eval(check, scratch, c, out)` for every chunk `c` of sixteen configurations of `qs`,
 /// `out` its `width` frames of `outs`: on the calling thread and rayon's pool when `parallel`
 /// (each thread with scratch buffers of its own; `bodies` evaluated per configuration, for the
-/// size of a run), else on the calling thread with `scratch`. The error of the first bad configuration if `eval` (or a task's
-/// check) rejects one.
+/// size of a run), else on the calling thread with `scratch`. The error of the first bad
+/// configuration if `eval` (or the check before it) rejects one.
 #[allow(clippy::too_many_arguments)]
 fn run_chunks(
     chain: &Chain,
