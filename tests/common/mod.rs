@@ -436,6 +436,15 @@ pub fn rate_ulps(path: &Path) -> [f64; 4] {
     std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON))
 }
 
+/// The ids of all of `chain`'s links, in the order of `chain.links()`.
+pub fn link_ids(chain: &Chain) -> Vec<kinechain::LinkId> {
+    chain
+        .links()
+        .iter()
+        .map(|l| chain.link_id(l.name()).unwrap())
+        .collect()
+}
+
 /// Asserts that batches (one thread and parallel, and of the end link alone) of 37 random
 /// configurations of each robot file give, configuration by configuration and bit for bit, what
 /// single evaluations give: four full chunks of eight and a partial one.
@@ -452,11 +461,7 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
         let mut batch = BatchData::new(&chain);
         batch.set_limit_policy(LimitPolicy::Ignore);
         let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
-        let links: Vec<_> = chain
-            .links()
-            .iter()
-            .map(|l| chain.link_id(l.name()).unwrap())
-            .collect();
+        let links = link_ids(&chain);
         let expected: Vec<Vec<Transform>> = qs
             .chunks(chain.dof())
             .map(|q| {
