@@ -249,24 +249,35 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
             b.iter(|| black_box(evaluate(chain, &mut data, black_box(&qs)).unwrap().len()))
         });
     }
-    // Every link's poses, folded block by block while in cache (the fold only counts them).
-    for (id, parallel) in [("fold_1_thread", false), ("fold_all_threads", true)] {
-        group.bench_function(id, |b| {
-            b.iter(|| {
-                let count = |n: usize, _, poses: BatchPoses<'_>| n + poses.len();
-                forward_kinematics_batch_fold(
-                    chain,
-                    black_box(&qs),
-                    LimitPolicy::Ignore,
-                    parallel,
-                    || 0,
-                    count,
-                    |a, b| a + b,
-                )
-                .unwrap()
-            })
-        });
+    // Every link's poses, folded block by block while in cache (the fold only counts them), in
+    // f64 and in f32.
+    macro_rules! fold_benches {
+        ($prefix:literal, $fold:path, $poses:ty) => {
+            for (id, parallel) in [("fold_1_thread", false), ("fold_all_threads", true)] {
+                group.bench_function(format!("{}{id}", $prefix), |b| {
+                    b.iter(|| {
+                        let count = |n: usize, _, poses: $poses| n + poses.len();
+                        $fold(
+                            chain,
+                            black_box(&qs),
+                            LimitPolicy::Ignore,
+                            parallel,
+                            || 0,
+                            count,
+                            |a, b| a + b,
+                        )
+                        .unwrap()
+                    })
+                });
+            }
+        };
     }
+    fold_benches!("", forward_kinematics_batch_fold, BatchPoses<'_>);
+    fold_benches!(
+        "f32_",
+        single_precision::forward_kinematics_batch_fold,
+        single_precision::BatchPoses<'_>
+    );
     // Reading every link's pose of every configuration of an evaluated batch (no evaluation).
     let links: Vec<_> = (0..chain.links().len())
         .map(|l| chain.link_id(chain.links()[l].name()).unwrap())

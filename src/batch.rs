@@ -295,17 +295,65 @@ pub fn forward_kinematics_batch_par<'a>(
 }
 
 /// Bytes of frames a block of [`forward_kinematics_batch_fold`] writes at most (unless one chunk
-/// of eight configurations needs more): they stay in a core's second-level cache while the
-/// block is folded.
+/// of configurations needs more): they stay in a core's second-level cache while the block is
+/// folded.
 const FOLD_BLOCK_BYTES: usize = 256 * 1024;
+
+/// A batch evaluation that [`fold_blocks`] runs block by block: this module's in `f64`,
+/// [`single_precision`]'s in `f32`.
+pub(crate) trait BlockEval {
+    /// Buffers of one thread.
+    type Data: Send;
+    /// The poses of one block.
+    type Poses<'a>;
+    /// Configurations per pass through the kernels.
+    const WIDTH: usize;
+    /// Bytes of one body's frames in one pass.
+    const CHUNK_BYTES: usize;
+    /// Empty buffers for `chain`, checking joint values under `policy`.
+    fn data(chain: &Chain, policy: LimitPolicy) -> Self::Data;
+    /// Every link's poses for the configurations of `qs`.
+    fn poses<'a>(
+        chain: &'a Chain,
+        data: &'a mut Self::Data,
+        qs: &[f64],
+    ) -> Result<Self::Poses<'a>, BatchError>;
+}
+
+/// The `f64` batch, as [`BlockEval`].
+struct Double;
+
+impl BlockEval for Double {
+    type Data = BatchData;
+    type Poses<'a> = BatchPoses<'a>;
+    const WIDTH: usize = LANES;
+    const CHUNK_BYTES: usize = std::mem::size_of::<Frame<Lanes>>();
+    fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
+        let mut data = BatchData::new(chain);
+        data.set_limit_policy(policy);
+        data
+    }
+    fn poses<'a>(
+        chain: &'a Chain,
+        data: &'a mut BatchData,
+        qs: &[f64],
+    ) -> Result<BatchPoses<'a>, BatchError> {
+        forward_kinematics_batch(chain, data, qs)
+    }
+}
+
+/// Configurations per block when `E` folds a batch of `chain`: a multiple of `E::WIDTH` whose
+/// frames fill at most [`FOLD_BLOCK_BYTES`] (one pass for a chain too long for that).
+fn block_len<E: BlockEval>(chain: &Chain) -> usize {
+    (FOLD_BLOCK_BYTES / (chain.bodies.len().max(1) * E::CHUNK_BYTES)).max(1) * E::WIDTH
+}
 
 /// Configurations per block of [`forward_kinematics_batch_fold`] for `chain`: a multiple of
 /// eight (the configurations of one pass through the kernels) whose frames, 96 bytes per body
 /// and configuration, fill at most 256 KiB (eight for a chain too long for that).
 #[must_use]
 pub fn fold_block_len(chain: &Chain) -> usize {
-    let chunk_bytes = chain.bodies.len().max(1) * std::mem::size_of::<Frame<Lanes>>();
-    (FOLD_BLOCK_BYTES / chunk_bytes).max(1) * LANES
+    block_len::<Double>(chain)
 }
 
 /// Poses of every link for each configuration of `qs` (row-major), folded block by block into a
@@ -322,7 +370,7 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 /// keeps every frame of the batch (96 bytes per body and configuration), and beyond a few
 /// thousand configurations it is bound by writing them to memory, which two threads share; here
 /// the frames never leave the cache. The poses are those of [`forward_kinematics_batch`], bit for
-/// bit.
+/// bit. [`single_precision::forward_kinematics_batch_fold`] is the same in `f32`.
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it, and
@@ -358,19 +406,27 @@ pub fn forward_kinematics_batch_fold<T: Send>(
     fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
     reduce: impl Fn(T, T) -> T + Sync + Send,
 ) -> Result<T, BatchError> {
+    fold_blocks::<Double, T>(chain, qs, policy, parallel, identity, fold, reduce)
+}
+
+/// [`forward_kinematics_batch_fold`] with the batches of `E`, in blocks of [`block_len`].
+pub(crate) fn fold_blocks<E: BlockEval, T: Send>(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    parallel: bool,
+    identity: impl Fn() -> T + Sync + Send,
+    fold: impl Fn(T, usize, E::Poses<'_>) -> T + Sync + Send,
+    reduce: impl Fn(T, T) -> T + Sync + Send,
+) -> Result<T, BatchError> {
     // The length is checked once for the whole batch, so that blocks hold whole configurations.
     configurations(chain, qs)?;
-    let block = fold_block_len(chain);
+    let block = block_len::<E>(chain);
     let rows = block * chain.dof();
-    let buffers = || {
-        let mut data = BatchData::new(chain);
-        data.set_limit_policy(policy);
-        data
-    };
     // Folds block `i` into `acc`.
-    let step = |data: &mut BatchData, acc: T, (i, qs): (usize, &[f64])| {
+    let step = |data: &mut E::Data, acc: T, (i, qs): (usize, &[f64])| {
         let first = i * block;
-        match forward_kinematics_batch(chain, data, qs) {
+        match E::poses(chain, data, qs) {
             Ok(poses) => Ok(fold(acc, first, poses)),
             Err(e) => Err(BatchError {
                 index: first + e.index,
@@ -379,7 +435,7 @@ pub fn forward_kinematics_batch_fold<T: Send>(
         }
     };
     if !(parallel && worth_parallel(qs, chain.dof(), chain.bodies.len())) {
-        let mut data = buffers();
+        let mut data = E::data(chain, policy);
         return qs
             .chunks(rows)
             .enumerate()
@@ -392,8 +448,8 @@ pub fn forward_kinematics_batch_fold<T: Send>(
     let claim_rows = per_claim * rows;
     let folded = claims::claimed_in_order(
         blocks.div_ceil(per_claim),
-        buffers,
-        |data: &mut BatchData, c| {
+        || E::data(chain, policy),
+        |data: &mut E::Data, c| {
             let claim = &qs[c * claim_rows..((c + 1) * claim_rows).min(qs.len())];
             claim
                 .chunks(rows)

@@ -6,8 +6,9 @@ use common::*;
 use kinechain::batch::{
     BatchData, BatchError, BatchPoses, fold_block_len, forward_kinematics_batch,
     forward_kinematics_batch_fold, forward_kinematics_batch_par, forward_kinematics_batch_to,
+    single_precision as sp,
 };
-use kinechain::{Chain, LimitPolicy, StateError, Transform};
+use kinechain::{Chain, LimitPolicy, LinkId, StateError, Transform};
 
 #[test]
 fn batches_equal_single_evaluations_bit_for_bit() {
@@ -304,33 +305,93 @@ fn batches_of_a_chain_without_moving_joints_are_refused() {
 /// Every link's poses of the blocks a batch is folded in, in order.
 type Blocks = Vec<(usize, Vec<Transform>)>;
 
-/// `forward_kinematics_batch_fold` collecting every pose, block by block.
-fn folded(chain: &Chain, qs: &[f64], parallel: bool) -> Result<Blocks, BatchError> {
-    let links = link_ids(chain);
-    forward_kinematics_batch_fold(
-        chain,
-        qs,
-        LimitPolicy::Ignore,
-        parallel,
-        Vec::new,
-        |mut blocks: Blocks, first, poses| {
-            let all = (0..poses.len())
-                .flat_map(|i| links.iter().map(move |&l| poses.world_from_link(i, l)))
-                .collect();
-            blocks.push((first, all));
-            blocks
-        },
-        |mut a, b| {
-            a.extend(b);
-            a
-        },
-    )
+/// `pose(i, l)` for configurations `i` of `0..n` and, in each, every link `l` of `links`.
+fn every_pose(
+    n: usize,
+    links: &[LinkId],
+    pose: impl Fn(usize, LinkId) -> Transform,
+) -> Vec<Transform> {
+    (0..n)
+        .flat_map(|i| links.iter().map(move |&l| (i, l)))
+        .map(|(i, l)| pose(i, l))
+        .collect()
 }
 
-/// Folding a batch block by block, on one thread or on a pool of two, hands every
-/// configuration's poses over once, in blocks of `fold_block_len` in order, with the bits of the
-/// whole batch. The 50-joint chain's 3 500 configurations make 73 blocks, more than the 64 runs
-/// two threads aim for, so that runs of two blocks are folded.
+/// `$fold` (the `f64` or `f32` batch's `forward_kinematics_batch_fold`) collecting every pose,
+/// block by block.
+macro_rules! folded {
+    ($fold:path) => {
+        |chain: &Chain, qs: &[f64], parallel: bool| -> Result<Blocks, BatchError> {
+            let links = link_ids(chain);
+            $fold(
+                chain,
+                qs,
+                LimitPolicy::Ignore,
+                parallel,
+                Vec::new,
+                |mut blocks: Blocks, first, poses| {
+                    blocks.push((
+                        first,
+                        every_pose(poses.len(), &links, |i, l| poses.world_from_link(i, l)),
+                    ));
+                    blocks
+                },
+                |mut a, b| {
+                    a.extend(b);
+                    a
+                },
+            )
+        }
+    };
+}
+
+/// The `f64` or the `f32` batch, as the fold tests use it.
+struct Precision {
+    name: &'static str,
+    /// Configurations per pass through the kernels.
+    width: usize,
+    block_len: fn(&Chain) -> usize,
+    /// Every link's pose in every configuration of the whole batch, configuration by
+    /// configuration.
+    whole: fn(&Chain, &[f64]) -> Vec<Transform>,
+    folded: fn(&Chain, &[f64], bool) -> Result<Blocks, BatchError>,
+}
+
+const PRECISIONS: [Precision; 2] = [
+    Precision {
+        name: "f64",
+        width: 8,
+        block_len: fold_block_len,
+        whole: |chain, qs| {
+            let mut data = BatchData::new(chain);
+            data.set_limit_policy(LimitPolicy::Ignore);
+            let poses = forward_kinematics_batch(chain, &mut data, qs).unwrap();
+            every_pose(poses.len(), &link_ids(chain), |i, l| {
+                poses.world_from_link(i, l)
+            })
+        },
+        folded: folded!(forward_kinematics_batch_fold),
+    },
+    Precision {
+        name: "f32",
+        width: 16,
+        block_len: sp::fold_block_len,
+        whole: |chain, qs| {
+            let mut data = sp::BatchData::new(chain);
+            data.set_limit_policy(LimitPolicy::Ignore);
+            let poses = sp::forward_kinematics_batch(chain, &mut data, qs).unwrap();
+            every_pose(poses.len(), &link_ids(chain), |i, l| {
+                poses.world_from_link(i, l)
+            })
+        },
+        folded: folded!(sp::forward_kinematics_batch_fold),
+    },
+];
+
+/// Folding a batch block by block, in `f64` or `f32`, on one thread or on a pool of two, hands
+/// every configuration's poses over once, in blocks of `fold_block_len` in order, with the bits
+/// of the whole batch. The 50-joint chain makes 73 blocks (of 48 configurations in `f64`, 96 in
+/// `f32`), more than the 64 runs two threads aim for, so that runs of two blocks are folded.
 #[test]
 fn folded_blocks_equal_the_batch_bit_for_bit() {
     let mut rng = rng(9);
@@ -338,76 +399,79 @@ fn folded_blocks_equal_the_batch_bit_for_bit() {
         .num_threads(2)
         .build()
         .unwrap();
-    for (file, n) in [
-        ("panda.urdf", 2_500),
-        ("ur5.yaml", 3_500),
-        ("snake50.yaml", 3_500),
-    ] {
-        let chain = Chain::from_file(robots_dir().join(file)).unwrap();
-        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
-        let mut data = BatchData::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
-        let whole = forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
-        let block = fold_block_len(&chain);
-        assert_eq!(block % 8, 0, "{file}");
-        assert!(
-            n > 3 * block,
-            "{file}: {n} configurations in blocks of {block}"
-        );
-        if file == "snake50.yaml" {
+    for p in &PRECISIONS {
+        for (file, n) in [
+            ("panda.urdf", 2_500),
+            ("ur5.yaml", 3_500),
+            ("snake50.yaml", 3_500),
+        ] {
+            let what = format!("{file} in {}", p.name);
+            // As many blocks in either precision.
+            let n = n * p.width / 8;
+            let chain = Chain::from_file(robots_dir().join(file)).unwrap();
+            let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
+            let whole = (p.whole)(&chain, &qs);
+            let block = (p.block_len)(&chain);
+            assert_eq!(block % p.width, 0, "{what}");
             assert!(
-                n.div_ceil(block) > 64,
-                "{n} configurations in blocks of {block}"
+                n > 3 * block,
+                "{what}: {n} configurations in blocks of {block}"
             );
-        }
-        let links = link_ids(&chain);
-        for parallel in [false, true] {
-            let blocks = pool.install(|| folded(&chain, &qs, parallel)).unwrap();
-            assert_eq!(blocks.len(), n.div_ceil(block), "{file}");
-            for (b, (first, poses)) in blocks.iter().enumerate() {
-                assert_eq!(*first, b * block, "{file}");
-                assert_eq!(poses.len(), block.min(n - first) * links.len(), "{file}");
-                for (k, pose) in poses.iter().enumerate() {
-                    let (i, l) = (first + k / links.len(), links[k % links.len()]);
-                    let want = whole.world_from_link(i, l);
-                    assert_eq!(
-                        *pose, want,
-                        "{file}, configuration {i}, parallel {parallel}"
-                    );
+            if file == "snake50.yaml" {
+                assert!(n.div_ceil(block) > 64, "{what}: {n} in blocks of {block}");
+            }
+            let links = chain.links().len();
+            for parallel in [false, true] {
+                let blocks = pool.install(|| (p.folded)(&chain, &qs, parallel)).unwrap();
+                assert_eq!(blocks.len(), n.div_ceil(block), "{what}");
+                for (b, (first, poses)) in blocks.iter().enumerate() {
+                    assert_eq!(*first, b * block, "{what}");
+                    assert_eq!(poses.len(), block.min(n - first) * links, "{what}");
+                    let want = &whole[first * links..][..poses.len()];
+                    for (k, (pose, want)) in poses.iter().zip(want).enumerate() {
+                        assert_eq!(
+                            pose,
+                            want,
+                            "{what}, configuration {}, parallel {parallel}",
+                            first + k / links
+                        );
+                    }
                 }
             }
         }
     }
 }
 
-/// A folded batch names its first bad configuration, whichever block and thread meets it, and
-/// refuses a batch of incomplete rows before folding anything.
+/// A folded batch, in `f64` or `f32`, names its first bad configuration, whichever block and
+/// thread meets it, and refuses a batch of incomplete rows before folding anything.
 #[test]
 fn folded_batches_name_the_first_bad_configuration() {
     let chain = Chain::from_file(robots_dir().join("panda.urdf")).unwrap();
-    let block = fold_block_len(&chain);
-    let n = 9 * block;
-    let mut rng = rng(10);
-    let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
     let dof = chain.dof();
-    for bad in [
-        [0, 7 * block + 3],
-        [3 * block + 1, 7 * block],
-        [n - 1, n - 1],
-    ] {
-        let mut qs = qs.clone();
-        for (k, &i) in bad.iter().enumerate() {
-            qs[i * dof + k] = f64::NAN;
+    let mut rng = rng(10);
+    for p in &PRECISIONS {
+        let block = (p.block_len)(&chain);
+        let n = 9 * block;
+        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        for bad in [
+            [0, 7 * block + 3],
+            [3 * block + 1, 7 * block],
+            [n - 1, n - 1],
+        ] {
+            let mut qs = qs.clone();
+            for (k, &i) in bad.iter().enumerate() {
+                qs[i * dof + k] = f64::NAN;
+            }
+            for parallel in [false, true] {
+                let e = (p.folded)(&chain, &qs, parallel).unwrap_err();
+                assert_eq!(e.index, bad[0], "{}, parallel {parallel}", p.name);
+                assert!(matches!(e.source, StateError::NonFinite { .. }), "{e:?}");
+            }
         }
         for parallel in [false, true] {
-            let e = folded(&chain, &qs, parallel).unwrap_err();
-            assert_eq!(e.index, bad[0], "parallel {parallel}");
-            assert!(matches!(e.source, StateError::NonFinite { .. }), "{e:?}");
+            let e = (p.folded)(&chain, &qs[..qs.len() - 1], parallel).unwrap_err();
+            assert_eq!(e.index, n - 1, "{}", p.name);
+            assert!(matches!(e.source, StateError::WrongLength { .. }), "{e:?}");
         }
-    }
-    for parallel in [false, true] {
-        let e = folded(&chain, &qs[..qs.len() - 1], parallel).unwrap_err();
-        assert_eq!(e.index, n - 1);
-        assert!(matches!(e.source, StateError::WrongLength { .. }), "{e:?}");
     }
 }

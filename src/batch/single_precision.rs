@@ -37,8 +37,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{
-    BatchError, LaneCheck, configurations, first_error, lane_pose, par_chunks_checked,
-    transpose_chunk, worth_parallel,
+    BatchError, BlockEval, LaneCheck, block_len, configurations, first_error, fold_blocks,
+    lane_pose, par_chunks_checked, transpose_chunk, worth_parallel,
 };
 use crate::arith::{Arith, fma_dispatch};
 use crate::chain::{Body, Chain, LinkId, Placement};
@@ -388,6 +388,81 @@ pub fn forward_kinematics_batch_to<'a>(
         },
     )?;
     Ok(BatchLinkPoses { chain, data, link })
+}
+
+/// The `f32` batch, as [`BlockEval`].
+struct Single;
+
+impl BlockEval for Single {
+    type Data = BatchData;
+    type Poses<'a> = BatchPoses<'a>;
+    const WIDTH: usize = WIDTH;
+    const CHUNK_BYTES: usize = std::mem::size_of::<Frame<F16>>();
+    fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
+        let mut data = BatchData::new(chain);
+        data.set_limit_policy(policy);
+        data
+    }
+    fn poses<'a>(
+        chain: &'a Chain,
+        data: &'a mut BatchData,
+        qs: &[f64],
+    ) -> Result<BatchPoses<'a>, BatchError> {
+        forward_kinematics_batch(chain, data, qs)
+    }
+}
+
+/// Configurations per block of [`forward_kinematics_batch_fold`] for `chain`: a multiple of
+/// sixteen (the configurations of one pass through the kernels) whose frames, 48 bytes per body
+/// and configuration, fill at most 256 KiB (sixteen for a chain too long for that).
+#[must_use]
+pub fn fold_block_len(chain: &Chain) -> usize {
+    block_len::<Single>(chain)
+}
+
+/// As [`super::forward_kinematics_batch_fold`], in `f32`: every link's poses, block by block
+/// ([`fold_block_len`] configurations per block, fewer in the last), are folded with
+/// `fold(acc, first, poses)` while the block's frames are in cache; with `parallel`, runs of
+/// blocks are shared between the calling thread and rayon's pool, and their results combined
+/// with `reduce` in block order. The poses are those of [`forward_kinematics_batch`], bit for
+/// bit.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it, and
+/// with `parallel` some after it, may have been folded; their result is dropped.
+///
+/// # Examples
+/// ```
+/// use kinechain::{Chain, LimitPolicy, batch::single_precision::forward_kinematics_batch_fold};
+/// let chain = Chain::from_file("robots/planar3.yaml")?;
+/// let tip = chain.link_id("link3")?;
+/// let qs: Vec<f64> = (0..1000).flat_map(|i| [0.001 * i as f64, 0.0, 0.0]).collect();
+/// // How many configurations put the tip above y = 4.
+/// let above = forward_kinematics_batch_fold(
+///     &chain,
+///     &qs,
+///     LimitPolicy::Enforce,
+///     true,
+///     || 0,
+///     |n, _first, poses| {
+///         n + (0..poses.len()).filter(|&i| poses.world_from_link(i, tip).translation().y > 4.0).count()
+///     },
+///     |a, b| a + b,
+/// )?;
+/// // 9 sin θ > 4 from θ = 0.4606 rad, configuration 461.
+/// assert_eq!(above, 1000 - 461);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn forward_kinematics_batch_fold<T: Send>(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    parallel: bool,
+    identity: impl Fn() -> T + Sync + Send,
+    fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
+    reduce: impl Fn(T, T) -> T + Sync + Send,
+) -> Result<T, BatchError> {
+    fold_blocks::<Single, T>(chain, qs, policy, parallel, identity, fold, reduce)
 }
 
 /// Runs `eval(check, scratch, c, out)` for every chunk `c` of sixteen configurations of `qs`,
