@@ -41,8 +41,7 @@ fn kinechain_modes(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (name, file) in robots() {
         let chain = Chain::from_file(root.join(file)).unwrap();
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let qs = configurations(&chain, 64, 1);
         let qd = vec![0.3; chain.dof()];
         let tip = chain.link_id(tool_link(name)).unwrap();
@@ -191,8 +190,7 @@ fn naive_baseline(c: &mut Criterion) {
             black_box(&out);
         })
     });
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let tip = chain.end_link();
     c.bench_function("fk/pose/panda_mdh", |b| {
         b.iter(|| {
@@ -231,8 +229,7 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
         forward_kinematics_batch_par, forward_kinematics_batch_to, single_precision,
     };
     let qs: Vec<f64> = configurations(chain, n, 2).concat();
-    let mut data = BatchData::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let mut group = c.benchmark_group(group_id);
     group.throughput(Throughput::Elements(n as u64));
     if n > 4096 {
@@ -282,8 +279,7 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     let links: Vec<_> = (0..chain.links().len())
         .map(|l| chain.link_id(chain.links()[l].name()).unwrap())
         .collect();
-    let mut read_data = BatchData::new(chain);
-    read_data.set_limit_policy(LimitPolicy::Ignore);
+    let mut read_data = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let poses = forward_kinematics_batch(chain, &mut read_data, &qs).unwrap();
     group.bench_function("read_all_links", |b| {
         b.iter(|| {
@@ -310,8 +306,7 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
         });
     }
     // The single-precision variant (looser: errors of a few f32 ulps), one thread.
-    let mut data32 = single_precision::BatchData::new(chain);
-    data32.set_limit_policy(LimitPolicy::Ignore);
+    let mut data32 = single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     group.bench_function("f32_1_thread", |b| {
         b.iter(|| {
             black_box(

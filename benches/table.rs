@@ -126,8 +126,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
         ("kinechain, baseline x86-64", Some(Isa::Baseline)),
     ] {
         force_isa(level);
-        let mut data = Data::new(chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
         let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
             .iter()
             .map(|q| {
@@ -159,8 +158,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
     // (looser, chosen explicitly).
     let flat: Vec<f64> = (0..16).flat_map(|_| qs.concat()).collect();
     let ids = &ids;
-    let mut batch = BatchData::new(chain);
-    batch.set_limit_policy(LimitPolicy::Ignore);
+    let mut batch = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch, 1 thread",
         flat.clone(),
@@ -171,8 +169,8 @@ fn rows_for(path: &Path) -> Vec<Row> {
             })
         },
     ));
-    let mut batch32 = single_precision::BatchData::new(chain);
-    batch32.set_limit_policy(LimitPolicy::Ignore);
+    let mut batch32 =
+        single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch f32, 1 thread",
         flat,

@@ -15,9 +15,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // The same configuration through both models: every link of the DH model, same pose.
     let q: Vec<f64> = (0..dh.dof()).map(|i| 0.4 + 0.1 * i as f64).collect();
-    let (mut a, mut b) = (Data::new(&dh), Data::new(&urdf));
-    a.set_limit_policy(LimitPolicy::Ignore);
-    b.set_limit_policy(LimitPolicy::Ignore);
+    let (mut a, mut b) = (
+        Data::new(&dh).with_limit_policy(LimitPolicy::Ignore),
+        Data::new(&urdf).with_limit_policy(LimitPolicy::Ignore),
+    );
     let (pa, pb) = (
         forward_kinematics(&dh, &mut a, &q)?,
         forward_kinematics(&urdf, &mut b, &q)?,

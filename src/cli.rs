@@ -1342,23 +1342,12 @@ fn bench(
     };
     let links = chain.links().len();
     // Every method has its own buffers, so that the methods can be timed in alternation.
-    let data = || {
-        let mut d = Data::new(chain);
-        d.set_limit_policy(LimitPolicy::Ignore);
-        d
-    };
-    let batch_data = || {
-        let mut b = BatchData::new(chain);
-        b.set_limit_policy(LimitPolicy::Ignore);
-        b
-    };
+    let data = || Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+    let batch_data = || BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
 
     let flat: Vec<f64> = qs.concat();
-    let single_data = || {
-        let mut b = single_precision::BatchData::new(chain);
-        b.set_limit_policy(LimitPolicy::Ignore);
-        b
-    };
+    let single_data =
+        || single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
 
     // Errors of the single evaluation and of the single-precision batch against the 256-bit
     // evaluation of the same model: (position, rotation) of each.
@@ -1668,8 +1657,7 @@ fn rate_errors(
     qd: &[Vec<f64>],
     acc: bool,
 ) -> Result<Vec<(f64, f64)>, CliError> {
-    let mut data = Data::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let mut worst = vec![(0.0_f64, 0.0_f64); if acc { 4 } else { 2 }];
     let zero = vec![0.0; chain.dof()];
     for (q, v) in qs.iter().zip(qd) {

@@ -66,6 +66,14 @@ impl Data {
         }
     }
 
+    /// These buffers with evaluations checking joint limits under `policy`, as
+    /// [`Data::set_limit_policy`] sets it: `Data::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
+    #[must_use]
+    pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
+        self.set_limit_policy(policy);
+        self
+    }
+
     /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
     pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
         if policy != self.limit_policy {

@@ -82,9 +82,8 @@ fn large_parallel_batches_equal_the_single_threaded_batch() {
     let chain = Chain::from_file(robots_dir().join("panda.urdf")).unwrap();
     let mut rng = rng(5);
     let qs: Vec<f64> = (0..3001).flat_map(|_| random_q(&chain, &mut rng)).collect();
-    let (mut one, mut all) = (BatchData::new(&chain), BatchData::new(&chain));
-    one.set_limit_policy(LimitPolicy::Ignore);
-    all.set_limit_policy(LimitPolicy::Ignore);
+    let unchecked = || BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    let (mut one, mut all) = (unchecked(), unchecked());
     let a = forward_kinematics_batch(&chain, &mut one, &qs).unwrap();
     let b = forward_kinematics_batch_par(&chain, &mut all, &qs).unwrap();
     assert_eq!(a.len(), b.len());
@@ -112,11 +111,7 @@ fn parallel_batches_in_a_pool_and_in_its_tasks_equal_the_single_threaded_batch()
         .flat_map(|_| random_q(&chain, &mut rng))
         .collect();
     let tool = chain.link_id("tool0").unwrap();
-    let unchecked = || {
-        let mut data = BatchData::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
-        data
-    };
+    let unchecked = || BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let tool_poses = |poses: BatchPoses<'_>| -> Vec<Transform> {
         (0..poses.len())
             .map(|i| poses.world_from_link(i, tool))
@@ -159,11 +154,9 @@ fn one_link_batches_equal_the_full_batch() {
         let qs: Vec<f64> = (0..20_003)
             .flat_map(|_| random_q(&chain, &mut rng))
             .collect();
-        let mut full = BatchData::new(&chain);
-        full.set_limit_policy(LimitPolicy::Ignore);
+        let mut full = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let all = forward_kinematics_batch(&chain, &mut full, &qs).unwrap();
-        let mut one = BatchData::new(&chain);
-        one.set_limit_policy(LimitPolicy::Ignore);
+        let mut one = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         for link in chain.links() {
             let id = chain.link_id(link.name()).unwrap();
             for parallel in [false, true] {
@@ -363,8 +356,7 @@ const PRECISIONS: [Precision; 2] = [
         width: 8,
         block_len: fold_block_len,
         whole: |chain, qs| {
-            let mut data = BatchData::new(chain);
-            data.set_limit_policy(LimitPolicy::Ignore);
+            let mut data = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
             let poses = forward_kinematics_batch(chain, &mut data, qs).unwrap();
             every_pose(poses.len(), &link_ids(chain), |i, l| {
                 poses.world_from_link(i, l)
@@ -377,8 +369,7 @@ const PRECISIONS: [Precision; 2] = [
         width: 16,
         block_len: sp::fold_block_len,
         whole: |chain, qs| {
-            let mut data = sp::BatchData::new(chain);
-            data.set_limit_policy(LimitPolicy::Ignore);
+            let mut data = sp::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
             let poses = sp::forward_kinematics_batch(chain, &mut data, qs).unwrap();
             every_pose(poses.len(), &link_ids(chain), |i, l| {
                 poses.world_from_link(i, l)

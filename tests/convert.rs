@@ -48,9 +48,10 @@ fn converted_robots_agree_with_the_original_in_kinechain_and_k() {
         }
         let k_robot = k::Chain::<f64>::from_urdf_file(&path)
             .unwrap_or_else(|e| panic!("k cannot load {name}: {e}"));
-        let (mut a, mut b) = (Data::new(&original), Data::new(&urdf));
-        a.set_limit_policy(LimitPolicy::Ignore);
-        b.set_limit_policy(LimitPolicy::Ignore);
+        let (mut a, mut b) = (
+            Data::new(&original).with_limit_policy(LimitPolicy::Ignore),
+            Data::new(&urdf).with_limit_policy(LimitPolicy::Ignore),
+        );
         for _ in 0..20 {
             let q = random_q(&original, &mut rng);
             let ours = forward_kinematics(&original, &mut a, &q).unwrap();

@@ -27,9 +27,7 @@ fn chains() -> Vec<Chain> {
 
 /// A buffer for `chain` that does not check limits (random configurations may leave them).
 fn unchecked(chain: &Chain) -> Data {
-    let mut data = Data::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
-    data
+    Data::new(chain).with_limit_policy(LimitPolicy::Ignore)
 }
 
 /// Every link's pose, in the chain's link order.

@@ -20,8 +20,7 @@ use kinechain::{
 /// end link's pose from [`forward_kinematics_to`].
 fn fingerprint(file: &str, seed: u64) -> Vec<u64> {
     let chain = repo_chain(file);
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let mut rng = rng(seed);
     let mut bits = Vec::new();
     for _ in 0..16 {

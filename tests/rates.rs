@@ -119,8 +119,7 @@ fn vee_of_skew(dr: &[f64; 12], pose: &Transform) -> [f64; 3] {
 fn rates_match_finite_differences_on_every_robot() {
     let mut rng = rng(3);
     for (name, chain) in robots() {
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let reach = chain.reach().max(1.0);
         let pose_error = 16.0 * f64::EPSILON * reach;
         for _ in 0..5 {
@@ -400,8 +399,7 @@ proptest! {
     ) {
         let all = robots();
         let (_, chain) = &all[robot % all.len()];
-        let mut data = Data::new(chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
         let mut r = rng(seed);
         let q = random_q(chain, &mut r);
         let x = random_vec(chain.dof(), 1.0, &mut r);
@@ -531,8 +529,7 @@ fn jacobian_columns_are_twists_per_unit_rate() {
     let mut rng = rng(31);
     let mut checked = 0;
     for (name, chain) in robots() {
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let reach = (0..chain.links().len())
             .map(|l| {
                 let q = vec![0.0; chain.dof()];
@@ -623,8 +620,7 @@ fn jacobian_derivative_gives_the_acceleration_and_the_jacobian_rate() {
     let mut rng = rng(37);
     let mut checked = 0;
     for (name, chain) in robots() {
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let (reach, dof) = (chain.reach().max(1.0), chain.dof() as f64);
         let links: Vec<LinkId> = (0..chain.links().len())
             .map(|l| LinkId::from_index(&chain, l))

@@ -15,9 +15,8 @@ fn poses_match_the_reference_for_every_model_sample_and_link() {
     for path in reference_files() {
         let reference = read_json(&path);
         let chain = reference_chain(&path, &reference);
-        let mut data = Data::new(&chain);
         // Sample 20 (all zeros) may violate a limit on purpose; evaluate it anyway.
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let scale = scale_of(&reference, "pose");
         let mut worst: f64 = 0.0;
         let mut checked = 0;

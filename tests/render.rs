@@ -17,8 +17,7 @@ fn drawn_origins_are_the_fk_positions_under_the_stated_projection() {
         "cylindrical.yaml",
     ] {
         let chain = Chain::from_file(robots_dir().join(name)).unwrap();
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let q = random_q(&chain, &mut rng);
         let text = {
             let poses = forward_kinematics(&chain, &mut data, &q).unwrap();

@@ -69,8 +69,7 @@ fn every_robot_is_where_its_file_says_at_the_zero_configuration() {
             path.display()
         );
         let chain = Chain::from_file(&path).unwrap();
-        let mut data = Data::new(&chain);
-        data.set_limit_policy(LimitPolicy::Ignore);
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let poses = forward_kinematics(&chain, &mut data, &vec![0.0; chain.dof()]).unwrap();
         for (link, want) in expected {
             let got = poses

@@ -26,10 +26,8 @@ fn errors(path: &std::path::Path) -> (f64, f64) {
         .iter()
         .flat_map(|s| joint_vector(&chain, &s["q"]))
         .collect();
-    let mut data = sp::BatchData::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
-    let mut one = sp::BatchData::new(&chain);
-    one.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = sp::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    let mut one = sp::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
     let all = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
     for name in samples[0]["links"].as_object().unwrap().keys() {
@@ -145,10 +143,8 @@ fn large_angles_are_as_accurate_as_small_ones() {
     let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
     let chain = Chain::from_file(robots_dir().join("ur5.yaml")).unwrap();
     let tool = chain.link_id("tool0").unwrap();
-    let mut data = sp::BatchData::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
-    let mut data64 = batch::BatchData::new(&chain);
-    data64.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = sp::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    let mut data64 = batch::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let mut rng = rng(5);
     let base: Vec<f64> = (0..64).flat_map(|_| random_q(&chain, &mut rng)).collect();
     for turns in [0.0, 1.0, 100.0, 10_000.0] {

@@ -102,8 +102,7 @@ fn measure(chain: &Chain, seed: u64, q_scale: f64) -> Errors {
         .collect();
     let qd = random_vec(chain.dof(), 1.0, &mut rng);
     let qdd = random_vec(chain.dof(), 1.0, &mut rng);
-    let mut data = Data::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let acc = forward_accelerations(chain, &mut data, &q, &qd, &qdd).unwrap();
     let exact: Vec<LinkMotion> = link_motion(chain, &q, &qd, &qdd);
     let reach = exact
@@ -195,8 +194,7 @@ fn large_joint_values() {
         let e = measure(&chain, seed, scale);
         assert_within(12, &e);
     }
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let mut rng = rng(4);
     let reach = chain.reach();
     for k in [1.0, 1e3, 1e5] {
@@ -341,8 +339,7 @@ fn long_chains_error_growth() {
 
     // Mixed scales, relative to each link's own length.
     let chain = random_chain(20, 8, |i| if i % 2 == 0 { 1e-6 } else { 1e3 }, None);
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let q: Vec<f64> = (0..chain.dof()).map(|i| 0.1 * i as f64).collect();
     let p = forward_kinematics(&chain, &mut data, &q).unwrap();
     let ours = poses(&chain, &p);
@@ -373,8 +370,7 @@ fn a_million_incremental_updates() {
 /// of `reach`, its angular rows (unit axes) in ulps of 1, `J̇ q̇` in ulps of the largest
 /// component of `a` and of `α` over the links.
 fn jacobian_ulps(chain: &Chain, q: &[f64], qd: &[f64], reach: f64) -> [f64; 3] {
-    let mut data = Data::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let dof = chain.dof();
     let columns: Vec<Vec<LinkMotion>> = (0..dof)
         .map(|i| {

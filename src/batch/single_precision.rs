@@ -246,6 +246,14 @@ impl BatchData {
         }
     }
 
+    /// These buffers with evaluations checking joint limits under `policy`, as
+    /// [`BatchData::set_limit_policy`] sets it: `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
+    #[must_use]
+    pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
+        self.set_limit_policy(policy);
+        self
+    }
+
     /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
     pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
         self.limit_policy = policy;
@@ -399,9 +407,7 @@ impl BlockEval for Single {
     const WIDTH: usize = WIDTH;
     const CHUNK_BYTES: usize = std::mem::size_of::<Frame<F16>>();
     fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
-        let mut data = BatchData::new(chain);
-        data.set_limit_policy(policy);
-        data
+        BatchData::new(chain).with_limit_policy(policy)
     }
     fn poses<'a>(
         chain: &'a Chain,

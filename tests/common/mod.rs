@@ -378,8 +378,7 @@ pub fn pose_ulps(path: &Path) -> (f64, f64) {
     let reference = read_json(path);
     let exact = read_json(&hp_path(path));
     let chain = reference_chain(path, &reference);
-    let mut data = Data::new(&chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let reach = scale_of(&exact, "pose");
     let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
     for sample in exact["samples"].as_array().unwrap() {
@@ -407,8 +406,7 @@ pub const RATE_FIELDS: [&str; 4] = ["omega", "v", "alpha", "a"];
 /// Largest absolute errors of ω, v, α and a (in the order of [`RATE_FIELDS`]) over every sample and
 /// link of a reference file (`file`, for `chain`), and the largest magnitude of each in the file.
 pub fn rate_errors(chain: &Chain, file: &Value) -> ([f64; 4], [f64; 4]) {
-    let mut data = Data::new(chain);
-    data.set_limit_policy(LimitPolicy::Ignore);
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let (mut worst, mut largest) = ([0.0_f64; 4], [0.0_f64; 4]);
     for sample in file["samples"].as_array().unwrap() {
         let q = joint_vector(chain, &sample["q"]);
@@ -456,10 +454,8 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
     let mut rng = rng(seed);
     for file in files {
         let chain = repo_chain(file);
-        let mut single = Data::new(&chain);
-        single.set_limit_policy(LimitPolicy::Ignore);
-        let mut batch = BatchData::new(&chain);
-        batch.set_limit_policy(LimitPolicy::Ignore);
+        let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut batch = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
         let links = link_ids(&chain);
         let expected: Vec<Vec<Transform>> = qs
