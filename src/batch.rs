@@ -37,6 +37,32 @@ macro_rules! batch_len {
     };
 }
 
+/// `$name`, the batch of the module invoking this, as [`BlockEval`]: its `BatchData`,
+/// `BatchPoses` and `forward_kinematics_batch`, `$width` configurations per pass in frames of
+/// `$frame`.
+macro_rules! block_eval {
+    ($name:ident, $width:expr, $frame:ty) => {
+        struct $name;
+
+        impl $crate::batch::BlockEval for $name {
+            type Data = BatchData;
+            type Poses<'a> = BatchPoses<'a>;
+            const WIDTH: usize = $width;
+            const CHUNK_BYTES: usize = std::mem::size_of::<$frame>();
+            fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
+                BatchData::new(chain).with_limit_policy(policy)
+            }
+            fn poses<'a>(
+                chain: &'a Chain,
+                data: &'a mut BatchData,
+                qs: &[f64],
+            ) -> Result<BatchPoses<'a>, BatchError> {
+                forward_kinematics_batch(chain, data, qs)
+            }
+        }
+    };
+}
+
 mod claims;
 pub mod single_precision;
 
@@ -328,25 +354,7 @@ pub(crate) trait BlockEval {
     ) -> Result<Self::Poses<'a>, BatchError>;
 }
 
-/// The `f64` batch, as [`BlockEval`].
-struct Double;
-
-impl BlockEval for Double {
-    type Data = BatchData;
-    type Poses<'a> = BatchPoses<'a>;
-    const WIDTH: usize = LANES;
-    const CHUNK_BYTES: usize = std::mem::size_of::<Frame<Lanes>>();
-    fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
-        BatchData::new(chain).with_limit_policy(policy)
-    }
-    fn poses<'a>(
-        chain: &'a Chain,
-        data: &'a mut BatchData,
-        qs: &[f64],
-    ) -> Result<BatchPoses<'a>, BatchError> {
-        forward_kinematics_batch(chain, data, qs)
-    }
-}
+block_eval!(Double, LANES, Frame<Lanes>);
 
 /// Configurations per block when `E` folds a batch of `chain`: a multiple of `E::WIDTH` whose
 /// frames fill at most [`FOLD_BLOCK_BYTES`] (one pass for a chain too long for that).

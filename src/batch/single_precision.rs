@@ -37,8 +37,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{
-    BatchError, BlockEval, LaneCheck, block_len, configurations, first_error, fold_blocks,
-    lane_pose, par_chunks_checked, transpose_chunk, worth_parallel,
+    BatchError, LaneCheck, block_len, configurations, first_error, fold_blocks, lane_pose,
+    par_chunks_checked, transpose_chunk, worth_parallel,
 };
 use crate::arith::{Arith, fma_dispatch};
 use crate::chain::{Body, Chain, LinkId, Placement};
@@ -398,25 +398,7 @@ pub fn forward_kinematics_batch_to<'a>(
     Ok(BatchLinkPoses { chain, data, link })
 }
 
-/// The `f32` batch, as [`BlockEval`].
-struct Single;
-
-impl BlockEval for Single {
-    type Data = BatchData;
-    type Poses<'a> = BatchPoses<'a>;
-    const WIDTH: usize = WIDTH;
-    const CHUNK_BYTES: usize = std::mem::size_of::<Frame<F16>>();
-    fn data(chain: &Chain, policy: LimitPolicy) -> BatchData {
-        BatchData::new(chain).with_limit_policy(policy)
-    }
-    fn poses<'a>(
-        chain: &'a Chain,
-        data: &'a mut BatchData,
-        qs: &[f64],
-    ) -> Result<BatchPoses<'a>, BatchError> {
-        forward_kinematics_batch(chain, data, qs)
-    }
-}
+block_eval!(Single, WIDTH, Frame<F16>);
 
 /// Configurations per block of [`forward_kinematics_batch_fold`] for `chain`: a multiple of
 /// sixteen (the configurations of one pass through the kernels) whose frames, 48 bytes per body
