@@ -132,8 +132,9 @@ impl BatchData {
         }
     }
 
-    /// These buffers with evaluations checking joint limits under `policy`, as
-    /// [`BatchData::set_limit_policy`] sets it: `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
+    /// These buffers, with evaluations checking joint limits under `policy` (as
+    /// [`BatchData::set_limit_policy`] sets it), in one expression:
+    /// `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
     #[must_use]
     pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
         self.set_limit_policy(policy);

@@ -66,8 +66,9 @@ impl Data {
         }
     }
 
-    /// These buffers with evaluations checking joint limits under `policy`, as
-    /// [`Data::set_limit_policy`] sets it: `Data::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
+    /// These buffers, with evaluations checking joint limits under `policy` (as
+    /// [`Data::set_limit_policy`] sets it), in one expression:
+    /// `Data::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
     #[must_use]
     pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
         self.set_limit_policy(policy);
