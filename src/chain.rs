@@ -763,37 +763,42 @@ impl LimitCheck {
 /// (`kinematics::admitted`).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DenseLimits {
-    /// `[scale, offset, lower, upper]`, each one entry per entry of `q`.
-    columns: [Vec<f64>; 4],
+    /// Block `b` holds the columns `[scale, offset, lower, upper]` of entries `4b..4b + 4`, so
+    /// that a vector check reads one contiguous block.
+    blocks: Vec<[[f64; 4]; 4]>,
 }
 
 impl DenseLimits {
+    /// The columns of four entries without limits: any finite value passes.
+    pub(crate) const FREE: [[f64; 4]; 4] = [
+        [1.0; 4],
+        [0.0; 4],
+        [f64::NEG_INFINITY; 4],
+        [f64::INFINITY; 4],
+    ];
+
     /// The columns for `checks` over `dof` entries. Two checks of one entry with the same scale
     /// and offset (a mimic joint copying its leader) become their intersection; with different
     /// ones the result is `None`.
     fn new(checks: &[LimitCheck], dof: usize) -> Option<DenseLimits> {
-        // Padded to whole blocks of four with entries that admit any finite value (see
-        // `DenseLimits::block`).
-        let padded = dof.next_multiple_of(4);
-        let mut scale = vec![1.0; padded];
-        let mut offset = vec![0.0; padded];
-        let mut lower = vec![f64::NEG_INFINITY; padded];
-        let mut upper = vec![f64::INFINITY; padded];
+        // Padded to whole blocks of four with entries that admit any finite value.
+        let mut blocks = vec![Self::FREE; dof.div_ceil(4)];
         let mut seen = vec![false; dof];
         for c in checks {
             let i = c.index;
-            if *seen.get(i)? && (scale[i] != c.scale || offset[i] != c.offset) {
+            let seen_before = *seen.get(i)?;
+            let [scale, offset, lower, upper] = &mut blocks[i / 4];
+            let k = i % 4;
+            if seen_before && (scale[k] != c.scale || offset[k] != c.offset) {
                 return None;
             }
             seen[i] = true;
-            scale[i] = c.scale;
-            offset[i] = c.offset;
-            lower[i] = lower[i].max(c.limits.lower);
-            upper[i] = upper[i].min(c.limits.upper);
+            scale[k] = c.scale;
+            offset[k] = c.offset;
+            lower[k] = lower[k].max(c.limits.lower);
+            upper[k] = upper[k].min(c.limits.upper);
         }
-        Some(DenseLimits {
-            columns: [scale, offset, lower, upper],
-        })
+        Some(DenseLimits { blocks })
     }
 
     /// Whether entry `i` may take the value `x`.
@@ -805,29 +810,17 @@ impl DenseLimits {
     /// `(scale, offset, lower, upper)` of entry `i`.
     #[inline(always)]
     pub(crate) fn entry(&self, i: usize) -> (f64, f64, f64, f64) {
-        let [scale, offset, lower, upper] = &self.columns;
-        (scale[i], offset[i], lower[i], upper[i])
+        let [scale, offset, lower, upper] = &self.blocks[i / 4];
+        let k = i % 4;
+        (scale[k], offset[k], lower[k], upper[k])
     }
 
-    /// `(scale, offset, lower, upper)` of entries `4b..4b + 4`, as the rows of a vector check;
-    /// `None` past the chain's length.
+    /// The columns `[scale, offset, lower, upper]` of entries `4b..4b + 4` for each block `b`,
+    /// as the rows of a vector check: one block per four entries of `q`, the last one padded.
     #[inline(always)]
-    pub(crate) fn block(&self, b: usize) -> Option<[&[f64; 4]; 4]> {
-        let [scale, offset, lower, upper] = &self.columns;
-        Some([
-            block_of(scale, b)?,
-            block_of(offset, b)?,
-            block_of(lower, b)?,
-            block_of(upper, b)?,
-        ])
+    pub(crate) fn blocks(&self) -> &[[[f64; 4]; 4]] {
+        &self.blocks
     }
-}
-
-/// Entries `4b..4b + 4` of `column` (no closure: one is not always inlined into a
-/// target-feature function).
-#[inline(always)]
-fn block_of(column: &[f64], b: usize) -> Option<&[f64; 4]> {
-    column.as_chunks::<4>().0.get(b)
 }
 
 /// Whether `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product and the sum

@@ -936,49 +936,57 @@ fn kernel_check<'a>(
 /// Whether `q` (of the chain's length) passes the check [`kernel_check`] chose: finiteness, or
 /// [`crate::chain::within`] the limits of each entry. Four entries per vector compare on the
 /// AVX paths (a loop over single entries stays scalar, about 40 instructions more on a
-/// seven-joint arm).
+/// seven-joint arm), each against one contiguous block of limit columns.
 #[inline(always)]
 pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> bool {
     let (blocks, rest) = q.as_chunks::<4>();
+    // The last entries completed with zeros, which the padding of the limit columns admits
+    // (entry by entry: a copy of variable length would be a library call).
+    let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
+    let last = [entry(0), entry(1), entry(2), 0.0];
     let mut ok = true;
-    for (b, x) in blocks.iter().enumerate() {
-        ok &= admitted_block::<A>(x, limits, b);
-    }
-    if !rest.is_empty() {
-        // Completed with zeros, which the padding of the limit columns admits (entry by entry:
-        // a copy of variable length would be a library call).
-        let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
-        let last = [entry(0), entry(1), entry(2), 0.0];
-        ok &= admitted_block::<A>(&last, limits, blocks.len());
+    match limits {
+        Some(limits) => {
+            let columns = limits.blocks();
+            // Another length is not decided here (`check_q` decides).
+            let Some(tail) = columns.get(blocks.len()..) else {
+                return false;
+            };
+            if tail.len() != usize::from(!rest.is_empty()) {
+                return false;
+            }
+            for (x, c) in blocks.iter().zip(columns) {
+                ok &= admitted_block::<A>(x, c);
+            }
+            if let Some(c) = tail.first() {
+                ok &= admitted_block::<A>(&last, c);
+            }
+        }
+        None => {
+            for x in blocks {
+                ok &= admitted_block::<A>(x, &DenseLimits::FREE);
+            }
+            if !rest.is_empty() {
+                ok &= admitted_block::<A>(&last, &DenseLimits::FREE);
+            }
+        }
     }
     ok
 }
 
-/// [`admitted`] for block `b` (entries `4b..4b + 4`) of `q`, given as `x`.
+/// [`admitted`] for four entries `x` of `q` against their columns `[scale, offset, lower,
+/// upper]`.
 #[inline(always)]
-fn admitted_block<A: Arith>(x: &[f64; 4], limits: Option<&DenseLimits>, b: usize) -> bool {
+fn admitted_block<A: Arith>(x: &[f64; 4], [s, o, l, u]: &[[f64; 4]; 4]) -> bool {
     use crate::arith::Col;
     type C<A> = <A as Arith>::Col;
-    // (No closures: one is not always inlined into a target-feature function.)
-    let limits = match limits {
-        Some(limits) => match limits.block(b) {
-            Some([s, o, l, u]) => [
-                C::<A>::load(s),
-                C::<A>::load(o),
-                C::<A>::load(l),
-                C::<A>::load(u),
-            ],
-            // Past the columns: not decided here (`check_q` decides).
-            None => return false,
-        },
-        None => [
-            C::<A>::splat(1.0),
-            C::<A>::splat(0.0),
-            C::<A>::splat(f64::NEG_INFINITY),
-            C::<A>::splat(f64::INFINITY),
-        ],
-    };
-    C::<A>::admitted(C::<A>::load(x), limits)
+    let columns = [
+        C::<A>::load(s),
+        C::<A>::load(o),
+        C::<A>::load(l),
+        C::<A>::load(u),
+    ];
+    C::<A>::admitted(C::<A>::load(x), columns)
 }
 
 /// [`poses_all_generic`] if `q` passes the check [`kernel_check`] chose, checked in the same
