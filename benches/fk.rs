@@ -56,6 +56,15 @@ fn kinechain_modes(c: &mut Criterion) {
                 black_box(p.world_from_link(tip));
             })
         });
+        // The default setting: the joint limits checked in the same call (the seeded
+        // configurations are within them).
+        let mut checked = Data::new(&chain);
+        c.bench_function(&format!("fk/pose_checked/{name}"), |b| {
+            b.iter(|| {
+                let p = forward_kinematics(&chain, &mut checked, black_box(next())).unwrap();
+                black_box(p.world_from_link(tip));
+            })
+        });
         c.bench_function(&format!("fk/vel/{name}"), |b| {
             b.iter(|| {
                 let v = forward_velocities(&chain, &mut data, black_box(next()), &qd).unwrap();

@@ -940,10 +940,6 @@ fn kernel_check<'a>(
 #[inline(always)]
 pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> bool {
     let (blocks, rest) = q.as_chunks::<4>();
-    // The last entries completed with zeros, which the padding of the limit columns admits
-    // (entry by entry: a copy of variable length would be a library call).
-    let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
-    let last = [entry(0), entry(1), entry(2), 0.0];
     let mut ok = true;
     match limits {
         Some(limits) => {
@@ -959,7 +955,7 @@ pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> boo
                 ok &= admitted_block::<A>(x, c);
             }
             if let Some(c) = tail.first() {
-                ok &= admitted_block::<A>(&last, c);
+                ok &= admitted_block::<A>(&completed(rest), c);
             }
         }
         None => {
@@ -967,11 +963,19 @@ pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> boo
                 ok &= admitted_block::<A>(x, &DenseLimits::FREE);
             }
             if !rest.is_empty() {
-                ok &= admitted_block::<A>(&last, &DenseLimits::FREE);
+                ok &= admitted_block::<A>(&completed(rest), &DenseLimits::FREE);
             }
         }
     }
     ok
+}
+
+/// The last (one to three) entries of `q` completed with zeros, which the padding of the limit
+/// columns admits (entry by entry: a copy of variable length would be a library call).
+#[inline(always)]
+fn completed(rest: &[f64]) -> [f64; 4] {
+    let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
+    [entry(0), entry(1), entry(2), 0.0]
 }
 
 /// [`admitted`] for four entries `x` of `q` against their columns `[scale, offset, lower,
