@@ -1602,7 +1602,7 @@ fn bench(
         text.push_str(&format!("{method:<width$} {ns:>12.1} {ratio:>10}\n"));
     }
     text.push_str(
-        "times: medians of 7 rounds, the methods run in alternation; \"vs k\": median of the ratios within a round\n",
+        "times: medians of 7 rounds, the methods run in alternation, joint limits not checked; \"vs k\": median of the ratios within a round\n",
     );
     // The incremental update against a full evaluation, and rates against poses alone, measured
     // in the same rounds.
