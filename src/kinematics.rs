@@ -939,33 +939,31 @@ fn kernel_check<'a>(
 /// seven-joint arm), each against one contiguous block of limit columns.
 #[inline(always)]
 pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> bool {
+    match limits {
+        // Another length is not decided here (`check_q` decides).
+        Some(limits) if limits.blocks().len() != q.len().div_ceil(4) => false,
+        Some(limits) => admitted_rows::<A>(q, limits.blocks().iter()),
+        None => admitted_rows::<A>(q, std::iter::repeat(&DenseLimits::FREE)),
+    }
+}
+
+/// [`admitted`] with the limit columns of each block of four entries of `q` from `columns`,
+/// which has one block for each (the last one for the completed rest).
+#[inline(always)]
+fn admitted_rows<'c, A: Arith>(
+    q: &[f64],
+    mut columns: impl Iterator<Item = &'c [[f64; 4]; 4]>,
+) -> bool {
     let (blocks, rest) = q.as_chunks::<4>();
     let mut ok = true;
-    match limits {
-        Some(limits) => {
-            let columns = limits.blocks();
-            // Another length is not decided here (`check_q` decides).
-            let Some(tail) = columns.get(blocks.len()..) else {
-                return false;
-            };
-            if tail.len() != usize::from(!rest.is_empty()) {
-                return false;
-            }
-            for (x, c) in blocks.iter().zip(columns) {
-                ok &= admitted_block::<A>(x, c);
-            }
-            if let Some(c) = tail.first() {
-                ok &= admitted_block::<A>(&completed(rest), c);
-            }
-        }
-        None => {
-            for x in blocks {
-                ok &= admitted_block::<A>(x, &DenseLimits::FREE);
-            }
-            if !rest.is_empty() {
-                ok &= admitted_block::<A>(&completed(rest), &DenseLimits::FREE);
-            }
-        }
+    for (x, c) in blocks.iter().zip(&mut columns) {
+        ok &= admitted_block::<A>(x, c);
+    }
+    if !rest.is_empty() {
+        ok &= match columns.next() {
+            Some(c) => admitted_block::<A>(&completed(rest), c),
+            None => false,
+        };
     }
     ok
 }
