@@ -855,7 +855,7 @@ pub struct Chain {
     /// moves.
     pub(crate) first_body_from: Vec<usize>,
     /// For each entry of `q`: (joint, component name for cylindrical joints).
-    variables: Vec<(usize, Option<&'static str>)>,
+    variables: Vec<Variable>,
     pub(crate) limit_checks: Vec<LimitCheck>,
     /// `limit_checks` by entry of `q`, when no entry has two different ones.
     pub(crate) dense_limits: Option<DenseLimits>,
@@ -1009,7 +1009,7 @@ impl Chain {
         self.bodies.len()
     }
 
-    pub(crate) fn variable(&self, index: usize) -> (usize, Option<&'static str>) {
+    pub(crate) fn variable(&self, index: usize) -> Variable {
         self.variables[index]
     }
 
@@ -1171,9 +1171,116 @@ fn norm(p: [f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
 }
 
+/// Validates `spec` and lays it out for evaluation, in stages whose errors come in this order:
+/// names, each joint's numbers, the tree, mimic joints.
 fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
-    // Names.
-    let mut link_of: HashMap<&str, usize> = HashMap::new();
+    let (link_of, joint_of) = name_indices(spec)?;
+    let axes = checked_axes(spec)?;
+    let tree = Tree::new(spec, &link_of)?;
+    let new_joint = positions(&tree.joint_order);
+    let new_link = positions(&tree.link_order);
+    let (q_index, variables) = q_layout(spec, &tree.joint_order, &new_joint);
+    let mimic = resolve_mimics(spec, &joint_of)?;
+    let Assembled {
+        bodies,
+        link_carrier,
+        reach,
+        limit_checks,
+    } = assemble(spec, &tree, &axes, &q_index, &mimic, &new_joint);
+    let EvalTables {
+        theta_gather,
+        trig_slot,
+        turning_before,
+        first_body_from,
+        serial_run,
+        tail_start,
+    } = EvalTables::new(&bodies, variables.len());
+
+    let joints: Vec<Joint> = tree
+        .joint_order
+        .iter()
+        .map(|&j| {
+            let js = &spec.joints[j];
+            Joint {
+                name: js.name.clone(),
+                kind: js.kind,
+                parent: LinkId(new_link[tree.ends[j].0]),
+                child: LinkId(new_link[tree.ends[j].1]),
+                axis: axes[j],
+                q_index: q_index[j],
+                mimic: mimic[j].map(|(p, multiplier, offset)| Mimic {
+                    primary: JointId(new_joint[p]),
+                    multiplier,
+                    offset,
+                }),
+                limits: if js.kind == JointKind::Continuous {
+                    [None, None]
+                } else {
+                    js.limits
+                },
+                theta0: js.theta,
+                d0: js.d,
+            }
+        })
+        .collect();
+    let links: Vec<Link> = tree
+        .link_order
+        .iter()
+        .map(|&l| Link {
+            name: spec.links[l].clone(),
+            parent_joint: tree.parent_joint[l].map(|j| JointId(new_joint[j])),
+            body: link_carrier[l].0,
+            offset: link_carrier[l].1,
+        })
+        .collect();
+
+    Ok(Chain {
+        end_link: farthest_link(&links, &joints),
+        name: spec.name.clone(),
+        link_index: links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.name.clone(), i))
+            .collect(),
+        joint_index: joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| (j.name.clone(), i))
+            .collect(),
+        joints,
+        links,
+        serial: serial_run == bodies.len(),
+        bodies,
+        theta_gather,
+        trig_slot,
+        turning_before,
+        first_body_from,
+        dense_limits: DenseLimits::new(&limit_checks, variables.len()),
+        variables,
+        limit_checks,
+        serial_run,
+        tail_start,
+        reach,
+        warnings: spec.warnings.clone(),
+        source: spec.clone(),
+    })
+}
+
+/// An entry of `q`: its joint (index in the chain) and, for a cylindrical joint, the component
+/// (`"theta"` or `"d"`).
+type Variable = (usize, Option<&'static str>);
+
+/// Indices in the builder's lists, by name.
+type NameIndex<'a> = HashMap<&'a str, usize>;
+
+/// A mimic joint resolved to an independent one: (primary joint in the builder's indices,
+/// multiplier, offset).
+type Resolved = (usize, f64, f64);
+
+/// The index of every link and joint by name, after checking that names are unique and not
+/// empty and that there is a link.
+fn name_indices(spec: &ChainBuilder) -> Result<(NameIndex<'_>, NameIndex<'_>), ModelError> {
+    let mut link_of = NameIndex::new();
     for (i, name) in spec.links.iter().enumerate() {
         if name.is_empty() {
             return Err(ModelError::EmptyName { what: "link" });
@@ -1185,7 +1292,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     if spec.links.is_empty() {
         return Err(ModelError::NoLinks);
     }
-    let mut joint_of: HashMap<&str, usize> = HashMap::new();
+    let mut joint_of = NameIndex::new();
     for (i, j) in spec.joints.iter().enumerate() {
         if j.name.is_empty() {
             return Err(ModelError::EmptyName { what: "joint" });
@@ -1196,8 +1303,13 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             });
         }
     }
+    Ok((link_of, joint_of))
+}
 
-    // Per-joint numbers.
+/// Each joint's unit axis (z for a fixed joint), after checking its numbers: rigid placements,
+/// finite values, a non-zero axis, ordered limits, a mimic only on a one-coordinate joint; and
+/// the base placement.
+fn checked_axes(spec: &ChainBuilder) -> Result<Vec<[f64; 3]>, ModelError> {
     let mut axes = Vec::with_capacity(spec.joints.len());
     for j in &spec.joints {
         check_rigid(&j.name, "origin", &j.origin)?;
@@ -1241,93 +1353,125 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     if let Some(root) = &spec.world_from_root {
         check_rigid("base", "placement", root)?;
     }
+    Ok(axes)
+}
 
-    // Tree: parent joint of every link, children of every link in file order.
-    let mut parent_joint: Vec<Option<usize>> = vec![None; spec.links.len()];
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); spec.links.len()];
-    let mut ends = Vec::with_capacity(spec.joints.len());
-    for (i, j) in spec.joints.iter().enumerate() {
-        let find = |name: &str, role| {
-            link_of
-                .get(name)
-                .copied()
-                .ok_or_else(|| ModelError::UnknownLink {
-                    joint: j.name.clone(),
-                    role,
-                    link: name.to_string(),
-                    suggestion: closest_name(name, spec.links.iter().map(String::as_str)),
-                })
+/// The joints' tree, in the builder's indices.
+struct Tree {
+    /// Each link's parent joint (`None` for the root).
+    parent_joint: Vec<Option<usize>>,
+    /// Each joint's (parent, child) links.
+    ends: Vec<(usize, usize)>,
+    root: usize,
+    /// Joints and links depth-first from the root, children in file order.
+    joint_order: Vec<usize>,
+    link_order: Vec<usize>,
+}
+
+impl Tree {
+    /// The tree of `spec`'s joints, or the error for an unknown link, a link with two parents,
+    /// several roots or a cycle.
+    fn new(spec: &ChainBuilder, link_of: &NameIndex<'_>) -> Result<Tree, ModelError> {
+        let mut parent_joint: Vec<Option<usize>> = vec![None; spec.links.len()];
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); spec.links.len()];
+        let mut ends = Vec::with_capacity(spec.joints.len());
+        for (i, j) in spec.joints.iter().enumerate() {
+            let find = |name: &str, role| {
+                link_of
+                    .get(name)
+                    .copied()
+                    .ok_or_else(|| ModelError::UnknownLink {
+                        joint: j.name.clone(),
+                        role,
+                        link: name.to_string(),
+                        suggestion: closest_name(name, spec.links.iter().map(String::as_str)),
+                    })
+            };
+            let parent = find(&j.parent, "parent")?;
+            let child = find(&j.child, "child")?;
+            if let Some(first) = parent_joint[child] {
+                return Err(ModelError::TwoParents {
+                    link: j.child.clone(),
+                    first: spec.joints[first].name.clone(),
+                    second: j.name.clone(),
+                });
+            }
+            parent_joint[child] = Some(i);
+            children[parent].push(i);
+            ends.push((parent, child));
+        }
+        let roots: Vec<usize> = (0..spec.links.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
+        let root = match roots.as_slice() {
+            [] => {
+                return Err(ModelError::Cycle {
+                    joint: spec
+                        .joints
+                        .first()
+                        .map(|j| j.name.clone())
+                        .unwrap_or_default(),
+                });
+            }
+            [r] => *r,
+            _ => {
+                return Err(ModelError::MultipleRoots {
+                    roots: roots.iter().map(|&l| spec.links[l].clone()).collect(),
+                });
+            }
         };
-        let parent = find(&j.parent, "parent")?;
-        let child = find(&j.child, "child")?;
-        if let Some(first) = parent_joint[child] {
-            return Err(ModelError::TwoParents {
-                link: j.child.clone(),
-                first: spec.joints[first].name.clone(),
-                second: j.name.clone(),
-            });
-        }
-        parent_joint[child] = Some(i);
-        children[parent].push(i);
-        ends.push((parent, child));
-    }
-    let roots: Vec<usize> = (0..spec.links.len())
-        .filter(|&l| parent_joint[l].is_none())
-        .collect();
-    let root = match roots.as_slice() {
-        [] => {
-            return Err(ModelError::Cycle {
-                joint: spec
-                    .joints
-                    .first()
-                    .map(|j| j.name.clone())
-                    .unwrap_or_default(),
-            });
-        }
-        [r] => *r,
-        _ => {
-            return Err(ModelError::MultipleRoots {
-                roots: roots.iter().map(|&l| spec.links[l].clone()).collect(),
-            });
-        }
-    };
 
-    // Depth-first order of joints from the root (iterative: chains may be very long).
-    let mut joint_order = Vec::with_capacity(spec.joints.len());
-    let mut link_order = Vec::with_capacity(spec.links.len());
-    let mut stack = vec![root];
-    while let Some(l) = stack.pop() {
-        link_order.push(l);
-        if let Some(j) = parent_joint[l] {
-            joint_order.push(j);
+        // Depth-first order of joints from the root (iterative: chains may be very long).
+        let mut joint_order = Vec::with_capacity(spec.joints.len());
+        let mut link_order = Vec::with_capacity(spec.links.len());
+        let mut stack = vec![root];
+        while let Some(l) = stack.pop() {
+            link_order.push(l);
+            if let Some(j) = parent_joint[l] {
+                joint_order.push(j);
+            }
+            // Push children reversed so the first declared child is visited first.
+            stack.extend(children[l].iter().rev().map(|&j| ends[j].1));
         }
-        // Push children reversed so the first declared child is visited first.
-        stack.extend(children[l].iter().rev().map(|&j| ends[j].1));
+        if link_order.len() != spec.links.len() {
+            // Every unreached link has a parent joint, so it lies on (or below) a cycle.
+            let unreached = (0..spec.links.len())
+                .find(|l| !link_order.contains(l))
+                .and_then(|l| parent_joint[l])
+                .map(|j| spec.joints[j].name.clone())
+                .unwrap_or_default();
+            return Err(ModelError::Cycle { joint: unreached });
+        }
+        Ok(Tree {
+            parent_joint,
+            ends,
+            root,
+            joint_order,
+            link_order,
+        })
     }
-    if link_order.len() != spec.links.len() {
-        // Every unreached link has a parent joint, so it lies on (or below) a cycle.
-        let unreached = (0..spec.links.len())
-            .find(|l| !link_order.contains(l))
-            .and_then(|l| parent_joint[l])
-            .map(|j| spec.joints[j].name.clone())
-            .unwrap_or_default();
-        return Err(ModelError::Cycle { joint: unreached });
-    }
+}
 
-    // New indices.
-    let mut new_joint = vec![0; spec.joints.len()];
-    for (n, &j) in joint_order.iter().enumerate() {
-        new_joint[j] = n;
+/// `position[i]`: where `i` stands in `order` (a permutation of `0..order.len()`).
+fn positions(order: &[usize]) -> Vec<usize> {
+    let mut position = vec![0; order.len()];
+    for (n, &i) in order.iter().enumerate() {
+        position[i] = n;
     }
-    let mut new_link = vec![0; spec.links.len()];
-    for (n, &l) in link_order.iter().enumerate() {
-        new_link[l] = n;
-    }
+    position
+}
 
-    // q layout: independent joints in depth-first order.
+/// The layout of `q`: independent joints in depth-first order. Each joint's first entry
+/// (`None` for fixed and mimic joints), and each entry's joint (new index) and component name
+/// (for cylindrical joints).
+fn q_layout(
+    spec: &ChainBuilder,
+    joint_order: &[usize],
+    new_joint: &[usize],
+) -> (Vec<Option<usize>>, Vec<Variable>) {
     let mut q_index: Vec<Option<usize>> = vec![None; spec.joints.len()];
     let mut variables = Vec::new();
-    for &j in &joint_order {
+    for &j in joint_order {
         let js = &spec.joints[j];
         if js.mimic.is_some() || js.kind == JointKind::Fixed {
             continue;
@@ -1340,9 +1484,16 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             variables.push((new_joint[j], None));
         }
     }
+    (q_index, variables)
+}
 
-    // Mimic resolution: (primary joint, multiplier, offset), following mimics of mimics.
-    let mut mimic: Vec<Option<(usize, f64, f64)>> = vec![None; spec.joints.len()];
+/// Each mimic joint's (primary joint, multiplier, offset), following mimics of mimics to an
+/// independent joint.
+fn resolve_mimics(
+    spec: &ChainBuilder,
+    joint_of: &NameIndex<'_>,
+) -> Result<Vec<Option<Resolved>>, ModelError> {
+    let mut mimic: Vec<Option<Resolved>> = vec![None; spec.joints.len()];
     for (i, js) in spec.joints.iter().enumerate() {
         let Some(m) = &js.mimic else { continue };
         let (mut multiplier, mut offset) = (m.multiplier, m.offset);
@@ -1385,8 +1536,31 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         };
         mimic[i] = Some((primary, multiplier, offset));
     }
+    Ok(mimic)
+}
 
-    // Bodies, link carriers, limit checks.
+/// The moving bodies of a chain, with what hangs from them.
+struct Assembled {
+    bodies: Vec<Body>,
+    /// Each link's (body it is fixed to, `None` for the base; placement in that body's frame),
+    /// in the builder's link indices.
+    link_carrier: Vec<(Option<usize>, Placement)>,
+    /// An upper bound on the distance of any link origin from the world origin ([`Chain::reach`]).
+    reach: f64,
+    limit_checks: Vec<LimitCheck>,
+}
+
+/// One body per moving joint in depth-first order, fixed joints folded into the placement of
+/// what follows them; each joint's limits as checks on entries of `q`.
+fn assemble(
+    spec: &ChainBuilder,
+    tree: &Tree,
+    axes: &[[f64; 3]],
+    q_index: &[Option<usize>],
+    mimic: &[Option<Resolved>],
+    new_joint: &[usize],
+) -> Assembled {
+    let root = tree.root;
     let mut link_carrier: Vec<(Option<usize>, Placement)> =
         vec![(None, Placement::Identity); spec.links.len()];
     link_carrier[root] = (
@@ -1397,9 +1571,9 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     reach_of[root] = norm(spec.world_from_root.unwrap_or(Transform::IDENTITY).p);
     let mut bodies = Vec::new();
     let mut limit_checks = Vec::new();
-    for &j in &joint_order {
+    for &j in &tree.joint_order {
         let js = &spec.joints[j];
-        let (parent, child) = ends[j];
+        let (parent, child) = tree.ends[j];
         let (carrier, offset) = link_carrier[parent];
         let origin = Placement::from_transform(&js.origin);
         let post = Placement::from_transform(&js.post);
@@ -1416,44 +1590,8 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         };
         reach_of[child] = reach_of[parent] + norm(js.origin.p) + travel + norm(js.post.p);
 
-        let var = |index: usize| -> Term {
-            match mimic[j] {
-                Some((primary, scale, offset)) => Term::Var {
-                    index: q_index[primary].unwrap_or(index),
-                    scale,
-                    offset,
-                },
-                None => Term::Var {
-                    index,
-                    scale: 1.0,
-                    offset: 0.0,
-                },
-            }
-        };
-        let with_offset = |t: Term, base: f64| match t {
-            Term::Var {
-                index,
-                scale,
-                offset,
-            } => Term::Var {
-                index,
-                scale,
-                offset: offset + base,
-            },
-            c => c,
-        };
         let first = q_index[j].unwrap_or(0);
-        let (theta, d) = match js.kind {
-            JointKind::Fixed => (Term::Const(js.theta), Term::Const(js.d)),
-            JointKind::Revolute | JointKind::Continuous => {
-                (with_offset(var(first), js.theta), Term::Const(js.d))
-            }
-            JointKind::Prismatic => (Term::Const(js.theta), with_offset(var(first), js.d)),
-            JointKind::Cylindrical => (
-                with_offset(var(first), js.theta),
-                with_offset(var(first + 1), js.d),
-            ),
-        };
+        let (theta, d) = joint_terms(js, first, mimic[j], q_index);
 
         if js.kind == JointKind::Fixed {
             let motion =
@@ -1476,160 +1614,170 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         });
         link_carrier[child] = (Some(body), Placement::Identity);
 
-        // Limits apply to the joint's own coordinate: q for an independent joint, the implied
-        // value for a mimic joint.
-        let components: &[Option<&'static str>] = if js.kind == JointKind::Cylindrical {
-            &[Some("theta"), Some("d")]
-        } else {
-            &[None]
+        limit_checks.extend(joint_limit_checks(
+            js,
+            new_joint[j],
+            first,
+            mimic[j],
+            q_index,
+        ));
+    }
+    Assembled {
+        bodies,
+        link_carrier,
+        reach: reach_of.iter().copied().fold(0.0, f64::max),
+        limit_checks,
+    }
+}
+
+/// θ and d of `js` as terms of `q`: its own entries from `first`, or its primary's through the
+/// mimic relation `(primary, multiplier, offset)`; constants for what the joint does not move.
+fn joint_terms(
+    js: &JointSpec,
+    first: usize,
+    mimic: Option<Resolved>,
+    q_index: &[Option<usize>],
+) -> (Term, Term) {
+    // Entry `index` of the joint's own coordinates, plus the joint's value at q = 0.
+    let var = |index: usize, base: f64| -> Term {
+        let (index, scale, offset) = match mimic {
+            Some((primary, scale, offset)) => (q_index[primary].unwrap_or(index), scale, offset),
+            None => (index, 1.0, 0.0),
         };
-        for (c, component) in components.iter().enumerate() {
-            let Some(limits) = js.limits[c] else { continue };
-            if js.kind == JointKind::Continuous {
-                continue;
-            }
-            let (index, scale, off) = match mimic[j] {
+        Term::Var {
+            index,
+            scale,
+            offset: offset + base,
+        }
+    };
+    match js.kind {
+        JointKind::Fixed => (Term::Const(js.theta), Term::Const(js.d)),
+        JointKind::Revolute | JointKind::Continuous => (var(first, js.theta), Term::Const(js.d)),
+        JointKind::Prismatic => (Term::Const(js.theta), var(first, js.d)),
+        JointKind::Cylindrical => (var(first, js.theta), var(first + 1, js.d)),
+    }
+}
+
+/// The checks of `js`'s limits (`joint` its index in the chain), on the joint's own
+/// coordinate: `q` for an independent joint (entries from `first`), the implied value for a
+/// mimic joint. None for a continuous joint.
+fn joint_limit_checks(
+    js: &JointSpec,
+    joint: usize,
+    first: usize,
+    mimic: Option<Resolved>,
+    q_index: &[Option<usize>],
+) -> Vec<LimitCheck> {
+    if js.kind == JointKind::Continuous {
+        return Vec::new();
+    }
+    let components: &[Option<&'static str>] = if js.kind == JointKind::Cylindrical {
+        &[Some("theta"), Some("d")]
+    } else {
+        &[None]
+    };
+    components
+        .iter()
+        .enumerate()
+        .filter_map(|(c, component)| {
+            let limits = js.limits[c]?;
+            let (index, scale, offset) = match mimic {
                 Some((primary, m, o)) => (q_index[primary].unwrap_or(0), m, o),
                 None => (first + c, 1.0, 0.0),
             };
-            limit_checks.push(LimitCheck {
-                joint: new_joint[j],
+            Some(LimitCheck {
+                joint,
                 index,
                 component: *component,
                 scale,
-                offset: off,
+                offset,
                 limits,
-            });
-        }
-    }
+            })
+        })
+        .collect()
+}
 
-    let serial_run = bodies
-        .iter()
-        .enumerate()
-        .take_while(|(k, b)| b.parent == k.checked_sub(1))
-        .count();
-    let serial = serial_run == bodies.len();
-    let mut first_body_from = vec![usize::MAX; variables.len()];
-    for (k, b) in bodies.iter().enumerate() {
-        for index in b.motion.variables() {
-            first_body_from[index] = first_body_from[index].min(k);
+/// What the evaluation paths look up about the bodies (the [`Chain`] fields of the same names).
+struct EvalTables {
+    theta_gather: Vec<ThetaGather>,
+    trig_slot: Vec<usize>,
+    turning_before: Vec<usize>,
+    first_body_from: Vec<usize>,
+    serial_run: usize,
+    tail_start: usize,
+}
+
+impl EvalTables {
+    /// The tables for `bodies`, whose motions read `dof` entries of `q`.
+    fn new(bodies: &[Body], dof: usize) -> EvalTables {
+        let serial_run = bodies
+            .iter()
+            .enumerate()
+            .take_while(|(k, b)| b.parent == k.checked_sub(1))
+            .count();
+        let mut first_body_from = vec![usize::MAX; dof];
+        for (k, b) in bodies.iter().enumerate() {
+            for index in b.motion.variables() {
+                first_body_from[index] = first_body_from[index].min(k);
+            }
         }
-    }
-    for i in (1..first_body_from.len()).rev() {
-        first_body_from[i - 1] = first_body_from[i - 1].min(first_body_from[i]);
-    }
-    // θ is gathered only for the bodies whose θ varies, in body order: a body's slot in `sin`/`cos`.
-    let turning: Vec<&Body> = bodies
-        .iter()
-        .filter(|b| matches!(b.motion.theta, Term::Var { .. }))
-        .collect();
-    let mut trig_slot = Vec::with_capacity(bodies.len());
-    let mut turning_before = Vec::with_capacity(bodies.len() + 1);
-    let mut count = 0;
-    for b in &bodies {
+        for i in (1..first_body_from.len()).rev() {
+            first_body_from[i - 1] = first_body_from[i - 1].min(first_body_from[i]);
+        }
+        // θ is gathered only for the bodies whose θ varies, in body order: a body's slot in
+        // `sin`/`cos`.
+        let turning: Vec<&Body> = bodies
+            .iter()
+            .filter(|b| matches!(b.motion.theta, Term::Var { .. }))
+            .collect();
+        let mut trig_slot = Vec::with_capacity(bodies.len());
+        let mut turning_before = Vec::with_capacity(bodies.len() + 1);
+        let mut count = 0;
+        for b in bodies {
+            turning_before.push(count);
+            if matches!(b.motion.theta, Term::Var { .. }) {
+                trig_slot.push(count);
+                count += 1;
+            } else {
+                // Read but not used: a constant θ has its sine and cosine in the body.
+                trig_slot.push(0);
+            }
+        }
         turning_before.push(count);
-        if matches!(b.motion.theta, Term::Var { .. }) {
-            trig_slot.push(count);
-            count += 1;
-        } else {
-            // Read but not used: a constant θ has its sine and cosine in the body.
-            trig_slot.push(0);
+        let n = bodies.len();
+        let tail_start = (0..=n)
+            .find(|&k| n - k <= 4 && count - turning_before[k] <= 2)
+            .unwrap_or(n);
+        let theta_gather = turning
+            .chunks(crate::kernel::LANES)
+            .map(|chunk| {
+                let mut g = ThetaGather {
+                    index: [0; crate::kernel::LANES],
+                    scale: [0.0; crate::kernel::LANES],
+                    offset: [0.0; crate::kernel::LANES],
+                };
+                for (i, b) in chunk.iter().enumerate() {
+                    if let Term::Var {
+                        index,
+                        scale,
+                        offset,
+                    } = b.motion.theta
+                    {
+                        (g.index[i], g.scale[i], g.offset[i]) = (index, scale, offset);
+                    }
+                }
+                g
+            })
+            .collect();
+        EvalTables {
+            theta_gather,
+            trig_slot,
+            turning_before,
+            first_body_from,
+            serial_run,
+            tail_start,
         }
     }
-    turning_before.push(count);
-    let n = bodies.len();
-    let tail_start = (0..=n)
-        .find(|&k| n - k <= 4 && count - turning_before[k] <= 2)
-        .unwrap_or(n);
-    let theta_gather = turning
-        .chunks(crate::kernel::LANES)
-        .map(|chunk| {
-            let mut g = ThetaGather {
-                index: [0; crate::kernel::LANES],
-                scale: [0.0; crate::kernel::LANES],
-                offset: [0.0; crate::kernel::LANES],
-            };
-            for (i, b) in chunk.iter().enumerate() {
-                if let Term::Var {
-                    index,
-                    scale,
-                    offset,
-                } = b.motion.theta
-                {
-                    (g.index[i], g.scale[i], g.offset[i]) = (index, scale, offset);
-                }
-            }
-            g
-        })
-        .collect();
-
-    let joints: Vec<Joint> = joint_order
-        .iter()
-        .map(|&j| {
-            let js = &spec.joints[j];
-            Joint {
-                name: js.name.clone(),
-                kind: js.kind,
-                parent: LinkId(new_link[ends[j].0]),
-                child: LinkId(new_link[ends[j].1]),
-                axis: axes[j],
-                q_index: q_index[j],
-                mimic: mimic[j].map(|(p, multiplier, offset)| Mimic {
-                    primary: JointId(new_joint[p]),
-                    multiplier,
-                    offset,
-                }),
-                limits: if js.kind == JointKind::Continuous {
-                    [None, None]
-                } else {
-                    js.limits
-                },
-                theta0: js.theta,
-                d0: js.d,
-            }
-        })
-        .collect();
-    let links: Vec<Link> = link_order
-        .iter()
-        .map(|&l| Link {
-            name: spec.links[l].clone(),
-            parent_joint: parent_joint[l].map(|j| JointId(new_joint[j])),
-            body: link_carrier[l].0,
-            offset: link_carrier[l].1,
-        })
-        .collect();
-    let reach = reach_of.iter().copied().fold(0.0, f64::max);
-
-    Ok(Chain {
-        end_link: farthest_link(&links, &joints),
-        name: spec.name.clone(),
-        link_index: links
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (l.name.clone(), i))
-            .collect(),
-        joint_index: joints
-            .iter()
-            .enumerate()
-            .map(|(i, j)| (j.name.clone(), i))
-            .collect(),
-        joints,
-        links,
-        bodies,
-        theta_gather,
-        trig_slot,
-        turning_before,
-        first_body_from,
-        dense_limits: DenseLimits::new(&limit_checks, variables.len()),
-        variables,
-        limit_checks,
-        serial,
-        serial_run,
-        tail_start,
-        reach,
-        warnings: spec.warnings.clone(),
-        source: spec.clone(),
-    })
 }
 
 /// The link farthest from the base, counted in joints, the last in file order of equally far
