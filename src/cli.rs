@@ -14,6 +14,7 @@ use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
 use serde_json::{Map, Value, json};
+use std::hint::black_box;
 use std::io::{BufRead, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -1319,55 +1320,20 @@ fn bench(
     link: Option<&str>,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    use crate::batch::{
-        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
-        forward_kinematics_batch_to, single_precision,
-    };
-    use crate::kinematics::forward_kinematics_incremental;
-    use std::hint::black_box;
-
     let chain = &load(path)?;
     if chain.dof() == 0 {
         return Err(CliError::NothingToTime);
     }
     let qs = &crate::measure::configurations(chain, n, 0x6b69_6e65);
-    let qd: Vec<Vec<f64>> = qs
+    let qd: &Vec<Vec<f64>> = &qs
         .iter()
         .map(|q| q.iter().map(|x| 0.5 * x.sin()).collect())
         .collect();
-    let all: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
     let end = match link {
         Some(name) => chain.link_id(name)?,
         None => chain.end_link(),
     };
-    let links = chain.links().len();
-    // Every method has its own buffers, so that the methods can be timed in alternation.
-    let data = || Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
-    let batch_data = || BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
-
-    let flat: Vec<f64> = qs.concat();
-    let single_data =
-        || single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
-
-    // Errors of the single evaluation and of the single-precision batch against the 256-bit
-    // evaluation of the same model: (position, rotation) of each.
-    let mut errors = [(0.0_f64, 0.0_f64); 2];
-    let mut d = data();
-    let mut b32 = single_data();
-    let rough =
-        single_precision::forward_kinematics_batch(chain, &mut b32, &flat).map_err(|e| e.source)?;
-    for (i, q) in qs.iter().enumerate() {
-        let exact = crate::reference::link_poses(chain, q);
-        let poses = forward_kinematics(chain, &mut d, q)?;
-        let ours: Vec<Transform> = all.iter().map(|&l| poses.world_from_link(l)).collect();
-        let single: Vec<Transform> = all.iter().map(|&l| rough.world_from_link(i, l)).collect();
-        for (e, got) in errors.iter_mut().zip([ours, single]) {
-            let (p, r) = crate::reference::max_errors(&got, &exact);
-            *e = (e.0.max(p), e.1.max(r));
-        }
-    }
-    let [(position, rotation), (position32, rotation32)] = errors;
-
+    let flat: &Vec<f64> = &qs.concat();
     // The multi-threaded rows evaluate the configurations `copies` times over in one batch of
     // THREADED_ROWS_WORK joint evaluations on the end link's path.
     let mut end_path = Vec::new();
@@ -1375,17 +1341,99 @@ fn bench(
     let copies = THREADED_ROWS_WORK
         .div_ceil(qs.len().max(1) * end_path.len().max(1))
         .max(1);
-    let big: Vec<f64> = (0..copies).flat_map(|_| flat.iter().copied()).collect();
-    let (flat, big) = (&flat, &big);
-    // `wide`: `sin`/`cos` forced into one 512-bit register where `narrow_trig` would split them.
-    let all_links = |isa: Option<crate::Isa>, wide: bool| -> Box<dyn FnMut() + '_> {
-        let mut d = data();
+    let big: &Vec<f64> = &(0..copies).flat_map(|_| flat.iter().copied()).collect();
+    let work = Workload {
+        chain,
+        qs,
+        qd,
+        flat,
+        big,
+        copies,
+        end,
+    };
+    let pose_errors = work.pose_errors()?;
+
+    let mut methods = match level {
+        Level::Pose => work.pose_methods(path),
+        Level::Vel | Level::Acc => work.rate_methods(level == Level::Acc),
+    };
+    let items: Vec<usize> = methods.iter().map(|m| m.2).collect();
+    let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.1 as _).collect();
+    let timings =
+        crate::measure::Interleaved::run(std::time::Duration::from_millis(20), 7, &mut calls)
+            .per_item(&items);
+    let labels: Vec<&str> = methods.iter().map(|m| m.0.as_str()).collect();
+    let mut text = timing_table(chain, qs.len(), &labels, &timings);
+    text.push_str(&error_lines(&work, level, pose_errors)?);
+    write_line(out, &text)
+}
+
+/// What `kinechain bench` evaluates: `qs` (with rates `qd`), row-major in `flat`, and `flat`
+/// repeated `copies` times in `big` for the multi-threaded rows; `end` the link read after each
+/// single evaluation and kept by the one-link batches.
+#[derive(Clone, Copy)]
+struct Workload<'a> {
+    chain: &'a Chain,
+    qs: &'a [Vec<f64>],
+    qd: &'a [Vec<f64>],
+    flat: &'a [f64],
+    big: &'a [f64],
+    copies: usize,
+    end: LinkId,
+}
+
+impl<'a> Workload<'a> {
+    /// Buffers of one method (each has its own, so that the methods can be timed in
+    /// alternation), not checking limits, as `k` is timed.
+    fn data(&self) -> Data {
+        Data::new(self.chain).with_limit_policy(LimitPolicy::Ignore)
+    }
+
+    fn batch_data(&self) -> crate::batch::BatchData {
+        crate::batch::BatchData::new(self.chain).with_limit_policy(LimitPolicy::Ignore)
+    }
+
+    fn single_data(&self) -> crate::batch::single_precision::BatchData {
+        crate::batch::single_precision::BatchData::new(self.chain)
+            .with_limit_policy(LimitPolicy::Ignore)
+    }
+
+    /// The largest (position, rotation) errors of the single evaluation and of the
+    /// single-precision batch, against the 256-bit evaluation of the same model.
+    fn pose_errors(&self) -> Result<[(f64, f64); 2], CliError> {
+        let chain = self.chain;
+        let all: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
+        let mut errors = [(0.0_f64, 0.0_f64); 2];
+        let mut d = self.data();
+        let mut b32 = self.single_data();
+        let rough =
+            crate::batch::single_precision::forward_kinematics_batch(chain, &mut b32, self.flat)
+                .map_err(|e| e.source)?;
+        for (i, q) in self.qs.iter().enumerate() {
+            let exact = crate::reference::link_poses(chain, q);
+            let poses = forward_kinematics(chain, &mut d, q)?;
+            let ours: Vec<Transform> = all.iter().map(|&l| poses.world_from_link(l)).collect();
+            let single: Vec<Transform> = all.iter().map(|&l| rough.world_from_link(i, l)).collect();
+            for (e, got) in errors.iter_mut().zip([ours, single]) {
+                let (p, r) = crate::reference::max_errors(&got, &exact);
+                *e = (e.0.max(p), e.1.max(r));
+            }
+        }
+        Ok(errors)
+    }
+
+    /// Every link's pose of each configuration, on the kernels of `isa` (`None`: the machine's),
+    /// with `wide` the `sin`/`cos` forced into one 512-bit register where `narrow_trig` would
+    /// split them; the end link read after each.
+    fn all_links(&self, isa: Option<crate::Isa>, wide: bool) -> Box<dyn FnMut() + 'a> {
+        let Workload { chain, qs, end, .. } = *self;
+        let mut d = self.data();
         Box::new(move || {
             crate::force_isa(isa);
             if wide {
                 crate::force_narrow_trig(Some(false));
             }
-            for q in qs.iter() {
+            for q in qs {
                 black_box(
                     forward_kinematics(chain, &mut d, black_box(q))
                         .ok()
@@ -1397,150 +1445,167 @@ fn bench(
                 crate::force_narrow_trig(None);
             }
         })
-    };
-    let mut methods: Vec<Method<'_>> = Vec::new();
-    match level {
-        Level::Pose => {
-            methods.push((ALL_LINKS.into(), all_links(None, false), n));
-            let mut d = data();
-            methods.push((
-                format!("kinechain, end link {} only", chain.link(end).name()),
-                Box::new(move || {
-                    for q in qs.iter() {
-                        black_box(forward_kinematics_to(chain, &mut d, black_box(q), end).ok());
-                    }
-                }),
-                n,
-            ));
-            if let Some(last) = last_variable_to(chain, end)
-                && let Some((joint, component)) = chain.variables().nth(last)
-            {
-                let moved = match component {
-                    Some(c) => format!("{} {c}", chain.joint(joint).name()),
-                    None => chain.joint(joint).name().to_string(),
-                };
-                let moving: Vec<Vec<f64>> = qs
-                    .iter()
-                    .map(|q| {
-                        let mut m = qs[0].clone();
-                        m[last] = q[last];
-                        m
-                    })
-                    .collect();
-                let mut d = data();
-                methods.push((
-                    format!("{INCREMENTAL} ({moved} moves)"),
-                    Box::new(move || {
-                        for q in &moving {
-                            black_box(
-                                forward_kinematics_incremental(chain, &mut d, black_box(q))
-                                    .ok()
-                                    .map(|p| p.world_from_link(end)),
-                            );
-                        }
-                    }),
-                    n,
-                ));
-            }
-            let mut b = batch_data();
-            methods.push((
-                "kinechain, batch, 1 thread".into(),
-                Box::new(move || {
-                    black_box(
-                        forward_kinematics_batch(chain, &mut b, black_box(flat))
-                            .ok()
-                            .map(|b| b.len()),
-                    );
-                }),
-                n,
-            ));
-            let mut b = single_data();
-            methods.push((
-                "kinechain, batch f32, 1 thread".into(),
-                Box::new(move || {
-                    black_box(
-                        single_precision::forward_kinematics_batch(chain, &mut b, black_box(flat))
-                            .ok()
-                            .map(|b| b.len()),
-                    );
-                }),
-                n,
-            ));
-            let mut b = batch_data();
-            methods.push((
-                format!(
-                    "kinechain, batch of {}, {} threads",
+    }
+
+    /// The rows of `--level pose`: every evaluation mode, the baseline path, and `k` when it
+    /// loads the robot at `path`.
+    fn pose_methods(&self, path: &std::path::Path) -> Vec<Method<'a>> {
+        use crate::batch::{
+            forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
+            single_precision,
+        };
+        let Workload {
+            chain,
+            qs,
+            flat,
+            big,
+            copies,
+            end,
+            ..
+        } = *self;
+        let n = qs.len();
+        let threads = rayon::current_num_threads();
+        let mut methods: Vec<Method<'a>> = vec![(ALL_LINKS.into(), self.all_links(None, false), n)];
+        let mut d = self.data();
+        methods.push((
+            format!("kinechain, end link {} only", chain.link(end).name()),
+            Box::new(move || {
+                for q in qs {
+                    black_box(forward_kinematics_to(chain, &mut d, black_box(q), end).ok());
+                }
+            }),
+            n,
+        ));
+        methods.extend(self.incremental_method());
+        let mut b = self.batch_data();
+        methods.push((
+            "kinechain, batch, 1 thread".into(),
+            Box::new(move || {
+                black_box(
+                    forward_kinematics_batch(chain, &mut b, black_box(flat))
+                        .ok()
+                        .map(|b| b.len()),
+                );
+            }),
+            n,
+        ));
+        let mut b = self.single_data();
+        methods.push((
+            "kinechain, batch f32, 1 thread".into(),
+            Box::new(move || {
+                black_box(
+                    single_precision::forward_kinematics_batch(chain, &mut b, black_box(flat))
+                        .ok()
+                        .map(|b| b.len()),
+                );
+            }),
+            n,
+        ));
+        let mut b = self.batch_data();
+        methods.push((
+            format!("kinechain, batch of {}, {threads} threads", copies * n),
+            Box::new(move || {
+                black_box(
+                    forward_kinematics_batch_par(chain, &mut b, black_box(big))
+                        .ok()
+                        .map(|b| b.len()),
+                );
+            }),
+            copies * n,
+        ));
+        for parallel in [false, true] {
+            let (qs, label, count) = if parallel {
+                (
+                    big,
+                    format!(
+                        "kinechain, batch of {}, end link only, {threads} threads",
+                        copies * n
+                    ),
                     copies * n,
-                    rayon::current_num_threads()
-                ),
+                )
+            } else {
+                (flat, "kinechain, batch, end link only, 1 thread".into(), n)
+            };
+            let mut b = self.batch_data();
+            methods.push((
+                label,
                 Box::new(move || {
                     black_box(
-                        forward_kinematics_batch_par(chain, &mut b, black_box(big))
+                        forward_kinematics_batch_to(chain, &mut b, black_box(qs), end, parallel)
                             .ok()
                             .map(|b| b.len()),
                     );
                 }),
-                copies * n,
+                count,
             ));
-            for parallel in [false, true] {
-                let (qs, label, count) = if parallel {
-                    (
-                        &big,
-                        format!(
-                            "kinechain, batch of {}, end link only, {} threads",
-                            copies * n,
-                            rayon::current_num_threads()
-                        ),
-                        copies * n,
-                    )
-                } else {
-                    (&flat, "kinechain, batch, end link only, 1 thread".into(), n)
-                };
-                let mut b = batch_data();
-                methods.push((
-                    label,
-                    Box::new(move || {
-                        black_box(
-                            forward_kinematics_batch_to(
-                                chain,
-                                &mut b,
-                                black_box(qs),
-                                end,
-                                parallel,
-                            )
-                            .ok()
-                            .map(|b| b.len()),
-                        );
-                    }),
-                    count,
-                ));
-            }
-            // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
-            // `kernel::all_sin_cos` makes), what it saves.
-            if crate::isa() == crate::Isa::Avx512
-                && crate::narrow_trig()
-                && chain.theta_gather.len() == 1
-            {
-                methods.push((
-                    "kinechain, all links, sin/cos in one 512-bit register".into(),
-                    all_links(None, true),
-                    n,
-                ));
-            }
+        }
+        // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
+        // `kernel::all_sin_cos` makes), what it saves.
+        if crate::isa() == crate::Isa::Avx512
+            && crate::narrow_trig()
+            && chain.theta_gather.len() == 1
+        {
             methods.push((
-                "kinechain, baseline x86-64 path".into(),
-                all_links(Some(crate::Isa::Baseline), false),
+                "kinechain, all links, sin/cos in one 512-bit register".into(),
+                self.all_links(None, true),
                 n,
             ));
-            if let Some((label, k)) = k_method(path, chain, qs) {
-                methods.push((label, k, n));
-            }
         }
-        Level::Vel | Level::Acc => {
-            let acc = level == Level::Acc;
-            let mut d = data();
-            let qd = &qd;
-            methods.push((
+        methods.push((
+            "kinechain, baseline x86-64 path".into(),
+            self.all_links(Some(crate::Isa::Baseline), false),
+            n,
+        ));
+        if let Some((label, k)) = k_method(path, chain, qs) {
+            methods.push((label, k, n));
+        }
+        methods
+    }
+
+    /// The incremental update moving only the last entry of `q` on the end link's path, from
+    /// the first configuration's other entries; `None` if no joint moves the end link.
+    fn incremental_method(&self) -> Option<Method<'a>> {
+        use crate::kinematics::forward_kinematics_incremental;
+        let Workload { chain, qs, end, .. } = *self;
+        let last = last_variable_to(chain, end)?;
+        let (joint, component) = chain.variables().nth(last)?;
+        let moved = match component {
+            Some(c) => format!("{} {c}", chain.joint(joint).name()),
+            None => chain.joint(joint).name().to_string(),
+        };
+        let moving: Vec<Vec<f64>> = qs
+            .iter()
+            .map(|q| {
+                let mut m = qs[0].clone();
+                m[last] = q[last];
+                m
+            })
+            .collect();
+        let mut d = self.data();
+        Some((
+            format!("{INCREMENTAL} ({moved} moves)"),
+            Box::new(move || {
+                for q in &moving {
+                    black_box(
+                        forward_kinematics_incremental(chain, &mut d, black_box(q))
+                            .ok()
+                            .map(|p| p.world_from_link(end)),
+                    );
+                }
+            }),
+            qs.len(),
+        ))
+    }
+
+    /// The rows of `--level vel` (`acc` false) or `--level acc`: the evaluation with rates, and
+    /// poses alone.
+    fn rate_methods(&self, acc: bool) -> Vec<Method<'a>> {
+        let Workload {
+            chain, qs, qd, end, ..
+        } = *self;
+        let mut d = self.data();
+        vec![
+            (
                 if acc {
                     format!("{WITH_RATES} + accelerations")
                 } else {
@@ -1563,32 +1628,34 @@ fn bench(
                         }
                     }
                 }),
-                n,
-            ));
-            methods.push((POSES_ONLY.into(), all_links(None, false), n));
-        }
+                qs.len(),
+            ),
+            (POSES_ONLY.into(), self.all_links(None, false), qs.len()),
+        ]
     }
+}
 
-    let items: Vec<usize> = methods.iter().map(|m| m.2).collect();
-    let mut calls: Vec<&mut dyn FnMut()> = methods.iter_mut().map(|m| &mut *m.1 as _).collect();
-    let timings =
-        crate::measure::Interleaved::run(std::time::Duration::from_millis(20), 7, &mut calls)
-            .per_item(&items);
-    let k = methods.iter().position(|(m, _, _)| m.starts_with("k "));
-    let reach = chain.reach().max(f64::MIN_POSITIVE);
+/// The header, the table of `kinechain bench` (a row per method of `labels`, with its ratio
+/// to the `k` row's time if there is one) and the lines comparing rows measured together.
+fn timing_table(
+    chain: &Chain,
+    n: usize,
+    labels: &[&str],
+    timings: &crate::measure::Interleaved,
+) -> String {
+    let k = labels.iter().position(|m| m.starts_with("k "));
     let mut text = format!(
-        "{}: {} dof, {} links, {} moving joints; {} random configurations; kernels: {}\n",
+        "{}: {} dof, {} links, {} moving joints; {n} random configurations; kernels: {}\n",
         chain.name(),
         chain.dof(),
-        links,
+        chain.links().len(),
         chain.moving_joint_count(),
-        qs.len(),
         kernels_name()
     );
     // The method column as wide as its longest name (the end link's name is part of one).
-    let width = methods
+    let width = labels
         .iter()
-        .map(|(m, _, _)| m.chars().count())
+        .map(|m| m.chars().count())
         .max()
         .unwrap_or(0)
         .max(48);
@@ -1596,7 +1663,7 @@ fn bench(
         "{:<width$} {:>12} {:>10}\n",
         "method", "ns/config", "vs k"
     ));
-    for (i, (method, _, _)) in methods.iter().enumerate() {
+    for (i, method) in labels.iter().enumerate() {
         let ns = timings.median(i);
         let ratio = k.map_or("-".to_string(), |k| format!("{:.1}x", timings.ratio(k, i)));
         text.push_str(&format!("{method:<width$} {ns:>12.1} {ratio:>10}\n"));
@@ -1606,7 +1673,7 @@ fn bench(
     );
     // The incremental update against a full evaluation, and rates against poses alone, measured
     // in the same rounds.
-    let row = |label: &str| methods.iter().position(|(m, _, _)| m.starts_with(label));
+    let row = |label: &str| labels.iter().position(|m| m.starts_with(label));
     for (part, whole, of) in [
         (INCREMENTAL, ALL_LINKS, "all links"),
         (WITH_RATES, POSES_ONLY, "poses only"),
@@ -1614,19 +1681,38 @@ fn bench(
         if let (Some(p), Some(w)) = (row(part), row(whole)) {
             text.push_str(&format!(
                 "{}: {:.2}x the time of {of} (median of the ratios within a round)\n",
-                methods[p].0.trim_start_matches("kinechain, "),
+                labels[p].trim_start_matches("kinechain, "),
                 timings.ratio(p, w)
             ));
         }
     }
-    text.push_str(&format!(
+    text
+}
+
+/// The error lines of `kinechain bench`: the poses' against the 256-bit evaluation
+/// (`pose_errors` from [`Workload::pose_errors`]), then the single-precision batch's
+/// (`--level pose`) or the rates' (`--level vel|acc`).
+fn error_lines(
+    work: &Workload<'_>,
+    level: Level,
+    pose_errors: [(f64, f64); 2],
+) -> Result<String, CliError> {
+    let [(position, rotation), (position32, rotation32)] = pose_errors;
+    let reach = work.chain.reach().max(f64::MIN_POSITIVE);
+    let mut text = format!(
         "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
-    ));
-    if level != Level::Pose {
+    );
+    if level == Level::Pose {
+        text.push_str(&format!(
+            "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
+            position32 / (reach * f64::from(f32::EPSILON)),
+            rotation32 / f64::from(f32::EPSILON)
+        ));
+    } else {
         let names = ["ω", "v", "α", "a"];
         let units = ["rad/s", "m/s", "rad/s²", "m/s²"];
-        let parts: Vec<String> = rate_errors(chain, qs, &qd, level == Level::Acc)?
+        let parts: Vec<String> = rate_errors(work.chain, work.qs, work.qd, level == Level::Acc)?
             .iter()
             .zip(names.iter().zip(units))
             .map(|((abs, ulps), (name, unit))| {
@@ -1637,14 +1723,8 @@ fn bench(
             "\nrate errors against the 256-bit evaluation: {}",
             parts.join(", ")
         ));
-    } else {
-        text.push_str(&format!(
-            "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
-            position32 / (reach * f64::from(f32::EPSILON)),
-            rotation32 / f64::from(f32::EPSILON)
-        ));
     }
-    write_line(out, &text)
+    Ok(text)
 }
 
 /// Errors of ω and v, and with `acc` of α and a, against the 256-bit evaluation of the same
@@ -1721,7 +1801,6 @@ fn k_method<'a>(
     chain: &Chain,
     qs: &[Vec<f64>],
 ) -> Option<(String, Box<dyn FnMut() + 'a>)> {
-    use std::hint::black_box;
     let (robot, written, label) =
         if crate::io::Format::from_path(path) == Some(crate::io::Format::Urdf) {
             let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
