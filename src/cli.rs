@@ -990,191 +990,10 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
     if args.ignore_limits {
         data.set_limit_policy(LimitPolicy::Ignore);
     }
-    let links = args
-        .links
-        .iter()
-        .map(|n| chain.link_id(n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let points = args
-        .points
-        .iter()
-        .map(|p| parse_point(&chain, p))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut outputs = Outputs {
-        links: Vec::with_capacity(chain.links().len()),
-        points: Vec::with_capacity(points.len()),
-        jacobians: args
-            .jacobians
-            .iter()
-            .map(|n| {
-                Ok(JacobianResult {
-                    link: chain.link_id(n)?,
-                    j: nalgebra::Matrix6xX::zeros(chain.dof()),
-                    j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
-                    with_rate: false,
-                })
-            })
-            .collect::<Result<Vec<_>, CliError>>()?,
-    };
-    let mut emit =
-        |out: &mut dyn Write, c: &Configuration, data: &mut Data| -> Result<(), CliError> {
-            evaluate(&chain, data, c, &links, &points, &mut outputs)?;
-            let Outputs {
-                links: results,
-                points: point_results,
-                jacobians,
-            } = &outputs;
-            check_finite(&chain, results, &points, point_results)?;
-            let text = match args.format {
-                OutputFormat::Json => {
-                    let mut value = results_json(&chain, results, args.orientation);
-                    if !points.is_empty() {
-                        value["points"] = points_json(&chain, &points, point_results);
-                    }
-                    if !jacobians.is_empty() {
-                        jacobians_json(&chain, jacobians, &mut value);
-                    }
-                    value.to_string()
-                }
-                OutputFormat::Table => {
-                    let mut text = results_table(&chain, results, args.orientation);
-                    text.push_str(&points_table(&chain, &points, point_results));
-                    text.push_str(&jacobians_table(&chain, jacobians));
-                    text
-                }
-            };
-            write_line(out, &text)
-        };
-
+    let mut request = Request::new(&chain, args)?;
     if let Some(path) = &args.batch {
-        let file = std::fs::File::open(path).map_err(|source| CliError::Io {
-            context: format!("cannot open batch file {}", path.display()),
-            source,
-        })?;
-        // Pose-only lines (the common case) go through the batch kernel, 256 at a time; lines
-        // with rates, or a run with --link/--point, go one by one. Results are written in line
-        // order, and everything before a bad line is written before its error.
-        // (A chain without moving joints has empty configurations, which a flat batch cannot
-        // count: its lines go one by one.)
-        let batchable =
-            links.is_empty() && points.is_empty() && args.jacobians.is_empty() && chain.dof() > 0;
-        let mut pending: Vec<f64> = Vec::new();
-        // The 1-based line number of each pending configuration.
-        let mut pending_lines: Vec<usize> = Vec::new();
-        let mut batch = BatchData::new(&chain);
-        batch.set_limit_policy(data.limit_policy());
-        let at = |line: usize, source: CliError| CliError::BatchLine {
-            path: path.clone(),
-            line,
-            source: Box::new(source),
-        };
-        // Writes the pending configurations' results; returns how many failed (written as error
-        // objects under --keep-going; without it, the first failure is the error).
-        let mut flush = |out: &mut dyn Write,
-                         pending: &mut Vec<f64>,
-                         lines: &mut Vec<usize>|
-         -> Result<usize, CliError> {
-            if pending.is_empty() {
-                return Ok(0);
-            }
-            let poses = forward_kinematics_batch(&chain, &mut batch, pending).map_err(|e| {
-                // (Each line was checked as it was read, so this is not expected.)
-                let line = lines.get(e.index).or(lines.last()).copied().unwrap_or(0);
-                at(line, CliError::State(e.source))
-            })?;
-            let mut failed = 0;
-            for (i, &line) in lines.iter().enumerate() {
-                let results: Vec<LinkResult> = (0..chain.links().len())
-                    .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
-                    .collect();
-                let text = match check_finite(&chain, &results, &[], &[]) {
-                    Ok(()) => match args.format {
-                        OutputFormat::Json => {
-                            results_json(&chain, &results, args.orientation).to_string()
-                        }
-                        OutputFormat::Table => results_table(&chain, &results, args.orientation),
-                    },
-                    Err(e) if args.keep_going => {
-                        failed += 1;
-                        error_json(line, &e)
-                    }
-                    Err(e) => return Err(at(line, e)),
-                };
-                write_line(out, &text)?;
-            }
-            pending.clear();
-            lines.clear();
-            Ok(failed)
-        };
-        let mut failed_lines = 0usize;
-        let mut reader = std::io::BufReader::new(file);
-        let limit = batch_line_limit(chain.dof());
-        let mut bytes = Vec::new();
-        for i in 0.. {
-            let result = match read_capped_line(&mut reader, &mut bytes, limit) {
-                Ok(CappedLine::End) => break,
-                Ok(CappedLine::Line) => {
-                    std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
-                        byte: e.valid_up_to() + 1,
-                    })
-                }
-                Ok(CappedLine::TooLong) => Err(CliError::LineTooLong { limit }),
-                Err(source) => Err(CliError::Io {
-                    context: "cannot read line".into(),
-                    source,
-                }),
-            };
-            let result = result.and_then(|line| {
-                if line.trim().is_empty() {
-                    return Ok(None);
-                }
-                let c = batch_configuration(&chain, line)?;
-                if batchable && c.qd.is_none() && c.qdd.is_none() {
-                    check_q(&chain, &c.q, data.limit_policy())?;
-                    pending.extend_from_slice(&c.q);
-                    pending_lines.push(i + 1);
-                    return Ok(None);
-                }
-                Ok(Some(c))
-            });
-            match result {
-                Ok(None) => {
-                    if pending_lines.len() >= 256 {
-                        failed_lines += flush(out, &mut pending, &mut pending_lines)?;
-                    }
-                }
-                Ok(Some(c)) => {
-                    failed_lines += flush(out, &mut pending, &mut pending_lines)?;
-                    match emit(out, &c, &mut data) {
-                        Ok(()) => {}
-                        Err(e @ CliError::Io { .. }) => return Err(e),
-                        Err(e) if args.keep_going => {
-                            failed_lines += 1;
-                            write_line(out, &error_json(i + 1, &e))?;
-                        }
-                        Err(e) => return Err(at(i + 1, e)),
-                    }
-                }
-                Err(e) => {
-                    failed_lines += flush(out, &mut pending, &mut pending_lines)?;
-                    if !args.keep_going {
-                        return Err(at(i + 1, e));
-                    }
-                    failed_lines += 1;
-                    write_line(out, &error_json(i + 1, &e))?;
-                }
-            }
-        }
-        failed_lines += flush(out, &mut pending, &mut pending_lines)?;
-        if failed_lines > 0 {
-            return Err(CliError::BatchFailures {
-                path: path.clone(),
-                count: failed_lines,
-            });
-        }
-        return Ok(());
+        return fk_batch_file(&chain, args, &mut data, &mut request, path, out);
     }
-
     let q = args.q.as_deref().unwrap_or_default();
     let c = Configuration {
         q: joint_vector_from_str(&chain, q, "q")?,
@@ -1189,7 +1008,255 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             .map(|t| joint_vector_from_str(&chain, t, "qdd"))
             .transpose()?,
     };
-    emit(out, &c, &mut data)
+    request.emit(&chain, args, &mut data, &c, out)
+}
+
+/// What `fk` prints for each configuration (`--link`, `--point`, `--jacobian`), with the
+/// buffers of the results.
+struct Request {
+    links: Vec<LinkId>,
+    points: Vec<Point>,
+    outputs: Outputs,
+}
+
+impl Request {
+    fn new(chain: &Chain, args: &FkArgs) -> Result<Request, CliError> {
+        let links = args
+            .links
+            .iter()
+            .map(|n| chain.link_id(n))
+            .collect::<Result<Vec<_>, _>>()?;
+        let points = args
+            .points
+            .iter()
+            .map(|p| parse_point(chain, p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let outputs = Outputs {
+            links: Vec::with_capacity(chain.links().len()),
+            points: Vec::with_capacity(points.len()),
+            jacobians: args
+                .jacobians
+                .iter()
+                .map(|n| {
+                    Ok(JacobianResult {
+                        link: chain.link_id(n)?,
+                        j: nalgebra::Matrix6xX::zeros(chain.dof()),
+                        j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
+                        with_rate: false,
+                    })
+                })
+                .collect::<Result<Vec<_>, CliError>>()?,
+        };
+        Ok(Request {
+            links,
+            points,
+            outputs,
+        })
+    }
+
+    /// Whether the request is every link's pose and nothing else, which the batch kernel can
+    /// evaluate (a chain without moving joints has empty configurations, which a flat batch
+    /// cannot count).
+    fn poses_only(&self, chain: &Chain) -> bool {
+        self.links.is_empty()
+            && self.points.is_empty()
+            && self.outputs.jacobians.is_empty()
+            && chain.dof() > 0
+    }
+
+    /// Evaluates `c` and writes its results in the format `args` asks for.
+    fn emit(
+        &mut self,
+        chain: &Chain,
+        args: &FkArgs,
+        data: &mut Data,
+        c: &Configuration,
+        out: &mut dyn Write,
+    ) -> Result<(), CliError> {
+        evaluate(chain, data, c, &self.links, &self.points, &mut self.outputs)?;
+        let Outputs {
+            links: results,
+            points: point_results,
+            jacobians,
+        } = &self.outputs;
+        let points = &self.points;
+        check_finite(chain, results, points, point_results)?;
+        let text = match args.format {
+            OutputFormat::Json => {
+                let mut value = results_json(chain, results, args.orientation);
+                if !points.is_empty() {
+                    value["points"] = points_json(chain, points, point_results);
+                }
+                if !jacobians.is_empty() {
+                    jacobians_json(chain, jacobians, &mut value);
+                }
+                value.to_string()
+            }
+            OutputFormat::Table => {
+                let mut text = results_table(chain, results, args.orientation);
+                text.push_str(&points_table(chain, points, point_results));
+                text.push_str(&jacobians_table(chain, jacobians));
+                text
+            }
+        };
+        write_line(out, &text)
+    }
+}
+
+/// The error of line `line` of the batch file `path`.
+fn at_line(path: &Path, line: usize, source: CliError) -> CliError {
+    CliError::BatchLine {
+        path: path.to_path_buf(),
+        line,
+        source: Box::new(source),
+    }
+}
+
+/// Pose-only lines of a batch file, evaluated together by the batch kernel.
+struct PendingPoses {
+    /// Their configurations, row-major.
+    qs: Vec<f64>,
+    /// The 1-based line number of each.
+    lines: Vec<usize>,
+    batch: BatchData,
+}
+
+impl PendingPoses {
+    /// Lines held before they are evaluated.
+    const MAX: usize = 256;
+
+    /// Writes the pending configurations' results and forgets them; returns how many failed
+    /// (written as error objects under `--keep-going`; without it, the first failure is the
+    /// error).
+    fn flush(
+        &mut self,
+        chain: &Chain,
+        args: &FkArgs,
+        path: &Path,
+        out: &mut dyn Write,
+    ) -> Result<usize, CliError> {
+        if self.qs.is_empty() {
+            return Ok(0);
+        }
+        let lines = &self.lines;
+        let poses = forward_kinematics_batch(chain, &mut self.batch, &self.qs).map_err(|e| {
+            // (Each line was checked as it was read, so this is not expected.)
+            let line = lines.get(e.index).or(lines.last()).copied().unwrap_or(0);
+            at_line(path, line, CliError::State(e.source))
+        })?;
+        let mut failed = 0;
+        for (i, &line) in lines.iter().enumerate() {
+            let results: Vec<LinkResult> = (0..chain.links().len())
+                .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
+                .collect();
+            let text = match check_finite(chain, &results, &[], &[]) {
+                Ok(()) => match args.format {
+                    OutputFormat::Json => {
+                        results_json(chain, &results, args.orientation).to_string()
+                    }
+                    OutputFormat::Table => results_table(chain, &results, args.orientation),
+                },
+                Err(e) if args.keep_going => {
+                    failed += 1;
+                    error_json(line, &e)
+                }
+                Err(e) => return Err(at_line(path, line, e)),
+            };
+            write_line(out, &text)?;
+        }
+        self.qs.clear();
+        self.lines.clear();
+        Ok(failed)
+    }
+}
+
+/// `fk --batch`: one result per line of the file at `path`, in line order. Pose-only lines (the
+/// common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with rates,
+/// or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before a bad
+/// line is written before its error.
+fn fk_batch_file(
+    chain: &Chain,
+    args: &FkArgs,
+    data: &mut Data,
+    request: &mut Request,
+    path: &Path,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let file = std::fs::File::open(path).map_err(|source| CliError::Io {
+        context: format!("cannot open batch file {}", path.display()),
+        source,
+    })?;
+    let batchable = request.poses_only(chain);
+    let mut pending = PendingPoses {
+        qs: Vec::new(),
+        lines: Vec::new(),
+        batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
+    };
+    let mut failed_lines = 0usize;
+    let mut reader = std::io::BufReader::new(file);
+    let limit = batch_line_limit(chain.dof());
+    let mut bytes = Vec::new();
+    for i in 0.. {
+        let result = match read_capped_line(&mut reader, &mut bytes, limit) {
+            Ok(CappedLine::End) => break,
+            Ok(CappedLine::Line) => std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
+                byte: e.valid_up_to() + 1,
+            }),
+            Ok(CappedLine::TooLong) => Err(CliError::LineTooLong { limit }),
+            Err(source) => Err(CliError::Io {
+                context: "cannot read line".into(),
+                source,
+            }),
+        };
+        let result = result.and_then(|line| {
+            if line.trim().is_empty() {
+                return Ok(None);
+            }
+            let c = batch_configuration(chain, line)?;
+            if batchable && c.qd.is_none() && c.qdd.is_none() {
+                check_q(chain, &c.q, data.limit_policy())?;
+                pending.qs.extend_from_slice(&c.q);
+                pending.lines.push(i + 1);
+                return Ok(None);
+            }
+            Ok(Some(c))
+        });
+        match result {
+            Ok(None) => {
+                if pending.lines.len() >= PendingPoses::MAX {
+                    failed_lines += pending.flush(chain, args, path, out)?;
+                }
+            }
+            Ok(Some(c)) => {
+                failed_lines += pending.flush(chain, args, path, out)?;
+                match request.emit(chain, args, data, &c, out) {
+                    Ok(()) => {}
+                    Err(e @ CliError::Io { .. }) => return Err(e),
+                    Err(e) if args.keep_going => {
+                        failed_lines += 1;
+                        write_line(out, &error_json(i + 1, &e))?;
+                    }
+                    Err(e) => return Err(at_line(path, i + 1, e)),
+                }
+            }
+            Err(e) => {
+                failed_lines += pending.flush(chain, args, path, out)?;
+                if !args.keep_going {
+                    return Err(at_line(path, i + 1, e));
+                }
+                failed_lines += 1;
+                write_line(out, &error_json(i + 1, &e))?;
+            }
+        }
+    }
+    failed_lines += pending.flush(chain, args, path, out)?;
+    if failed_lines > 0 {
+        return Err(CliError::BatchFailures {
+            path: path.to_path_buf(),
+            count: failed_lines,
+        });
+    }
+    Ok(())
 }
 
 /// The longest batch line read, in bytes: 1 MiB, plus 1 KiB per degree of freedom (a line names
