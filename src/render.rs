@@ -109,16 +109,61 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
         .max(1e-9);
     let triad = 0.08 * reach;
     let arrow = 0.12 * reach;
-
-    // One scale for the three orthographic views (so the scale bar holds for all), another for
-    // the isometric one; each view is centred on its own extent.
     let mut points: Vec<Point3<f64>> = origins.clone();
     for (_, p, z) in &axes {
         points.push(p + z * arrow);
     }
+    let (panels, ortho) = layout(&points);
+
+    let mut s = String::new();
+    let size = 2.0 * PANEL;
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{}" viewBox="0 0 {size} {}" font-family="sans-serif" font-size="11">"#,
+        size + 40.0,
+        size + 40.0
+    );
+    let _ = writeln!(s, "<title>{}</title>", escape_shown(chain.name()));
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    for (i, p) in panels.iter().enumerate() {
+        write_panel(&mut s, chain, i, p, &origins, &axes, arrow);
+    }
+    // One group per link: its origin and triad in every panel, and its name on hover.
+    let tools: Vec<LinkId> = links
+        .iter()
+        .copied()
+        .filter(|l| chain.joints().iter().all(|j| j.parent() != *l))
+        .collect();
+    for (i, &l) in links.iter().enumerate() {
+        let role = if l == LinkId(0) {
+            " base"
+        } else if tools.contains(&l) {
+            " tool"
+        } else {
+            ""
+        };
+        let columns = [0, 1, 2].map(|k| frames[i].rotation().column(k) * triad);
+        write_link(
+            &mut s,
+            chain.link(l).name(),
+            role,
+            &panels,
+            &origins[i],
+            &columns,
+        );
+    }
+    write_legend(&mut s, size, ortho);
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The four panels, each centred on the extent of `points` in its view: one scale for the three
+/// orthographic views (so that the scale bar holds for all), returned as well, and another for
+/// the isometric one.
+fn layout(points: &[Point3<f64>]) -> (Vec<Panel>, f64) {
     let extent = |v: View| {
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
-        for p in &points {
+        for p in points {
             let (u, w) = v.project(p);
             lo = (lo.0.min(u), lo.1.min(w));
             hi = (hi.0.max(u), hi.1.max(w));
@@ -135,7 +180,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
             .iter()
             .fold(0.0_f64, |m, s| m.max(*s));
     let iso = (PANEL - 2.0 * MARGIN) / span(View::Isometric);
-    let panels: Vec<Panel> = View::ALL
+    let panels = View::ALL
         .iter()
         .enumerate()
         .map(|(i, &view)| {
@@ -151,122 +196,122 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
             }
         })
         .collect();
+    (panels, ortho)
+}
 
-    let mut s = String::new();
-    let size = 2.0 * PANEL;
+/// Panel `i`: its frame and title, the links as segments between the origins of each joint's
+/// parent and child, and the joint axes as arrows of length `arrow`.
+fn write_panel(
+    s: &mut String,
+    chain: &Chain,
+    i: usize,
+    p: &Panel,
+    origins: &[Point3<f64>],
+    axes: &[(String, Point3<f64>, Vector3<f64>)],
+    arrow: f64,
+) {
+    let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
     let _ = writeln!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{}" viewBox="0 0 {size} {}" font-family="sans-serif" font-size="11">"#,
-        size + 40.0,
-        size + 40.0
+        r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{:.6}">"#,
+        p.view.name(),
+        p.x0,
+        p.y0,
+        p.scale
     );
-    let _ = writeln!(s, "<title>{}</title>", escape_shown(chain.name()));
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    for (i, p) in panels.iter().enumerate() {
-        let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+    let _ = writeln!(
+        s,
+        r##"<rect x="{px}" y="{py}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#bbb"/><text x="{}" y="{}" fill="#555">{}</text>"##,
+        px + 8.0,
+        py + 16.0,
+        match p.view {
+            View::Front => "front (x →, z ↑)",
+            View::Side => "side (y →, z ↑)",
+            View::Top => "top (x →, y ↑)",
+            View::Isometric => "isometric",
+        }
+    );
+    // Links: segments from the parent link's origin to the child's, one per joint.
+    for j in chain.joints() {
+        let (a, b) = (p.at(&origins[j.parent().0]), p.at(&origins[j.child().0]));
         let _ = writeln!(
             s,
-            r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{:.6}">"#,
-            p.view.name(),
-            p.x0,
-            p.y0,
-            p.scale
+            r##"<line class="segment" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#333" stroke-width="3" stroke-linecap="round"><title>{}</title></line>"##,
+            a.0,
+            a.1,
+            b.0,
+            b.1,
+            escape_shown(j.name())
         );
-        let _ = writeln!(
-            s,
-            r##"<rect x="{px}" y="{py}" width="{PANEL}" height="{PANEL}" fill="none" stroke="#bbb"/><text x="{}" y="{}" fill="#555">{}</text>"##,
-            px + 8.0,
-            py + 16.0,
-            match p.view {
-                View::Front => "front (x →, z ↑)",
-                View::Side => "side (y →, z ↑)",
-                View::Top => "top (x →, y ↑)",
-                View::Isometric => "isometric",
-            }
-        );
-        // Links: segments from the parent link's origin to the child's, one per joint.
-        for j in chain.joints() {
-            let (a, b) = (p.at(&origins[j.parent().0]), p.at(&origins[j.child().0]));
-            let _ = writeln!(
-                s,
-                r##"<line class="segment" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#333" stroke-width="3" stroke-linecap="round"><title>{}</title></line>"##,
-                a.0,
-                a.1,
-                b.0,
-                b.1,
-                escape_shown(j.name())
-            );
-        }
-        // Joint axes: short arrows from the axis point along the axis.
-        for (name, o, z) in &axes {
-            let (a, b) = (p.at(o), p.at(&(o + z * arrow)));
-            let _ = writeln!(
-                s,
-                r##"<line class="axis" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#c60" stroke-width="1.5" marker-end="url(#arrow)"><title>axis of {}</title></line>"##,
-                a.0,
-                a.1,
-                b.0,
-                b.1,
-                escape_shown(name)
-            );
-        }
-        let _ = writeln!(s, "</g>");
     }
-    // One group per link: its origin and triad in every panel, and its name on hover.
-    let root = LinkId(0);
-    let tools: Vec<LinkId> = links
-        .iter()
-        .copied()
-        .filter(|l| chain.joints().iter().all(|j| j.parent() != *l))
-        .collect();
-    for (i, &l) in links.iter().enumerate() {
-        let name = chain.link(l).name();
-        let role = if l == root {
-            " base"
-        } else if tools.contains(&l) {
-            " tool"
-        } else {
-            ""
+    // Joint axes: short arrows from the axis point along the axis.
+    for (name, o, z) in axes {
+        let (a, b) = (p.at(o), p.at(&(o + z * arrow)));
+        let _ = writeln!(
+            s,
+            r##"<line class="axis" x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="#c60" stroke-width="1.5" marker-end="url(#arrow)"><title>axis of {}</title></line>"##,
+            a.0,
+            a.1,
+            b.0,
+            b.1,
+            escape_shown(name)
+        );
+    }
+    let _ = writeln!(s, "</g>");
+}
+
+/// The group of the link `name` at `origin`: in every panel its triad (`columns`, the frame's
+/// axes scaled to the triad's length), the marker of its `role` (`" base"`, `" tool"` or none)
+/// and its origin.
+fn write_link(
+    s: &mut String,
+    name: &str,
+    role: &str,
+    panels: &[Panel],
+    origin: &Point3<f64>,
+    columns: &[Vector3<f64>; 3],
+) {
+    let _ = writeln!(
+        s,
+        r#"<g class="link{role}" data-link="{shown}"><title>{shown}</title>"#,
+        shown = escape_shown(name)
+    );
+    for p in panels {
+        let o = p.at(origin);
+        for (column, color) in columns.iter().zip(["#d00", "#080", "#00d"]) {
+            let t = p.at(&(origin + column));
+            let _ = writeln!(
+                s,
+                r#"<line x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="{color}" stroke-width="1"/>"#,
+                o.0, o.1, t.0, t.1
+            );
+        }
+        let marker = match role {
+            " base" => format!(
+                r##"<rect x="{:.3}" y="{:.3}" width="10" height="10" fill="#444"/>"##,
+                o.0 - 5.0,
+                o.1 - 5.0
+            ),
+            " tool" => format!(
+                r##"<circle cx="{:.3}" cy="{:.3}" r="5" fill="none" stroke="#c00" stroke-width="2"/>"##,
+                o.0, o.1
+            ),
+            _ => String::new(),
         };
         let _ = writeln!(
             s,
-            r#"<g class="link{role}" data-link="{shown}"><title>{shown}</title>"#,
-            shown = escape_shown(name)
+            r##"{marker}<circle class="origin" data-view="{}" cx="{:.6}" cy="{:.6}" r="2.5" fill="#222"/>"##,
+            p.view.name(),
+            o.0,
+            o.1
         );
-        for p in &panels {
-            let o = p.at(&origins[i]);
-            for (k, color) in ["#d00", "#080", "#00d"].iter().enumerate() {
-                let tip = origins[i] + frames[i].rotation().column(k) * triad;
-                let t = p.at(&tip);
-                let _ = writeln!(
-                    s,
-                    r#"<line x1="{:.3}" y1="{:.3}" x2="{:.3}" y2="{:.3}" stroke="{color}" stroke-width="1"/>"#,
-                    o.0, o.1, t.0, t.1
-                );
-            }
-            let marker = match role {
-                " base" => format!(
-                    r##"<rect x="{:.3}" y="{:.3}" width="10" height="10" fill="#444"/>"##,
-                    o.0 - 5.0,
-                    o.1 - 5.0
-                ),
-                " tool" => format!(
-                    r##"<circle cx="{:.3}" cy="{:.3}" r="5" fill="none" stroke="#c00" stroke-width="2"/>"##,
-                    o.0, o.1
-                ),
-                _ => String::new(),
-            };
-            let _ = writeln!(
-                s,
-                r##"{marker}<circle class="origin" data-view="{}" cx="{:.6}" cy="{:.6}" r="2.5" fill="#222"/>"##,
-                p.view.name(),
-                o.0,
-                o.1
-            );
-        }
-        let _ = writeln!(s, "</g>");
     }
-    // Scale bar (orthographic views).
+    let _ = writeln!(s, "</g>");
+}
+
+/// The scale bar of the orthographic views (drawn at `ortho` pixels per metre), the key, and
+/// the arrowhead's definition, below the panels of a drawing `size` wide.
+fn write_legend(s: &mut String, size: f64, ortho: f64) {
     let bar = round_length(0.25 * (PANEL - 2.0 * MARGIN) / ortho);
     let (bx, by) = (20.0, size + 20.0);
     let _ = writeln!(
@@ -287,6 +332,4 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
         s,
         r##"<defs><marker id="arrow" viewBox="0 0 10 10" refX="9" refY="5" markerWidth="6" markerHeight="6" orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" fill="#c60"/></marker></defs>"##
     );
-    s.push_str("</svg>\n");
-    s
 }
