@@ -360,6 +360,131 @@ impl Reader<'_> {
             }
         }
     }
+
+    /// `spec` with the numbers of DH row `j`: θ and d at q = 0, and `Tx(a) Rx(α)` after the
+    /// joint's motion about z (`standard`) or before it (`modified`); a warning in `b` for an
+    /// angle in radians larger than 2π.
+    fn dh_row(
+        &self,
+        convention: Convention,
+        j: &RawJoint,
+        spec: JointSpec,
+        b: &mut ChainBuilder,
+    ) -> Result<JointSpec, LoadErrorKind> {
+        let context = convention.context();
+        let missing = |field: &str| self.problem(field, FieldProblem::Missing { context });
+        let not_allowed = |field: &str| self.problem(field, FieldProblem::NotAllowed { context });
+        if j.origin.is_some() {
+            return Err(not_allowed("origin"));
+        }
+        if j.axis.is_some() {
+            return Err(not_allowed("axis"));
+        }
+        let a = self.plain("a", j.a.as_ref().ok_or_else(|| missing("a"))?)?;
+        let alpha = self.angle("alpha", j.alpha.as_ref().ok_or_else(|| missing("alpha"))?)?;
+        let d = self.plain("d", j.d.as_ref().ok_or_else(|| missing("d"))?)?;
+        let theta = self.angle("theta", j.theta.as_ref().ok_or_else(|| missing("theta"))?)?;
+        for (field, value) in [("alpha", alpha), ("theta", theta)] {
+            if self.unit == AngleUnit::Rad && value.abs() > TAU {
+                b.warn(format!(
+                    "joint '{}': {field} = {value} rad is larger than 2π in magnitude; is it in degrees? (set angle_unit: deg)",
+                    j.name
+                ));
+            }
+        }
+        // Tx(a) Rx(α): the constant part of a DH row, before (modified) or after (standard) the
+        // joint's motion about z.
+        let screw = Transform {
+            p: [a, 0.0, 0.0],
+            ..Transform::rot_x(alpha)
+        };
+        let spec = spec.with_offsets(theta, d);
+        Ok(if convention == Convention::Standard {
+            spec.with_post(screw)
+        } else {
+            spec.with_origin(screw)
+        })
+    }
+
+    /// `spec` with the origin and axis of row `j` of the axis form (eq. 2.119); a fixed joint
+    /// needs no axis.
+    fn axis_row(
+        &self,
+        j: &RawJoint,
+        kind: JointKind,
+        spec: JointSpec,
+    ) -> Result<JointSpec, LoadErrorKind> {
+        let context = Convention::Axis.context();
+        let not_allowed = |field: &str| self.problem(field, FieldProblem::NotAllowed { context });
+        for (field, present) in [
+            ("a", j.a.is_some()),
+            ("alpha", j.alpha.is_some()),
+            ("d", j.d.is_some()),
+            ("theta", j.theta.is_some()),
+        ] {
+            if present {
+                return Err(not_allowed(field));
+            }
+        }
+        let origin = j
+            .origin
+            .as_ref()
+            .ok_or_else(|| self.problem("origin", FieldProblem::Missing { context }))?;
+        if origin.name.is_some() {
+            return Err(not_allowed("origin.name"));
+        }
+        let spec = spec.with_origin(self.frame("origin", origin)?);
+        match (&j.axis, kind) {
+            (Some(axis), _) => {
+                let mut v = [0.0; 3];
+                for (k, x) in axis.iter().enumerate() {
+                    v[k] = self.plain("axis", x)?;
+                }
+                if v == [0.0; 3] {
+                    return Err(self.problem("axis", FieldProblem::ZeroAxis));
+                }
+                Ok(spec.with_axis(v))
+            }
+            (None, JointKind::Fixed) => Ok(spec),
+            (None, _) => Err(self.problem("axis", FieldProblem::Missing { context })),
+        }
+    }
+
+    /// The limits of row `j`, of a joint of `kind`: none for a fixed or continuous joint, a pair
+    /// for a revolute or prismatic one, a pair for θ and one for d for a cylindrical one.
+    fn joint_limits(
+        &self,
+        j: &RawJoint,
+        kind: JointKind,
+    ) -> Result<[Option<Limits>; 2], LoadErrorKind> {
+        match (&j.limits, kind) {
+            (None, _) => Ok([None, None]),
+            (Some(_), JointKind::Fixed | JointKind::Continuous) => Err(self.problem(
+                "limits",
+                FieldProblem::NotAllowed {
+                    context: "for a fixed or continuous joint",
+                },
+            )),
+            (Some(RawLimits::Pair(pair)), JointKind::Revolute | JointKind::Prismatic) => {
+                Ok([Some(self.limits(pair, kind == JointKind::Revolute)?), None])
+            }
+            (Some(RawLimits::Cylindrical { theta, d }), JointKind::Cylindrical) => {
+                Ok([Some(self.limits(theta, true)?), Some(self.limits(d, false)?)])
+            }
+            (Some(RawLimits::Pair(_)), _) => Err(self.problem(
+                "limits",
+                FieldProblem::Shape {
+                    expected: "a cylindrical joint needs {theta: [lower, upper], d: [lower, upper]}",
+                },
+            )),
+            (Some(RawLimits::Cylindrical { .. }), _) => Err(self.problem(
+                "limits",
+                FieldProblem::Shape {
+                    expected: "a one-coordinate joint needs [lower, upper]",
+                },
+            )),
+        }
+    }
 }
 
 /// Parses DH YAML text into a chain description.
@@ -399,108 +524,14 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
             RawKind::Cylindrical => JointKind::Cylindrical,
             RawKind::Fixed => JointKind::Fixed,
         };
-        let mut spec = JointSpec::new(j.name.clone(), kind, parent.clone(), link.clone());
-        let context = raw.convention.context();
-        let missing = |field: &str| r.problem(field, FieldProblem::Missing { context });
-        let not_allowed = |field: &str| r.problem(field, FieldProblem::NotAllowed { context });
-        match raw.convention {
+        let spec = JointSpec::new(j.name.clone(), kind, parent.clone(), link.clone());
+        let mut spec = match raw.convention {
             Convention::Standard | Convention::Modified => {
-                if j.origin.is_some() {
-                    return Err(not_allowed("origin"));
-                }
-                if j.axis.is_some() {
-                    return Err(not_allowed("axis"));
-                }
-                let a = r.plain("a", j.a.as_ref().ok_or_else(|| missing("a"))?)?;
-                let alpha = r.angle("alpha", j.alpha.as_ref().ok_or_else(|| missing("alpha"))?)?;
-                let d = r.plain("d", j.d.as_ref().ok_or_else(|| missing("d"))?)?;
-                let theta = r.angle("theta", j.theta.as_ref().ok_or_else(|| missing("theta"))?)?;
-                for (field, value) in [("alpha", alpha), ("theta", theta)] {
-                    if unit == AngleUnit::Rad && value.abs() > TAU {
-                        b.warn(format!(
-                            "joint '{}': {field} = {value} rad is larger than 2π in magnitude; is it in degrees? (set angle_unit: deg)",
-                            j.name
-                        ));
-                    }
-                }
-                // Tx(a) Rx(α): the constant part of a DH row, before (modified) or after
-                // (standard) the joint's motion about z.
-                let screw = Transform {
-                    p: [a, 0.0, 0.0],
-                    ..Transform::rot_x(alpha)
-                };
-                spec = spec.with_offsets(theta, d);
-                spec = if raw.convention == Convention::Standard {
-                    spec.with_post(screw)
-                } else {
-                    spec.with_origin(screw)
-                };
+                r.dh_row(raw.convention, j, spec, &mut b)?
             }
-            Convention::Axis => {
-                for (field, present) in [
-                    ("a", j.a.is_some()),
-                    ("alpha", j.alpha.is_some()),
-                    ("d", j.d.is_some()),
-                    ("theta", j.theta.is_some()),
-                ] {
-                    if present {
-                        return Err(not_allowed(field));
-                    }
-                }
-                let origin = j.origin.as_ref().ok_or_else(|| missing("origin"))?;
-                if origin.name.is_some() {
-                    return Err(not_allowed("origin.name"));
-                }
-                spec = spec.with_origin(r.frame("origin", origin)?);
-                match (&j.axis, kind) {
-                    (Some(axis), _) => {
-                        let mut v = [0.0; 3];
-                        for (k, x) in axis.iter().enumerate() {
-                            v[k] = r.plain("axis", x)?;
-                        }
-                        if v == [0.0; 3] {
-                            return Err(r.problem("axis", FieldProblem::ZeroAxis));
-                        }
-                        spec = spec.with_axis(v);
-                    }
-                    (None, JointKind::Fixed) => {}
-                    (None, _) => return Err(missing("axis")),
-                }
-            }
-        }
-        match (&j.limits, kind) {
-            (None, _) => {}
-            (Some(_), JointKind::Fixed | JointKind::Continuous) => {
-                return Err(r.problem(
-                    "limits",
-                    FieldProblem::NotAllowed {
-                        context: "for a fixed or continuous joint",
-                    },
-                ));
-            }
-            (Some(RawLimits::Pair(pair)), JointKind::Revolute | JointKind::Prismatic) => {
-                spec.limits[0] = Some(r.limits(pair, kind == JointKind::Revolute)?);
-            }
-            (Some(RawLimits::Cylindrical { theta, d }), JointKind::Cylindrical) => {
-                spec.limits = [Some(r.limits(theta, true)?), Some(r.limits(d, false)?)];
-            }
-            (Some(RawLimits::Pair(_)), _) => {
-                return Err(r.problem(
-                    "limits",
-                    FieldProblem::Shape {
-                        expected: "a cylindrical joint needs {theta: [lower, upper], d: [lower, upper]}",
-                    },
-                ));
-            }
-            (Some(RawLimits::Cylindrical { .. }), _) => {
-                return Err(r.problem(
-                    "limits",
-                    FieldProblem::Shape {
-                        expected: "a one-coordinate joint needs [lower, upper]",
-                    },
-                ));
-            }
-        }
+            Convention::Axis => r.axis_row(j, kind, spec)?,
+        };
+        spec.limits = r.joint_limits(j, kind)?;
         b.link(link.clone());
         b.joint(spec);
         parent = link;
