@@ -33,91 +33,103 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     // taken as missing when all its values are zero, as urdf-rs fills a missing one.
     let aligned = scan.joint_has_limit.len() == robot.joints.len();
     for (k, j) in robot.joints.iter().enumerate() {
-        let field = |field: &str, problem| LoadErrorKind::Field {
-            joint: Some(j.name.clone()),
-            field: field.to_string(),
-            problem,
+        let l = &j.limit;
+        let has_limit = if aligned {
+            scan.joint_has_limit[k]
+        } else {
+            [l.lower, l.upper, l.velocity, l.effort] != [0.0; 4]
         };
-        let finite = |name: &str, values: &[f64]| match values.iter().find(|x| !x.is_finite()) {
-            Some(&value) => Err(field(name, FieldProblem::NonFinite { value })),
-            None => Ok(()),
-        };
-        let kind = match j.joint_type {
-            urdf_rs::JointType::Revolute => JointKind::Revolute,
-            urdf_rs::JointType::Continuous => JointKind::Continuous,
-            urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-            urdf_rs::JointType::Fixed => JointKind::Fixed,
-            ref other => {
-                return Err(field(
-                    "type",
-                    FieldProblem::UnsupportedJointType {
-                        kind: format!("{other:?}").to_lowercase(),
-                    },
-                ));
-            }
-        };
-        finite("origin.xyz", &j.origin.xyz.0)?;
-        finite("origin.rpy", &j.origin.rpy.0)?;
-        let mut spec = JointSpec::new(
-            j.name.clone(),
-            kind,
-            j.parent.link.clone(),
-            j.child.link.clone(),
-        )
-        .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
-        if kind != JointKind::Fixed {
-            finite("axis.xyz", &j.axis.xyz.0)?;
-            if j.axis.xyz.0 == [0.0; 3] {
-                return Err(field("axis.xyz", FieldProblem::ZeroAxis));
-            }
-            spec = spec.with_axis(j.axis.xyz.0);
-        }
-        if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
-            let l = &j.limit;
-            let present = if aligned {
-                scan.joint_has_limit[k]
-            } else {
-                [l.lower, l.upper, l.velocity, l.effort] != [0.0; 4]
-            };
-            if !present {
-                return Err(field(
-                    "limit",
-                    FieldProblem::MissingLimit {
-                        kind: kind.as_str(),
-                    },
-                ));
-            }
-            // (An infinite bound is refused as in DH tables: a joint without bounds is
-            // `continuous`, and JSON output could not print it.)
-            finite("limit", &[l.lower, l.upper])?;
-            if l.lower > l.upper {
-                return Err(field(
-                    "limit",
-                    FieldProblem::ReversedLimits {
-                        lower: l.lower,
-                        upper: l.upper,
-                    },
-                ));
-            }
-            if l.lower == l.upper {
-                b.warn(format!(
-                    "joint '{}': limit [{}, {}] allows no motion (URDF reads a missing lower or upper as 0); values other than {} are refused unless limits are ignored",
-                    j.name, l.lower, l.upper, l.lower
-                ));
-            }
-            spec.limits[0] = Some(Limits {
-                lower: l.lower,
-                upper: l.upper,
-            });
-        }
-        if let Some(m) = &j.mimic {
-            let (multiplier, offset) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
-            finite("mimic", &[multiplier, offset])?;
-            spec = spec.with_mimic(m.joint.clone(), multiplier, offset);
-        }
+        let spec = joint_spec(j, has_limit, &mut b)?;
         b.joint(spec);
     }
     Ok(b)
+}
+
+/// The joint `j` as a [`JointSpec`] (`has_limit`: whether the file gives it a `<limit>`), after
+/// checking its numbers; a warning in `b` for limits that allow no motion.
+fn joint_spec(
+    j: &urdf_rs::Joint,
+    has_limit: bool,
+    b: &mut ChainBuilder,
+) -> Result<JointSpec, LoadErrorKind> {
+    let field = |field: &str, problem| LoadErrorKind::Field {
+        joint: Some(j.name.clone()),
+        field: field.to_string(),
+        problem,
+    };
+    let finite = |name: &str, values: &[f64]| match values.iter().find(|x| !x.is_finite()) {
+        Some(&value) => Err(field(name, FieldProblem::NonFinite { value })),
+        None => Ok(()),
+    };
+    let kind = match j.joint_type {
+        urdf_rs::JointType::Revolute => JointKind::Revolute,
+        urdf_rs::JointType::Continuous => JointKind::Continuous,
+        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+        urdf_rs::JointType::Fixed => JointKind::Fixed,
+        ref other => {
+            return Err(field(
+                "type",
+                FieldProblem::UnsupportedJointType {
+                    kind: format!("{other:?}").to_lowercase(),
+                },
+            ));
+        }
+    };
+    finite("origin.xyz", &j.origin.xyz.0)?;
+    finite("origin.rpy", &j.origin.rpy.0)?;
+    let mut spec = JointSpec::new(
+        j.name.clone(),
+        kind,
+        j.parent.link.clone(),
+        j.child.link.clone(),
+    )
+    .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
+    if kind != JointKind::Fixed {
+        finite("axis.xyz", &j.axis.xyz.0)?;
+        if j.axis.xyz.0 == [0.0; 3] {
+            return Err(field("axis.xyz", FieldProblem::ZeroAxis));
+        }
+        spec = spec.with_axis(j.axis.xyz.0);
+    }
+    if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
+        let l = &j.limit;
+        if !has_limit {
+            return Err(field(
+                "limit",
+                FieldProblem::MissingLimit {
+                    kind: kind.as_str(),
+                },
+            ));
+        }
+        // (An infinite bound is refused as in DH tables: a joint without bounds is
+        // `continuous`, and JSON output could not print it.)
+        finite("limit", &[l.lower, l.upper])?;
+        if l.lower > l.upper {
+            return Err(field(
+                "limit",
+                FieldProblem::ReversedLimits {
+                    lower: l.lower,
+                    upper: l.upper,
+                },
+            ));
+        }
+        if l.lower == l.upper {
+            b.warn(format!(
+                "joint '{}': limit [{}, {}] allows no motion (URDF reads a missing lower or upper as 0); values other than {} are refused unless limits are ignored",
+                j.name, l.lower, l.upper, l.lower
+            ));
+        }
+        spec.limits[0] = Some(Limits {
+            lower: l.lower,
+            upper: l.upper,
+        });
+    }
+    if let Some(m) = &j.mimic {
+        let (multiplier, offset) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+        finite("mimic", &[multiplier, offset])?;
+        spec = spec.with_mimic(m.joint.clone(), multiplier, offset);
+    }
+    Ok(spec)
 }
 
 /// The XML parser's message in the file author's terms: without the deserializer's `custom: `
