@@ -182,106 +182,8 @@ fn rows_for(path: &Path) -> Vec<Row> {
         },
     ));
 
-    // The k crate: on the URDF models, and on the others as `kinechain convert` writes them (the
-    // links keep their names and the joint vector its order; a cylindrical joint becomes two
-    // joints, so k's joint names are looked up in the written model). Not for a model URDF
-    // cannot express (a prismatic joint without limits).
-    let text = (reference["model"]["kind"] != "urdf")
-        .then(|| kinechain::convert::to_urdf(chain).ok())
-        .flatten();
-    let written = text.map(|text| {
-        let file = std::env::temp_dir().join(format!(
-            "kinechain-table-{}-{}.urdf",
-            std::process::id(),
-            robot.replace('/', "-")
-        ));
-        std::fs::write(&file, &text).unwrap();
-        (file, kinechain::Chain::from_urdf_str(&text).unwrap())
-    });
-    let urdf = match &written {
-        Some((file, named)) => Some((file.clone(), named)),
-        None => (reference["model"]["kind"] == "urdf").then(|| {
-            let file = path.with_file_name(reference["model"]["file"].as_str().unwrap());
-            (file, chain)
-        }),
-    };
-    if let Some((file, named)) = urdf {
-        let robot = k::Chain::<f64>::from_urdf_file(&file).unwrap();
-        if written.is_some() {
-            let _ = std::fs::remove_file(&file);
-        }
-        let joint_names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
-        let kq: Vec<Vec<f64>> = qs
-            .iter()
-            .map(|q| {
-                named
-                    .positions_by_name(joint_names.iter().map(String::as_str), q)
-                    .unwrap()
-            })
-            .collect();
-        let poses: Vec<Vec<[[f64; 4]; 4]>> = kq
-            .iter()
-            .map(|q| {
-                robot.set_joint_positions_unchecked(q);
-                robot.update_transforms();
-                names
-                    .iter()
-                    .map(|name| {
-                        let m = robot
-                            .find_link(name)
-                            .unwrap()
-                            .world_transform()
-                            .unwrap()
-                            .to_homogeneous();
-                        std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
-                    })
-                    .collect()
-            })
-            .collect();
-        methods.push(Method {
-            label: if written.is_some() {
-                "k 0.32, written as URDF"
-            } else {
-                "k 0.32"
-            },
-            poses,
-            call: Box::new(move || {
-                for q in &kq {
-                    robot.set_joint_positions_unchecked(black_box(q));
-                    black_box(robot.update_transforms());
-                }
-            }),
-            repeat: 1,
-        });
-    }
-
-    // The textbook method for DH models: products of 4×4 nalgebra matrices (eq. 2.129 or the
-    // standard form), sin/cos from the standard library.
-    if let Some(product) = DhProduct::of(&reference) {
-        let index: Vec<usize> = names.iter().map(|name| product.index(name)).collect();
-        let mut out = Vec::new();
-        let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
-            .iter()
-            .map(|q| {
-                product.poses(q, &mut out);
-                index
-                    .iter()
-                    .map(|&i| std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)])))
-                    .collect()
-            })
-            .collect();
-        methods.push(Method {
-            label: "naive nalgebra Matrix4",
-            poses,
-            call: Box::new(move || {
-                for q in qs {
-                    product.poses(black_box(q), &mut out);
-                    black_box(&out);
-                }
-            }),
-            repeat: 1,
-        });
-    }
+    methods.extend(k_method(path, &reference, chain, qs, &names, &robot));
+    methods.extend(naive_method(&reference, qs, &names));
 
     let n = qs.len();
     let items: Vec<usize> = methods.iter().map(|m| m.repeat * n).collect();
@@ -308,6 +210,124 @@ fn rows_for(path: &Path) -> Vec<Row> {
             }
         })
         .collect()
+}
+
+/// The k crate's method for the robot of `reference` (`path` its file, `robot` its label in the
+/// table), timed on `qs` and read at the links `names`.
+fn k_method<'a>(
+    path: &Path,
+    reference: &serde_json::Value,
+    chain: &kinechain::Chain,
+    qs: &'a [Vec<f64>],
+    names: &[String],
+    robot: &str,
+) -> Option<Method<'a>> {
+    // The k crate: on the URDF models, and on the others as `kinechain convert` writes them (the
+    // links keep their names and the joint vector its order; a cylindrical joint becomes two
+    // joints, so k's joint names are looked up in the written model). Not for a model URDF
+    // cannot express (a prismatic joint without limits).
+    let text = (reference["model"]["kind"] != "urdf")
+        .then(|| kinechain::convert::to_urdf(chain).ok())
+        .flatten();
+    let written = text.map(|text| {
+        let file = std::env::temp_dir().join(format!(
+            "kinechain-table-{}-{}.urdf",
+            std::process::id(),
+            robot.replace('/', "-")
+        ));
+        std::fs::write(&file, &text).unwrap();
+        (file, kinechain::Chain::from_urdf_str(&text).unwrap())
+    });
+    let urdf = match &written {
+        Some((file, named)) => Some((file.clone(), named)),
+        None => (reference["model"]["kind"] == "urdf").then(|| {
+            let file = path.with_file_name(reference["model"]["file"].as_str().unwrap());
+            (file, chain)
+        }),
+    };
+    let (file, named) = urdf?;
+    let robot = k::Chain::<f64>::from_urdf_file(&file).unwrap();
+    if written.is_some() {
+        let _ = std::fs::remove_file(&file);
+    }
+    let joint_names: Vec<String> = robot.iter_joints().map(|j| j.name.clone()).collect();
+    let kq: Vec<Vec<f64>> = qs
+        .iter()
+        .map(|q| {
+            named
+                .positions_by_name(joint_names.iter().map(String::as_str), q)
+                .unwrap()
+        })
+        .collect();
+    let poses: Vec<Vec<[[f64; 4]; 4]>> = kq
+        .iter()
+        .map(|q| {
+            robot.set_joint_positions_unchecked(q);
+            robot.update_transforms();
+            names
+                .iter()
+                .map(|name| {
+                    let m = robot
+                        .find_link(name)
+                        .unwrap()
+                        .world_transform()
+                        .unwrap()
+                        .to_homogeneous();
+                    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+                })
+                .collect()
+        })
+        .collect();
+    Some(Method {
+        label: if written.is_some() {
+            "k 0.32, written as URDF"
+        } else {
+            "k 0.32"
+        },
+        poses,
+        call: Box::new(move || {
+            for q in &kq {
+                robot.set_joint_positions_unchecked(black_box(q));
+                black_box(robot.update_transforms());
+            }
+        }),
+        repeat: 1,
+    })
+}
+
+/// The naive product of 4×4 matrices for a DH model (`None` for the others), timed on `qs` and
+/// read at the links `names`.
+fn naive_method<'a>(
+    reference: &serde_json::Value,
+    qs: &'a [Vec<f64>],
+    names: &[String],
+) -> Option<Method<'a>> {
+    // The textbook method for DH models: products of 4×4 nalgebra matrices (eq. 2.129 or the
+    // standard form), sin/cos from the standard library.
+    let product = DhProduct::of(reference)?;
+    let index: Vec<usize> = names.iter().map(|name| product.index(name)).collect();
+    let mut out = Vec::new();
+    let poses: Vec<Vec<[[f64; 4]; 4]>> = qs
+        .iter()
+        .map(|q| {
+            product.poses(q, &mut out);
+            index
+                .iter()
+                .map(|&i| std::array::from_fn(|r| std::array::from_fn(|c| out[i][(r, c)])))
+                .collect()
+        })
+        .collect();
+    Some(Method {
+        label: "naive nalgebra Matrix4",
+        poses,
+        call: Box::new(move || {
+            for q in qs {
+                product.poses(black_box(q), &mut out);
+                black_box(&out);
+            }
+        }),
+        repeat: 1,
+    })
 }
 
 /// A speed-up for the table, "–" where there is none.
