@@ -861,7 +861,6 @@ pub struct Chain {
     pub(crate) dense_limits: Option<DenseLimits>,
     link_index: HashMap<String, usize>,
     joint_index: HashMap<String, usize>,
-    serial: bool,
     /// The number of leading bodies that form a serial chain (body `k` hangs from `k − 1`):
     /// the part of any body's path that needs no index list.
     pub(crate) serial_run: usize,
@@ -979,7 +978,7 @@ impl Chain {
     /// True when every moving joint hangs from the previous one (no branches).
     #[must_use]
     pub fn is_serial(&self) -> bool {
-        self.serial
+        self.serial_run == self.bodies.len()
     }
 
     /// An upper bound on the distance of any link origin from the world origin (m): the sum of
@@ -1249,7 +1248,6 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             .collect(),
         joints,
         links,
-        serial: serial_run == bodies.len(),
         bodies,
         theta_gather,
         trig_slot,
@@ -1849,6 +1847,28 @@ mod tests {
                 s,
             };
             assert_eq!(Placement::from_transform(&p.to_transform()), p);
+        }
+    }
+
+    #[test]
+    fn serial_chains_are_told_from_trees() {
+        // Serial: every body hangs from the one before it (fixed tools and flanges folded).
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
+        let reference = root.join("../tests/data/reference/urdf");
+        for (chain, serial) in [
+            (Chain::from_file(root.join("ur5.yaml")).unwrap(), true),
+            (Chain::from_file(root.join("panda_mdh.yaml")).unwrap(), true),
+            (Chain::from_file(reference.join("ur5.urdf")).unwrap(), true),
+            // The second finger hangs from the hand, as the first does.
+            (Chain::from_file(root.join("panda.urdf")).unwrap(), false),
+            (
+                Chain::from_file(reference.join("tiago_no_hand.urdf")).unwrap(),
+                false,
+            ),
+        ] {
+            assert_eq!(chain.is_serial(), serial, "{}", chain.name());
+            let each = (0..chain.bodies.len()).all(|k| chain.bodies[k].parent == k.checked_sub(1));
+            assert_eq!(chain.is_serial(), each, "{}", chain.name());
         }
     }
 
