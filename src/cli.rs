@@ -1517,6 +1517,47 @@ impl<'a> Workload<'a> {
     /// The rows of `--level pose`: every evaluation mode, the baseline path, and `k` when it
     /// loads the robot at `path`.
     fn pose_methods(&self, path: &std::path::Path) -> Vec<Method<'a>> {
+        let Workload { chain, qs, end, .. } = *self;
+        let n = qs.len();
+        let mut methods: Vec<Method<'a>> = vec![(ALL_LINKS.into(), self.all_links(None, false), n)];
+        let mut d = self.data();
+        methods.push((
+            format!("kinechain, end link {} only", chain.link(end).name()),
+            Box::new(move || {
+                for q in qs {
+                    black_box(forward_kinematics_to(chain, &mut d, black_box(q), end).ok());
+                }
+            }),
+            n,
+        ));
+        methods.extend(self.incremental_method());
+        methods.extend(self.batch_methods());
+        // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
+        // `kernel::all_sin_cos` makes), what it saves.
+        if crate::isa() == crate::Isa::Avx512
+            && crate::narrow_trig()
+            && chain.theta_gather.len() == 1
+        {
+            methods.push((
+                "kinechain, all links, sin/cos in one 512-bit register".into(),
+                self.all_links(None, true),
+                n,
+            ));
+        }
+        methods.push((
+            "kinechain, baseline x86-64 path".into(),
+            self.all_links(Some(crate::Isa::Baseline), false),
+            n,
+        ));
+        if let Some((label, k)) = k_method(path, chain, qs) {
+            methods.push((label, k, n));
+        }
+        methods
+    }
+
+    /// The batch rows of `--level pose`: all links on one thread in `f64` and `f32`, all links
+    /// of the repeated batch on the pool, and the end link alone on one thread and on the pool.
+    fn batch_methods(&self) -> Vec<Method<'a>> {
         use crate::batch::{
             forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
             single_precision,
@@ -1532,18 +1573,7 @@ impl<'a> Workload<'a> {
         } = *self;
         let n = qs.len();
         let threads = rayon::current_num_threads();
-        let mut methods: Vec<Method<'a>> = vec![(ALL_LINKS.into(), self.all_links(None, false), n)];
-        let mut d = self.data();
-        methods.push((
-            format!("kinechain, end link {} only", chain.link(end).name()),
-            Box::new(move || {
-                for q in qs {
-                    black_box(forward_kinematics_to(chain, &mut d, black_box(q), end).ok());
-                }
-            }),
-            n,
-        ));
-        methods.extend(self.incremental_method());
+        let mut methods: Vec<Method<'a>> = Vec::new();
         let mut b = self.batch_data();
         methods.push((
             "kinechain, batch, 1 thread".into(),
@@ -1605,26 +1635,6 @@ impl<'a> Workload<'a> {
                 }),
                 count,
             ));
-        }
-        // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
-        // `kernel::all_sin_cos` makes), what it saves.
-        if crate::isa() == crate::Isa::Avx512
-            && crate::narrow_trig()
-            && chain.theta_gather.len() == 1
-        {
-            methods.push((
-                "kinechain, all links, sin/cos in one 512-bit register".into(),
-                self.all_links(None, true),
-                n,
-            ));
-        }
-        methods.push((
-            "kinechain, baseline x86-64 path".into(),
-            self.all_links(Some(crate::Isa::Baseline), false),
-            n,
-        ));
-        if let Some((label, k)) = k_method(path, chain, qs) {
-            methods.push((label, k, n));
         }
         methods
     }

@@ -445,16 +445,7 @@ const MAX_PART_WARNINGS: usize = 20;
 /// convert` writes it) by the values alone.
 fn scan_parts(source: &str) -> Scanned {
     let mut joint_has_limit = Vec::new();
-    // (byte offset, message without its line), and how many more there were.
-    let mut found: Vec<(usize, String)> = Vec::new();
-    let mut more = 0usize;
-    let mut note = |offset: usize, message: &dyn Fn() -> String| {
-        if found.len() < MAX_PART_WARNINGS {
-            found.push((offset, message()));
-        } else {
-            more += 1;
-        }
-    };
+    let mut notes = Notes::default();
     // The <link> or <joint> open under <robot>, as (label, element name): its parts are checked
     // when it is a joint, and text directly inside it in both cases.
     let mut holder: Option<(String, &str)> = None;
@@ -463,7 +454,7 @@ fn scan_parts(source: &str) -> Scanned {
     for (offset, tag, depth) in nested_tags(source) {
         let checked = open == 1 || (open == 2 && holder.is_some());
         if checked && let Some(at) = stray_text(source, text_from..offset) {
-            note(at, &|| match (open, &holder) {
+            notes.add(at, || match (open, &holder) {
                 (2, Some((label, element))) => {
                     format!("{label}: text inside <{element}> is not URDF and is ignored")
                 }
@@ -476,18 +467,12 @@ fn scan_parts(source: &str) -> Scanned {
             continue;
         }
         let name = element_name(tag);
-        let unknown = |allowed: &[&str]| {
-            attributes(tag)
-                .map(|(attr, _)| attr)
-                .filter(|attr| !attr.contains(':') && !allowed.contains(attr))
-                .collect::<Vec<_>>()
-        };
         match depth {
             1 if name == "joint" => {
                 let label =
                     attribute(tag, "name").map_or("<joint>".into(), |n| format!("joint '{n}'"));
-                for attr in unknown(&["name", "type"]) {
-                    note(offset, &|| {
+                for attr in unknown_attributes(tag, &["name", "type"]) {
+                    notes.add(offset, || {
                         format!(
                             "{label}: attribute {attr} is not a URDF joint attribute and is ignored"
                         )
@@ -503,7 +488,7 @@ fn scan_parts(source: &str) -> Scanned {
                     (label, "link")
                 });
                 if !name.contains(':') && !TOP_LEVEL.contains(&name) {
-                    note(offset, &|| {
+                    notes.add(offset, || {
                         format!("<{name}> is not a URDF element under <robot> and is ignored")
                     });
                 }
@@ -515,44 +500,86 @@ fn scan_parts(source: &str) -> Scanned {
                     {
                         *has = true;
                     }
-                    match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
-                        Some((_, None)) => {}
-                        Some((_, Some(allowed))) => {
-                            for attr in unknown(allowed) {
-                                note(offset, &|| {
-                                    format!(
-                                        "{label}: <{name}> attribute {attr} is not a URDF attribute and is ignored (it takes {})",
-                                        allowed.join(", ")
-                                    )
-                                });
-                            }
-                        }
-                        None => note(offset, &|| {
-                            format!("{label}: <{name}> is not a URDF joint element and is ignored")
-                        }),
-                    }
+                    joint_part(&mut notes, offset, tag, label);
                 }
             }
             _ => {}
         }
     }
-    let (mut line, mut counted) = (1, 0);
-    let mut warnings: Vec<String> = found
-        .into_iter()
-        .map(|(offset, message)| {
-            line += source[counted..offset].matches('\n').count();
-            counted = offset;
-            format!("line {line}: {message}")
-        })
-        .collect();
-    if more > 0 {
-        warnings.push(format!(
-            "{more} more elements or attributes are not URDF and are ignored"
-        ));
-    }
     Scanned {
-        warnings,
+        warnings: notes.numbered(source),
         joint_has_limit,
+    }
+}
+
+/// Notes on an element `tag` (at byte `offset`) inside the joint `label`: an element URDF does
+/// not define there, or an attribute it does not define on that element.
+fn joint_part(notes: &mut Notes, offset: usize, tag: &str, label: &str) {
+    let name = element_name(tag);
+    match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
+        Some((_, None)) => {}
+        Some((_, Some(allowed))) => {
+            for attr in unknown_attributes(tag, allowed) {
+                notes.add(offset, || {
+                    format!(
+                        "{label}: <{name}> attribute {attr} is not a URDF attribute and is ignored (it takes {})",
+                        allowed.join(", ")
+                    )
+                });
+            }
+        }
+        None => notes.add(offset, || {
+            format!("{label}: <{name}> is not a URDF joint element and is ignored")
+        }),
+    }
+}
+
+/// The attributes of `tag` without a namespace prefix that are not in `allowed`.
+fn unknown_attributes<'t>(tag: &'t str, allowed: &[&str]) -> Vec<&'t str> {
+    attributes(tag)
+        .map(|(attr, _)| attr)
+        .filter(|attr| !attr.contains(':') && !allowed.contains(attr))
+        .collect()
+}
+
+/// The warnings [`scan_parts`] collects: the first [`MAX_PART_WARNINGS`] as (byte offset,
+/// message without its line), the rest counted.
+#[derive(Default)]
+struct Notes {
+    found: Vec<(usize, String)>,
+    more: usize,
+}
+
+impl Notes {
+    /// A warning at byte `offset`; its message is made only if it is listed.
+    fn add(&mut self, offset: usize, message: impl FnOnce() -> String) {
+        if self.found.len() < MAX_PART_WARNINGS {
+            self.found.push((offset, message()));
+        } else {
+            self.more += 1;
+        }
+    }
+
+    /// The warnings with their line numbers in `source` (offsets in increasing order, so the
+    /// lines are counted in one pass), and a count of the rest.
+    fn numbered(self, source: &str) -> Vec<String> {
+        let (mut line, mut counted) = (1, 0);
+        let mut warnings: Vec<String> = self
+            .found
+            .into_iter()
+            .map(|(offset, message)| {
+                line += source[counted..offset].matches('\n').count();
+                counted = offset;
+                format!("line {line}: {message}")
+            })
+            .collect();
+        if self.more > 0 {
+            warnings.push(format!(
+                "{} more elements or attributes are not URDF and are ignored",
+                self.more
+            ));
+        }
+        warnings
     }
 }
 
