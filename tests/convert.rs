@@ -235,3 +235,72 @@ fn names_with_markup_characters_survive_the_round_trip() {
         })
     );
 }
+
+/// Origins at pitch = ±π/2 exactly (`a₁₁ = a₂₁ = 0`, where roll and yaw are not separately
+/// defined) are written with pitch ±π/2, roll 0 and the whole turn about z in yaw, and read back
+/// as the same frames. Rz(30°)·Ry(90°) and Ry(−90°)·Rz(−50°) = Rz(50°)·Ry(−90°)·Rx(... ) are given
+/// as exact matrices, so that the written angles are known.
+#[test]
+fn gimbal_locked_origins_survive_the_round_trip() {
+    let (s30, c30) = (0.5_f64, 0.75_f64.sqrt());
+    let (s50, c50) = 50_f64.to_radians().sin_cos();
+    // Rz(30°)·Ry(+90°): a₃₁ = −1, a₁₂ = −sin 30°, a₂₂ = cos 30°.
+    let up = [
+        [0.0, -s30, c30, 0.0],
+        [0.0, c30, s30, 0.0],
+        [-1.0, 0.0, 0.0, 0.1],
+    ];
+    // Rz(50°)·Ry(−90°): a₃₁ = +1, a₁₂ = −sin 50°, a₂₂ = cos 50°.
+    let down = [
+        [0.0, -s50, -c50, 0.2],
+        [0.0, c50, -s50, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+    ];
+    let matrix = |m: [[f64; 4]; 3]| {
+        let rows: Vec<String> = m
+            .iter()
+            .chain(std::iter::once(&[0.0, 0.0, 0.0, 1.0]))
+            .map(|r| format!("[{}, {}, {}, {}]", r[0], r[1], r[2], r[3]))
+            .collect();
+        format!("[{}]", rows.join(", "))
+    };
+    let yaml = format!(
+        "convention: axis\njoints:\n  \
+         - {{name: up, link: l1, type: revolute, origin: {{matrix: {}}}, axis: [0, 0, 1], limits: [-3, 3]}}\n  \
+         - {{name: down, link: l2, type: revolute, origin: {{matrix: {}}}, axis: [0, 1, 0], limits: [-3, 3]}}\n",
+        matrix(up),
+        matrix(down)
+    );
+    let chain = Chain::from_dh_yaml_str(&yaml).unwrap_or_else(|e| panic!("{e}\n{yaml}"));
+    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let rpy = |joint: &str| -> [f64; 3] {
+        let start = text.find(&format!("<joint name=\"{joint}\"")).unwrap();
+        let from = start + text[start..].find("rpy=\"").unwrap() + 5;
+        let values: Vec<f64> = text[from..from + text[from..].find('"').unwrap()]
+            .split(' ')
+            .map(|v| v.parse().unwrap())
+            .collect();
+        values.try_into().unwrap()
+    };
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    assert_eq!(rpy("up")[..2], [0.0, half_pi], "{text}");
+    approx::assert_relative_eq!(rpy("up")[2], 30_f64.to_radians(), max_relative = 1e-15);
+    assert_eq!(rpy("down")[..2], [0.0, -half_pi], "{text}");
+    approx::assert_relative_eq!(rpy("down")[2], 50_f64.to_radians(), max_relative = 1e-15);
+
+    let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let (mut a, mut b) = (Data::new(&chain), Data::new(&urdf));
+    for q in [[0.0, 0.0], [0.7, -1.2], [-2.5, 2.9]] {
+        let (pa, pb) = (
+            forward_kinematics(&chain, &mut a, &q).unwrap(),
+            forward_kinematics(&urdf, &mut b, &q).unwrap(),
+        );
+        for link in ["l1", "l2"] {
+            let (ta, tb) = (
+                pa.world_from_link(chain.link_id(link).unwrap()),
+                pb.world_from_link(urdf.link_id(link).unwrap()),
+            );
+            approx::assert_relative_eq!(ta.to_homogeneous(), tb.to_homogeneous(), epsilon = 1e-15);
+        }
+    }
+}
