@@ -986,6 +986,55 @@ fn converting_a_urdf_says_what_is_not_written() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Each joint that holds any of an effort limit, a velocity limit, `<dynamics>`,
+/// `<calibration>` or `<safety_controller>` is counted once, whichever of them it holds.
+#[test]
+fn converting_a_urdf_counts_each_dropped_joint_part() {
+    let dir = scratch_dir("convert_parts");
+    let source = dir.join("parts.urdf");
+    // (name, limit's effort and velocity, the elements after the limit)
+    let joints = [
+        ("effort_only", "10", "0", "<dynamics damping=\"0.1\"/>"),
+        ("velocity_only", "0", "2", "<calibration rising=\"0.2\"/>"),
+        (
+            "safety_only",
+            "0",
+            "0",
+            "<safety_controller k_velocity=\"1\"/>",
+        ),
+        ("bare", "0", "0", ""),
+    ];
+    let mut urdf = String::from("<robot name=\"parts\">\n  <link name=\"l0\"/>\n");
+    for (i, (name, effort, velocity, extra)) in joints.iter().enumerate() {
+        urdf += &format!(
+            "  <link name=\"l{}\"/>\n  <joint name=\"{name}\" type=\"revolute\">\n    \
+             <parent link=\"l{i}\"/><child link=\"l{}\"/><axis xyz=\"0 0 1\"/>\n    \
+             <limit lower=\"-1\" upper=\"1\" effort=\"{effort}\" velocity=\"{velocity}\"/>{extra}\n  \
+             </joint>\n",
+            i + 1,
+            i + 1
+        );
+    }
+    urdf += "</robot>\n";
+    std::fs::write(&source, urdf).unwrap();
+    let out = kinechain(&[
+        "convert",
+        source.to_str().unwrap(),
+        "-o",
+        dir.join("written.urdf").to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.trim_end().ends_with(
+            "not written: 2 joints' effort and velocity limits, \
+             3 joints' dynamics, calibration or safety controller elements"
+        ),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A loader's warning (here |alpha| = 90 with `angle_unit: rad`, likely degrees) reaches stderr
 /// with the file's name, and the command still succeeds.
 #[test]
