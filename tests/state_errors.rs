@@ -274,6 +274,18 @@ fn json_vectors() {
             found: "a string"
         }
     ));
+    // Keyed by name, each of a cylindrical joint's two entries is named by its own index.
+    for (pair, index) in [(json!([null, 1.0]), 0), (json!([0.5, "x"]), 1)] {
+        assert_eq!(
+            joint_vector_from_json(&chain, &json!({ "joint": pair }), "q")
+                .unwrap_err()
+                .to_string(),
+            format!(
+                "q[{index}]: expected a number, found {}",
+                if index == 0 { "null" } else { "a string" }
+            )
+        );
+    }
     assert!(matches!(
         joint_vector_from_json(&chain, &json!(3), "q").unwrap_err(),
         InputError::NotArrayOrObject {
