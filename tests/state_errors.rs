@@ -253,6 +253,35 @@ fn mimic_joints_are_checked_against_their_own_limits() {
     );
 }
 
+/// JSON read from text keeps each value's type (the reader that refuses repeated member names
+/// builds the values itself): an entry that is not a number is named with the type it has.
+#[test]
+fn json_text_entries_are_named_by_their_type() {
+    let chain = robot("cylindrical.yaml");
+    for (entry, found) in [
+        ("true", "a boolean"),
+        ("null", "null"),
+        ("\"0.5\"", "a string"),
+        ("[0.5]", "an array"),
+        ("{\"theta\": 0.5}", "an object"),
+    ] {
+        assert_eq!(
+            joint_vector_from_str(&chain, &format!("[1.0, {entry}]"), "q").unwrap_err(),
+            InputError::NotANumber {
+                what: "q",
+                index: 1,
+                found
+            },
+            "{entry}"
+        );
+    }
+    // Integers, negative ones among them, read as numbers.
+    assert_eq!(
+        joint_vector_from_str(&chain, "[-1, 2]", "q").unwrap(),
+        vec![-1.0, 2.0]
+    );
+}
+
 #[test]
 fn json_vectors() {
     let chain = robot("cylindrical.yaml");
