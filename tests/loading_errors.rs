@@ -158,6 +158,10 @@ fn yaml_missing_and_mistyped_fields() {
     let (joint, name, problem) = field(&e);
     assert_eq!((joint, name), (Some("j1"), "d"));
     assert!(matches!(problem, FieldProblem::Missing { .. }));
+    assert!(
+        message(&e).ends_with("joint 'j1': d: missing (required for convention standard)"),
+        "{e}"
+    );
 
     let e = load("yaml/missing_convention.yaml");
     assert!(yaml(&e).2.contains("missing field `convention`"));
@@ -171,6 +175,24 @@ fn yaml_missing_and_mistyped_fields() {
     let (joint, name, problem) = field(&e);
     assert_eq!((joint, name), (Some("j1"), "origin"));
     assert!(matches!(problem, FieldProblem::Missing { .. }));
+    assert!(
+        message(&e).ends_with("joint 'j1': origin: missing (required for convention axis)"),
+        "{e}"
+    );
+
+    // A limits list of another length than two says what limits take.
+    let cylindrical = "convention: axis\njoints:\n  - {name: c, link: l, type: cylindrical, \
+                       origin: {xyz: [0, 0, 0]}, axis: [0, 0, 1], limits: LIMITS}\n";
+    for (limits, length) in [("[1]", 1), ("[1, 2, 3]", 3)] {
+        let e = Chain::from_dh_yaml_str(&cylindrical.replace("LIMITS", limits)).unwrap_err();
+        assert!(
+            message(&e).ends_with(&format!(
+                "joint 'c': limits: invalid length {length}, expected [lower, upper] or \
+                 {{theta: [lower, upper], d: [lower, upper]}}"
+            )),
+            "{e}"
+        );
+    }
 }
 
 #[test]
@@ -286,6 +308,10 @@ fn yaml_keys_that_do_not_belong() {
     let (joint, f, problem) = field(&e);
     assert_eq!((joint, f), (Some("j1"), "origin"));
     assert!(matches!(problem, FieldProblem::NotAllowed { .. }));
+    assert!(
+        message(&e).ends_with("joint 'j1': origin: not allowed for convention standard"),
+        "{e}"
+    );
 
     let e = load("yaml/cylindrical_pair_limits.yaml");
     assert!(matches!(field(&e).2, FieldProblem::Shape { .. }));
