@@ -905,4 +905,14 @@ fn angle_units_tags_and_the_degrees_warning() {
     }
     let (_, warnings) = alpha("rad", "90");
     assert_eq!(warnings, 1);
+    // The warning starts past 2π in magnitude: a whole turn (the double nearest 2π) is quiet,
+    // the next double is not, on either side of zero.
+    for (value, expected) in [
+        ("6.283185307179586", 0),
+        ("-6.283185307179586", 0),
+        ("6.283185307179587", 1),
+        ("-6.283185307179587", 1),
+    ] {
+        assert_eq!(alpha("rad", value).1, expected, "{value}");
+    }
 }
