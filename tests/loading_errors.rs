@@ -759,6 +759,15 @@ fn urdf_typos_in_a_joint_draw_warnings() {
         ]
         .map(String::from)
     );
+    // Single quotes are read as double quotes are (the joint is named, the typo found).
+    let single = "<robot name='r'>\n<link name='a'/><link name='b'/>\n\
+        <joint name='j' type='fixed'><parent link='a'/><child link='b'/><origin xyz='1 0 0' rp='0 0 1'/></joint>\n</robot>";
+    let chain = Chain::from_urdf_str(single).unwrap();
+    assert_eq!(
+        chain.warnings(),
+        ["line 3: joint 'j': <origin> attribute rp is not a URDF attribute and is ignored (it takes xyz, rpy)"
+            .to_string()]
+    );
     // Past twenty, the rest are counted rather than listed.
     let many = format!("{limit}{}", "<note/>\n".repeat(25));
     let chain = Chain::from_urdf_str(&urdf(&many)).unwrap();
