@@ -680,6 +680,10 @@ fn urdf_root_must_be_a_named_robot() {
             "<robot name=\"r\"/>\n\nx",
             "line 3: text outside the root element <robot>",
         ),
+        (
+            "<?xml version=\"1.0\"?>\n<robot name=\"r\"/>\nx",
+            "line 3: text outside the root element <robot>",
+        ),
     ];
     for (text, expected) in cases {
         assert_eq!(urdf_message(text), expected);
@@ -767,6 +771,15 @@ fn urdf_typos_in_a_joint_draw_warnings() {
         chain.warnings(),
         ["line 3: joint 'j': <origin> attribute rp is not a URDF attribute and is ignored (it takes xyz, rpy)"
             .to_string()]
+    );
+    // Text right after a comment is found, and what extension elements hold is theirs to define.
+    let commented = "<robot name=\"r\">\n<link name=\"a\"/><!-- c -->x<link name=\"b\"/>\n\
+        <joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>\n\
+        <gazebo>text</gazebo>\n</robot>";
+    let chain = Chain::from_urdf_str(commented).unwrap();
+    assert_eq!(
+        chain.warnings(),
+        ["line 2: text inside <robot> is not URDF and is ignored".to_string()]
     );
     // Past twenty, the rest are counted rather than listed.
     let many = format!("{limit}{}", "<note/>\n".repeat(25));
