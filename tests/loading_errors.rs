@@ -505,6 +505,24 @@ fn urdf_bad_numbers_and_axes() {
         "{}",
         message(&e)
     );
+    // The parser would read two or four numbers, or skip a word among them; each is refused,
+    // in <origin> and in <axis> alike.
+    for (element, value) in [
+        ("origin", "1 0"),
+        ("origin", "1 0 0 0"),
+        ("axis", "0 0"),
+        ("axis", "0 x 1"),
+    ] {
+        let text = format!(
+            "<robot name=\"r\">\n<link name=\"a\"/><link name=\"b\"/>\n\
+             <joint name=\"j\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>\n\
+             <{element} xyz=\"{value}\"/></joint>\n</robot>"
+        );
+        assert_eq!(
+            urdf_message(&text),
+            format!("line 4: <{element}> attribute xyz=\"{value}\" is not three numbers")
+        );
+    }
 }
 
 #[test]
