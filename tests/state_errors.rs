@@ -304,15 +304,15 @@ fn json_vectors() {
         }
     ));
     // Keyed by name, each of a cylindrical joint's two entries is named by its own index.
-    for (pair, index) in [(json!([null, 1.0]), 0), (json!([0.5, "x"]), 1)] {
+    for (pair, index, found) in [
+        (json!([null, 1.0]), 0, "null"),
+        (json!([0.5, "x"]), 1, "a string"),
+    ] {
         assert_eq!(
             joint_vector_from_json(&chain, &json!({ "joint": pair }), "q")
                 .unwrap_err()
                 .to_string(),
-            format!(
-                "q[{index}]: expected a number, found {}",
-                if index == 0 { "null" } else { "a string" }
-            )
+            format!("q[{index}]: expected a number, found {found}")
         );
     }
     assert!(matches!(
