@@ -1145,10 +1145,14 @@ impl PendingPoses {
             at_line(path, line, CliError::State(e.source))
         })?;
         let mut failed = 0;
+        // One buffer for every line's link results.
+        let mut results: Vec<LinkResult> = Vec::with_capacity(chain.links().len());
         for (i, &line) in lines.iter().enumerate() {
-            let results: Vec<LinkResult> = (0..chain.links().len())
-                .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None))
-                .collect();
+            results.clear();
+            results.extend(
+                (0..chain.links().len())
+                    .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None)),
+            );
             let text = match check_finite(chain, &results, &[], &[]) {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
