@@ -309,4 +309,45 @@ mod tests {
         assert_eq!(normalize_axis([0.0; 3]), None);
         assert_eq!(normalize_axis([f64::NAN, 1.0, 0.0]), None);
     }
+
+    #[test]
+    fn each_kind_reports_its_freedoms_and_its_name() {
+        use JointKind::*;
+        // (kind, dof, rotates, translates, name)
+        let table = [
+            (Revolute, 1, true, false, "revolute"),
+            (Continuous, 1, true, false, "continuous"),
+            (Prismatic, 1, false, true, "prismatic"),
+            (Cylindrical, 2, true, true, "cylindrical"),
+            (Fixed, 0, false, false, "fixed"),
+        ];
+        for (kind, dof, rotates, translates, name) in table {
+            assert_eq!(kind.dof(), dof, "{name}");
+            assert_eq!(kind.rotates(), rotates, "{name}");
+            assert_eq!(kind.translates(), translates, "{name}");
+            assert_eq!(kind.as_str(), name);
+            assert_eq!(kind.to_string(), name);
+        }
+    }
+
+    #[test]
+    fn only_exact_coordinate_axes_take_their_special_form() {
+        let cases = [
+            ([1.0, 0.0, 0.0], Axis::X),
+            ([0.0, 1.0, 0.0], Axis::Y),
+            ([0.0, 0.0, 1.0], Axis::Z),
+            ([-1.0, 0.0, 0.0], Axis::NegX),
+            ([0.0, -1.0, 0.0], Axis::NegY),
+            ([0.0, 0.0, -1.0], Axis::NegZ),
+        ];
+        for (v, axis) in cases {
+            assert_eq!(Axis::from_unit(v), axis, "{v:?}");
+            assert_eq!(axis.vector(), v);
+        }
+        // One ulp off a coordinate axis is a general axis, kept as given.
+        let near = [1.0, 0.0, f64::MIN_POSITIVE];
+        assert_eq!(Axis::from_unit(near), Axis::General(near));
+        let tilted = [0.6, 0.0, -0.8];
+        assert_eq!(Axis::from_unit(tilted).vector(), tilted);
+    }
 }

@@ -396,6 +396,19 @@ mod tests {
     }
 
     #[test]
+    fn composition_is_the_product_of_homogeneous_matrices() {
+        let a = Transform::from_xyz_rpy([0.3, -1.2, 2.0], [0.4, -1.1, 2.9]);
+        let b = Transform::from_xyz_rpy([-0.7, 0.5, 0.1], [2.2, 0.3, -0.6]);
+        let by_value = a * b;
+        assert_eq!(&a * &b, by_value);
+        assert_relative_eq!(
+            by_value.to_homogeneous(),
+            a.to_homogeneous() * b.to_homogeneous(),
+            epsilon = 8.0 * f64::EPSILON
+        );
+    }
+
+    #[test]
     fn rpy_is_rz_ry_rx() {
         let rpy = [0.4, -1.1, 2.9];
         let direct = Transform::from_xyz_rpy([0.0; 3], rpy);
@@ -437,5 +450,32 @@ mod tests {
         let mut m = Transform::IDENTITY.to_rows();
         m[1][3] = f64::NAN;
         assert_eq!(Transform::try_from_rows(&m), Err(NotRigid::NonFinite));
+    }
+
+    #[test]
+    fn the_rigidity_tolerance_is_inclusive() {
+        let tol = Transform::RIGID_TOLERANCE;
+        // A last row off by exactly the tolerance passes; one step further does not.
+        let mut m = Transform::IDENTITY.to_rows();
+        m[3][0] = tol;
+        assert!(Transform::try_from_rows(&m).is_ok());
+        m[3][0] = tol.next_up();
+        assert!(matches!(
+            Transform::try_from_rows(&m),
+            Err(NotRigid::LastRow { .. })
+        ));
+        // Columns x and y with the dot product `tol` (their squared norms round to 1).
+        let mut m = Transform::IDENTITY.to_rows();
+        m[0][1] = tol;
+        assert_eq!(
+            Transform::from_rows(&[m[0], m[1], m[2]]).orthonormality_error(),
+            tol
+        );
+        assert!(Transform::try_from_rows(&m).is_ok());
+        m[0][1] = tol.next_up();
+        assert!(matches!(
+            Transform::try_from_rows(&m),
+            Err(NotRigid::NotOrthonormal { .. })
+        ));
     }
 }
