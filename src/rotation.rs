@@ -16,7 +16,7 @@
 //! [`Singular`] error is returned; no function returns NaN for a finite rotation.
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Unit, Vector3, Vector4};
-use std::f64::consts::PI;
+use std::f64::consts::{PI, TAU};
 
 /// A representation or rate map is undefined (or would divide by ~0) at this rotation.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -378,10 +378,17 @@ impl RodriguezParameters {
 // ---------------------------------------------------------------------------------------------
 // Euler angles
 
-/// Wraps to `(−π, π]`.
+/// Wraps an angle in `[−2π, 2π]` (an `atan2` value or the difference of two) to `(−π, π]`,
+/// exactly: an angle already there is returned as it is, and otherwise the one shift by 2π
+/// subtracts numbers within a factor of two of each other, which is exact (Sterbenz's lemma).
 fn wrap(a: f64) -> f64 {
-    let w = a.rem_euclid(2.0 * PI);
-    if w > PI { w - 2.0 * PI } else { w }
+    if a > PI {
+        a - TAU
+    } else if a <= -PI {
+        a + TAU
+    } else {
+        a
+    }
 }
 
 /// Goldstein's Euler angles (sec. 2.7): `A = Rz(φ) Rx(θ) Rz(ψ)` (eq. 2.96), θ in `[0, π]`.
@@ -407,6 +414,7 @@ impl EulerZxz {
     /// (both accurate relative to sin θ, which is all the entries need of φ); ψ from φ + ψ (for
     /// θ ≤ π/2) or φ − ψ (beyond), taken from 2×2 minors that stay well conditioned near θ = 0 and
     /// θ = π respectively, so that the large entries, which depend on φ ± ψ, come back exactly.
+    /// φ and ψ are in `(−π, π]`.
     ///
     /// # Errors
     /// [`Singular`] at θ = 0 or π exactly (`sin θ = 0`).
@@ -420,7 +428,7 @@ impl EulerZxz {
         }
         let theta = s.atan2(a[(2, 2)]);
         // a13 = sθ sφ, a23 = −sθ cφ with sθ > 0.
-        let phi = a[(0, 2)].atan2(-a[(1, 2)]);
+        let phi = wrap(a[(0, 2)].atan2(-a[(1, 2)]));
         let psi = if a[(2, 2)] >= 0.0 {
             // a21 − a12 = (1 + cθ) sin(φ+ψ), a11 + a22 = (1 + cθ) cos(φ+ψ).
             (a[(1, 0)] - a[(0, 1)]).atan2(a[(0, 0)] + a[(1, 1)]) - phi
@@ -522,7 +530,8 @@ impl EulerXyz {
     }
 
     /// The angles of a rotation matrix: θ = atan2(a₁₃, √(a₁₁² + a₁₂²)), φ = atan2(−a₂₃, a₃₃), and
-    /// ψ from φ + ψ (θ ≥ 0) or ψ − φ (θ < 0), taken from 2×2 minors as for z-x-z.
+    /// ψ from φ + ψ (θ ≥ 0) or ψ − φ (θ < 0), taken from 2×2 minors as for z-x-z. φ and ψ are in
+    /// `(−π, π]`.
     ///
     /// # Errors
     /// [`Singular`] at θ = ±π/2 exactly (`cos θ = 0`).
@@ -536,7 +545,7 @@ impl EulerXyz {
         }
         let theta = a[(0, 2)].atan2(c);
         // a23 = −sφ cθ, a33 = cφ cθ with cθ > 0.
-        let phi = (-a[(1, 2)]).atan2(a[(2, 2)]);
+        let phi = wrap((-a[(1, 2)]).atan2(a[(2, 2)]));
         let psi = if a[(0, 2)] >= 0.0 {
             // a21 + a32 = (1 + sθ) sin(φ+ψ), a22 − a31 = (1 + sθ) cos(φ+ψ).
             (a[(1, 0)] + a[(2, 1)]).atan2(a[(1, 1)] - a[(2, 0)]) - phi
@@ -622,7 +631,8 @@ impl Rpy {
     }
 
     /// The angles of a rotation matrix: pitch = atan2(−a₃₁, √(a₁₁² + a₂₁²)), roll = atan2(a₃₂, a₃₃),
-    /// and yaw from roll − yaw (pitch ≥ 0) or roll + yaw (pitch < 0), taken from 2×2 minors.
+    /// and yaw from roll − yaw (pitch ≥ 0) or roll + yaw (pitch < 0), taken from 2×2 minors. Roll
+    /// and yaw are in `(−π, π]`.
     ///
     /// # Errors
     /// [`Singular`] at pitch = ±π/2 exactly.
@@ -636,7 +646,7 @@ impl Rpy {
         }
         let pitch = (-a[(2, 0)]).atan2(c);
         // a32 = cp sr, a33 = cp cr with cp > 0.
-        let roll = a[(2, 1)].atan2(a[(2, 2)]);
+        let roll = wrap(a[(2, 1)].atan2(a[(2, 2)]));
         let yaw = if a[(2, 0)] <= 0.0 {
             // a12 − a23 = (1 + sp) sin(r − y), a13 + a22 = (1 + sp) cos(r − y).
             roll - (a[(0, 1)] - a[(1, 2)]).atan2(a[(0, 2)] + a[(1, 1)])
@@ -675,11 +685,18 @@ pub enum FrameError {
     /// The axes form a left-handed frame.
     #[error("axes form a left-handed frame")]
     LeftHanded,
+    /// The tolerance is negative or not a number.
+    #[error("orthogonality tolerance {tolerance} is not a number ≥ 0")]
+    InvalidTolerance {
+        /// The tolerance given.
+        tolerance: f64,
+    },
 }
 
 /// The rotation matrix whose columns are the direction cosines of the body axes (eqs. 2.97–2.99):
 /// each given axis is normalised; they must be orthogonal within `tolerance` (eq. 2.101) and
-/// right-handed.
+/// right-handed. The tolerance bounds `|αₖ·αₗ|` and is inclusive (0 asks for exactly orthogonal
+/// axes); axes that span no volume are refused whatever it is.
 ///
 /// # Errors
 /// [`FrameError`] naming what is wrong.
@@ -687,6 +704,9 @@ pub fn from_direction_cosines(
     axes: [Vector3<f64>; 3],
     tolerance: f64,
 ) -> Result<Matrix3<f64>, FrameError> {
+    if tolerance.is_nan() || tolerance < 0.0 {
+        return Err(FrameError::InvalidTolerance { tolerance });
+    }
     let mut unit = [Vector3::zeros(); 3];
     for (i, a) in axes.iter().enumerate() {
         let n = a.norm();
@@ -704,8 +724,13 @@ pub fn from_direction_cosines(
         return Err(FrameError::NotOrthogonal { deviation });
     }
     let a = Matrix3::from_columns(&unit);
-    if a.determinant() < 0.0 {
+    let determinant = a.determinant();
+    if determinant < 0.0 {
         return Err(FrameError::LeftHanded);
+    }
+    if determinant == 0.0 {
+        // Only a tolerance of 1 or more lets dependent axes this far.
+        return Err(FrameError::NotOrthogonal { deviation });
     }
     Ok(a)
 }
@@ -732,4 +757,25 @@ pub fn single_frame(rotations: &[(Unit<Vector3<f64>>, f64)]) -> Matrix3<f64> {
             let global = Unit::new_normalize(a * axis.into_inner());
             rotation_matrix(&global, *angle) * a
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrapping_is_exact_and_half_open() {
+        // Inside the range nothing changes, not even the last bit of a tiny negative angle.
+        for a in [-0.1, -1e-20, -0.0, 0.0, 3.0, PI, (-PI).next_up()] {
+            assert_eq!(wrap(a).to_bits(), a.to_bits(), "{a}");
+        }
+        assert_eq!(wrap(-PI), PI);
+        assert_eq!(wrap(PI.next_up()), PI.next_up() - TAU);
+        // Outside, one shift by exactly 2π.
+        for a in [PI.next_up(), 3.5, TAU, -3.5, -TAU, (-PI).next_down()] {
+            let w = wrap(a);
+            assert!(w > -PI && w <= PI, "{a} -> {w}");
+            assert_eq!((a - w).abs(), TAU, "{a}");
+        }
+    }
 }

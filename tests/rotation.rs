@@ -208,6 +208,58 @@ fn example_2_10_direction_cosines() {
     );
 }
 
+#[test]
+fn bounds_are_where_the_documentation_puts_them() {
+    // The orthogonality tolerance is inclusive: exactly orthogonal axes pass a tolerance of 0.
+    let scaled = [2.0 * Vector3::x(), Vector3::y(), 0.5 * Vector3::z()];
+    assert_eq!(from_direction_cosines(scaled, 0.0), Ok(Matrix3::identity()));
+    // Whatever the tolerance, axes in one plane are not a frame; a tolerance must be a number ≥ 0.
+    let flat = [Vector3::x(), Vector3::new(1.0, 1.0, 0.0), Vector3::y()];
+    assert!(matches!(
+        from_direction_cosines(flat, 2.0),
+        Err(FrameError::NotOrthogonal { .. })
+    ));
+    for tolerance in [-1e-9, f64::NAN] {
+        assert!(matches!(
+            from_direction_cosines(scaled, tolerance),
+            Err(FrameError::InvalidTolerance { .. })
+        ));
+    }
+    // z-x-z rates fail when |sin θ| < RATE_SINGULARITY, and sin θ = θ exactly this close to 0.
+    let w = Vector3::new(0.1, -0.2, 0.3);
+    let at = |theta: f64| EulerZxz {
+        phi: 0.4,
+        theta,
+        psi: -0.3,
+    };
+    assert_eq!(RATE_SINGULARITY.sin(), RATE_SINGULARITY);
+    assert!(at(RATE_SINGULARITY).rates(&w).is_ok());
+    assert!(at(RATE_SINGULARITY).rates_from_local(&w).is_ok());
+    let below = RATE_SINGULARITY.next_down();
+    assert!(at(below).rates(&w).is_err());
+    assert!(at(below).rates_from_local(&w).is_err());
+    // x-y-z rates fail when |cos θ| < RATE_SINGULARITY: on either side of the bound.
+    for (offset, singular) in [(0.5, true), (2.0, false)] {
+        let theta = FRAC_PI_2 - offset * RATE_SINGULARITY;
+        let x = EulerXyz {
+            phi: 0.4,
+            theta,
+            psi: -0.3,
+        };
+        assert_eq!(x.rates(&w).is_err(), singular, "{offset}");
+        assert_eq!(x.rates_from_local(&w).is_err(), singular, "{offset}");
+    }
+    // Euler parameters of a half turn (e₀ = 0) keep the axis as it is, not its negative.
+    let half_turn_x = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0);
+    let e = EulerParameters::from_matrix(&half_turn_x);
+    assert_eq!(
+        e.as_vector(),
+        Vector4::new(0.0, 1.0, 0.0, 0.0),
+        "{:?}",
+        e.as_vector()
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // Problems: one rotation and one ω through every representation, checked for consistency.
 
@@ -390,6 +442,37 @@ fn singular_cases_are_errors() {
     assert!(max_diff(&a.to_matrix(), &near) < 4e-16);
 }
 
+#[test]
+fn free_angles_are_in_the_half_open_range_up_to_pi() {
+    // Half turns, written exactly: each free angle comes back as +π, never −π.
+    let half_turn_z = Matrix3::new(-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0);
+    let rpy = Rpy::from_matrix(&half_turn_z).unwrap();
+    assert_eq!((rpy.roll, rpy.pitch, rpy.yaw), (0.0, 0.0, PI));
+    // Rx(π/2) Rz(π): z-x-z angles (0, π/2, π).
+    let zxz = Matrix3::new(-1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, -1.0, 0.0);
+    let e = EulerZxz::from_matrix(&zxz).unwrap();
+    assert_eq!((e.phi, e.theta, e.psi), (0.0, FRAC_PI_2, PI));
+    // The half turn about x with the signs of zero for which atan2 gives −π: roll = atan2(a₃₂,
+    // a₃₃) with a₃₂ = −0, and x-y-z φ = atan2(−a₂₃, a₃₃) with a₂₃ = +0.
+    let half_turn_x = Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, -0.0, -1.0);
+    let rpy = Rpy::from_matrix(&half_turn_x).unwrap();
+    assert_eq!((rpy.roll, rpy.pitch, rpy.yaw), (PI, 0.0, 0.0));
+    let xyz = EulerXyz::from_matrix(&half_turn_x).unwrap();
+    assert_eq!((xyz.phi, xyz.theta, xyz.psi), (PI, 0.0, 0.0));
+    for a in [half_turn_z, zxz, half_turn_x] {
+        for angles in [
+            Rpy::from_matrix(&a).map(|r| [r.roll, r.yaw]),
+            EulerXyz::from_matrix(&a).map(|x| [x.phi, x.psi]),
+            EulerZxz::from_matrix(&a).map(|z| [z.phi, z.psi]),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            assert!(angles.iter().all(|x| *x > -PI && *x <= PI), "{angles:?}");
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Properties.
 
@@ -460,6 +543,7 @@ fn near_singular() -> impl Strategy<Value = Matrix3<f64>> {
 fn round_trips(a: &Matrix3<f64>) -> Result<(), TestCaseError> {
     const BOUND: f64 = 12.0 * f64::EPSILON;
     let e = EulerParameters::from_matrix(a);
+    prop_assert!(e.e0 >= 0.0, "e0 = {}", e.e0);
     prop_assert!(
         max_diff(&e.to_matrix(), a) < BOUND,
         "Euler parameters {}",
