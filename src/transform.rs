@@ -396,6 +396,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::op_ref, reason = "the by-reference `Mul` is what is tested")]
     fn composition_is_the_product_of_homogeneous_matrices() {
         let a = Transform::from_xyz_rpy([0.3, -1.2, 2.0], [0.4, -1.1, 2.9]);
         let b = Transform::from_xyz_rpy([-0.7, 0.5, 0.1], [2.2, 0.3, -0.6]);
