@@ -1949,6 +1949,39 @@ mod tests {
     }
 
     #[test]
+    fn z_tail_codes_give_the_kinds_of_theta_and_d() {
+        use ZTail as Z;
+        // (kind, θ offset, d offset) and the (θ, d) kinds the code must give.
+        let cases = [
+            (JointKind::Revolute, 0.0, 0.0, (Z::VARIABLE, Z::ZERO)),
+            (JointKind::Revolute, 0.0, 0.3, (Z::VARIABLE, Z::CONSTANT)),
+            (JointKind::Prismatic, 0.2, 0.0, (Z::CONSTANT, Z::VARIABLE)),
+            (JointKind::Prismatic, 0.0, 0.1, (Z::ZERO, Z::VARIABLE)),
+            (JointKind::Cylindrical, 0.4, 0.0, (Z::VARIABLE, Z::VARIABLE)),
+        ];
+        let mut b = ChainBuilder::new("codes");
+        b.link("l0");
+        for (i, (kind, theta, d, _)) in cases.iter().enumerate() {
+            b.link(format!("l{}", i + 1));
+            b.joint(
+                JointSpec::new(
+                    format!("j{i}"),
+                    *kind,
+                    format!("l{i}"),
+                    format!("l{}", i + 1),
+                )
+                .with_offsets(*theta, *d),
+            );
+        }
+        let chain = b.build().unwrap();
+        for (body, (kind, .., want)) in chain.bodies.iter().zip(cases) {
+            let motion = body.z_tail.map(|z| z.motion);
+            let got = motion.map(|m| (Z::theta_kind(m), Z::d_kind(m)));
+            assert_eq!(got, Some(want), "{kind:?}");
+        }
+    }
+
+    #[test]
     fn dense_limits_decide_as_the_checks_do() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
         let mimic_opposite = r#"<robot name="g"><link name="palm"/><link name="l"/><link name="r"/>

@@ -1,0 +1,84 @@
+//! Chains built in code: what the builder is given is what the built chain reports and where
+//! its evaluation puts the links.
+
+use kinechain::{Chain, ChainBuilder, Data, JointKind, JointSpec, Transform, forward_kinematics};
+
+fn placed_arm() -> (ChainBuilder, Chain) {
+    let base = Transform::from_xyz_rpy([0.5, -0.25, 1.0], [0.0, 0.0, 0.3]);
+    let mut b = ChainBuilder::new("placed");
+    b.link("base").link("upper").link("lower");
+    b.world_from_root(base);
+    b.joint(
+        JointSpec::new("shoulder", JointKind::Revolute, "base", "upper")
+            // Not a unit vector: the chain keeps it normalised.
+            .with_axis([0.0, 1.2, 1.6])
+            .with_origin(Transform::from_xyz_rpy([0.0, 0.0, 0.2], [0.0; 3])),
+    );
+    b.joint(
+        JointSpec::new("elbow", JointKind::Prismatic, "upper", "lower")
+            .with_origin(Transform::from_xyz_rpy([0.3, 0.0, 0.0], [0.0; 3]))
+            .with_offsets(-0.5, 0.125),
+    );
+    let chain = b.build().unwrap();
+    (b, chain)
+}
+
+#[test]
+fn the_chain_reports_what_it_was_built_from() {
+    let (b, chain) = placed_arm();
+    assert_eq!(b.name(), "placed");
+    assert_eq!(chain.name(), "placed");
+    assert_eq!(chain.description().name(), "placed");
+    let base = Transform::from_xyz_rpy([0.5, -0.25, 1.0], [0.0, 0.0, 0.3]);
+    assert_eq!(b.root_placement(), Some(base));
+    assert_eq!(chain.description().root_placement(), Some(base));
+    assert_eq!(ChainBuilder::new("bare").root_placement(), None);
+    for (i, name) in ["shoulder", "elbow"].into_iter().enumerate() {
+        let id = chain.joint_id(name).unwrap();
+        assert_eq!(id.index(), i);
+        assert_eq!(chain.joint(id).name(), name);
+    }
+    let shoulder = chain.joint(chain.joint_id("shoulder").unwrap());
+    let axis = shoulder.axis();
+    assert!(
+        axis[0].abs() < 1e-16 && (axis[1] - 0.6).abs() < 2e-16 && (axis[2] - 0.8).abs() < 2e-16
+    );
+    let elbow = chain.joint(chain.joint_id("elbow").unwrap());
+    assert_eq!(elbow.axis(), [0.0, 0.0, 1.0]);
+    assert_eq!(elbow.offsets(), (-0.5, 0.125));
+    assert_eq!(shoulder.offsets(), (0.0, 0.0));
+    // Each link names the joint it hangs from.
+    for (link, joint) in [
+        ("base", None),
+        ("upper", Some("shoulder")),
+        ("lower", Some("elbow")),
+    ] {
+        let parent = chain.link(chain.link_id(link).unwrap()).parent_joint();
+        assert_eq!(parent, joint.map(|j| chain.joint_id(j).unwrap()), "{link}");
+    }
+}
+
+#[test]
+fn the_root_placement_moves_every_link() {
+    let (_, chain) = placed_arm();
+    let base = chain.description().root_placement().unwrap();
+    let mut data = Data::new(&chain);
+    let q = [0.4, 0.05];
+    let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+    let root = chain.link_id("base").unwrap();
+    assert_eq!(poses.world_from_link(root), base);
+    // The same chain built without the placement, then placed by hand.
+    let (mut unplaced, _) = placed_arm();
+    unplaced.world_from_root(Transform::IDENTITY);
+    let local = unplaced.build().unwrap();
+    let mut local_data = Data::new(&local);
+    let local_poses = forward_kinematics(&local, &mut local_data, &q).unwrap();
+    for link in ["upper", "lower"] {
+        let placed = poses.world_from_link(chain.link_id(link).unwrap());
+        let by_hand = base * local_poses.world_from_link(local.link_id(link).unwrap());
+        let diff = (placed.to_homogeneous() - by_hand.to_homogeneous())
+            .abs()
+            .max();
+        assert!(diff < 4.0 * f64::EPSILON, "{link}: {diff:e}");
+    }
+}
