@@ -1,7 +1,9 @@
 //! Chains built in code: what the builder is given is what the built chain reports and where
 //! its evaluation puts the links.
 
-use kinechain::{Chain, ChainBuilder, Data, JointKind, JointSpec, Transform, forward_kinematics};
+use kinechain::{
+    Chain, ChainBuilder, Data, JointKind, JointSpec, ModelError, Transform, forward_kinematics,
+};
 
 fn placed_arm() -> (ChainBuilder, Chain) {
     let base = Transform::from_xyz_rpy([0.5, -0.25, 1.0], [0.0, 0.0, 0.3]);
@@ -17,7 +19,8 @@ fn placed_arm() -> (ChainBuilder, Chain) {
     b.joint(
         JointSpec::new("elbow", JointKind::Prismatic, "upper", "lower")
             .with_origin(Transform::from_xyz_rpy([0.3, 0.0, 0.0], [0.0; 3]))
-            .with_offsets(-0.5, 0.125),
+            .with_offsets(-0.5, 0.125)
+            .with_limits(-0.1, 0.2),
     );
     let chain = b.build().unwrap();
     (b, chain)
@@ -81,4 +84,82 @@ fn the_root_placement_moves_every_link() {
             .max();
         assert!(diff < 4.0 * f64::EPSILON, "{link}: {diff:e}");
     }
+}
+
+#[test]
+fn the_reach_bounds_every_link_within_the_limits() {
+    let (_, chain) = placed_arm();
+    // The base's distance, the two origins' lengths and the elbow's farthest slide, 0.125 + 0.2.
+    let want = (0.5f64.powi(2) + 0.25f64.powi(2) + 1.0).sqrt() + 0.2 + 0.3 + 0.325;
+    assert!(
+        (chain.reach() - want).abs() < 4.0 * f64::EPSILON,
+        "{}",
+        chain.reach()
+    );
+    let mut data = Data::new(&chain);
+    let mut farthest = 0.0_f64;
+    for i in 0..=20 {
+        for j in 0..=20 {
+            let q = [-3.0 + 0.3 * f64::from(i), -0.1 + 0.015 * f64::from(j)];
+            let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+            for link in chain.links() {
+                let p = poses
+                    .world_from_link(chain.link_id(link.name()).unwrap())
+                    .translation();
+                farthest = farthest.max(p.norm());
+            }
+        }
+    }
+    assert!(farthest <= chain.reach(), "{farthest} > {}", chain.reach());
+    // Not a loose bound either: the farthest origin found comes within 0.25 m of it (0.205).
+    assert!(farthest > chain.reach() - 0.25, "{farthest}");
+}
+
+#[test]
+fn an_open_ended_slide_leaves_the_reach_finite() {
+    // Travel counts only where both limits are finite; otherwise the offset stands for it.
+    for (lower, upper) in [(-0.1, f64::INFINITY), (f64::NEG_INFINITY, 0.2)] {
+        let mut b = ChainBuilder::new("open");
+        b.link("a").link("b").joint(
+            JointSpec::new("slide", JointKind::Prismatic, "a", "b")
+                .with_offsets(0.0, 0.5)
+                .with_limits(lower, upper),
+        );
+        let chain = b.build().unwrap();
+        assert_eq!(chain.reach(), 0.5, "{lower} {upper}");
+    }
+}
+
+#[test]
+fn numbers_from_code_are_checked_as_numbers_from_files_are() {
+    let build = |joint: JointSpec| {
+        let mut b = ChainBuilder::new("bad");
+        b.link("a").link("b").joint(joint);
+        b.build()
+    };
+    let joint = || JointSpec::new("j", JointKind::Cylindrical, "a", "b");
+    let non_finite = [
+        (joint().with_offsets(f64::NAN, 0.0), "theta"),
+        (joint().with_offsets(0.0, f64::INFINITY), "d"),
+        (joint().with_axis([0.0, f64::NAN, 1.0]), "axis"),
+        (joint().with_limits(f64::NAN, 1.0), "limits"),
+        (joint().with_limits(-1.0, f64::NAN), "limits"),
+    ];
+    for (spec, field) in non_finite {
+        match build(spec) {
+            Err(ModelError::NonFinite { joint, field: f }) => {
+                assert_eq!((joint.as_str(), f), ("j", field));
+            }
+            other => panic!("{field}: {other:?}"),
+        }
+    }
+    assert!(matches!(
+        build(joint().with_axis([0.0; 3])),
+        Err(ModelError::ZeroAxis { joint }) if joint == "j"
+    ));
+    assert!(matches!(
+        build(joint().with_limits(1.0, -1.0)),
+        Err(ModelError::ReversedLimits { joint, .. }) if joint == "j"
+    ));
+    assert!(build(joint().with_limits(-1.0, 1.0)).is_ok());
 }
