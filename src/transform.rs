@@ -402,6 +402,10 @@ mod tests {
         let b = Transform::from_xyz_rpy([-0.7, 0.5, 0.1], [2.2, 0.3, -0.6]);
         let by_value = a * b;
         assert_eq!(&a * &b, by_value);
+        let shift = Vector3::new(0.25, -1.5, 3.0);
+        let moved = Transform::from_translation(shift) * a;
+        assert_eq!(moved.rotation(), a.rotation());
+        assert_eq!(moved.translation(), a.translation() + shift);
         assert_relative_eq!(
             by_value.to_homogeneous(),
             a.to_homogeneous() * b.to_homogeneous(),

@@ -163,3 +163,31 @@ fn numbers_from_code_are_checked_as_numbers_from_files_are() {
     ));
     assert!(build(joint().with_limits(-1.0, 1.0)).is_ok());
 }
+
+#[test]
+fn a_mimic_of_a_mimic_follows_the_primary_through_both() {
+    let mut b = ChainBuilder::new("gripper");
+    b.link("palm").link("a").link("b").link("c");
+    b.joint(JointSpec::new("drive", JointKind::Revolute, "palm", "a"));
+    b.joint(JointSpec::new("middle", JointKind::Revolute, "a", "b").with_mimic("drive", 2.0, 0.1));
+    b.joint(JointSpec::new("tip", JointKind::Revolute, "b", "c").with_mimic("middle", -1.0, 0.25));
+    let chain = b.build().unwrap();
+    assert_eq!(chain.dof(), 1);
+    let q = [0.3];
+    let tip = chain
+        .joint_position(chain.joint_id("tip").unwrap(), &q)
+        .unwrap();
+    // q_tip = −(2 q + 0.1) + 0.25 = −2 q + 0.15.
+    assert!(
+        (tip - (-2.0 * 0.3 + 0.15)).abs() < 4.0 * f64::EPSILON,
+        "{tip}"
+    );
+    // The tip turns by the sum of the three angles about the shared z axis.
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+    let r = poses
+        .world_from_link(chain.link_id("c").unwrap())
+        .rotation();
+    let total = 0.3 + (2.0 * 0.3 + 0.1) + tip;
+    assert!((r[(1, 0)] - total.sin()).abs() < 1e-15 && (r[(0, 0)] - total.cos()).abs() < 1e-15);
+}
