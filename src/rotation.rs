@@ -685,8 +685,8 @@ pub enum FrameError {
     /// The axes form a left-handed frame.
     #[error("axes form a left-handed frame")]
     LeftHanded,
-    /// The tolerance is negative or not a number.
-    #[error("orthogonality tolerance {tolerance} is not a number ≥ 0")]
+    /// The tolerance is not in `[0, 0.5)`.
+    #[error("orthogonality tolerance {tolerance} is not in [0, 0.5)")]
     InvalidTolerance {
         /// The tolerance given.
         tolerance: f64,
@@ -696,7 +696,9 @@ pub enum FrameError {
 /// The rotation matrix whose columns are the direction cosines of the body axes (eqs. 2.97–2.99):
 /// each given axis is normalised; they must be orthogonal within `tolerance` (eq. 2.101) and
 /// right-handed. The tolerance bounds `|αₖ·αₗ|` and is inclusive (0 asks for exactly orthogonal
-/// axes); axes that span no volume are refused whatever it is.
+/// axes). It must be below 0.5, which keeps the axes independent: the eigenvalues of their Gram
+/// matrix are then at least `1 − 2·tolerance` (Gershgorin), while three axes in one plane can
+/// have every `|αₖ·αₗ|` at 0.5.
 ///
 /// # Errors
 /// [`FrameError`] naming what is wrong.
@@ -704,7 +706,7 @@ pub fn from_direction_cosines(
     axes: [Vector3<f64>; 3],
     tolerance: f64,
 ) -> Result<Matrix3<f64>, FrameError> {
-    if tolerance.is_nan() || tolerance < 0.0 {
+    if !(0.0..0.5).contains(&tolerance) {
         return Err(FrameError::InvalidTolerance { tolerance });
     }
     let mut unit = [Vector3::zeros(); 3];
@@ -724,13 +726,8 @@ pub fn from_direction_cosines(
         return Err(FrameError::NotOrthogonal { deviation });
     }
     let a = Matrix3::from_columns(&unit);
-    let determinant = a.determinant();
-    if determinant < 0.0 {
+    if a.determinant() < 0.0 {
         return Err(FrameError::LeftHanded);
-    }
-    if determinant == 0.0 {
-        // Only a tolerance of 1 or more lets dependent axes this far.
-        return Err(FrameError::NotOrthogonal { deviation });
     }
     Ok(a)
 }

@@ -213,13 +213,19 @@ fn bounds_are_where_the_documentation_puts_them() {
     // The orthogonality tolerance is inclusive: exactly orthogonal axes pass a tolerance of 0.
     let scaled = [2.0 * Vector3::x(), Vector3::y(), 0.5 * Vector3::z()];
     assert_eq!(from_direction_cosines(scaled, 0.0), Ok(Matrix3::identity()));
-    // Whatever the tolerance, axes in one plane are not a frame; a tolerance must be a number ≥ 0.
-    let flat = [Vector3::x(), Vector3::new(1.0, 1.0, 0.0), Vector3::y()];
+    // Axes in one plane 60° apart: every |αₖ·αₗ| is 0.5 (to rounding), the least a plane allows,
+    // so a tolerance below 0.5 refuses them and none at 0.5 or above is accepted.
+    let (s60, c60) = 60f64.to_radians().sin_cos();
+    let flat = [
+        Vector3::x(),
+        Vector3::new(c60, s60, 0.0),
+        Vector3::new(-c60, s60, 0.0),
+    ];
     assert!(matches!(
-        from_direction_cosines(flat, 2.0),
+        from_direction_cosines(flat, 0.499),
         Err(FrameError::NotOrthogonal { .. })
     ));
-    for tolerance in [-1e-9, f64::NAN] {
+    for tolerance in [-1e-9, f64::NAN, 0.5, 2.0] {
         assert!(matches!(
             from_direction_cosines(scaled, tolerance),
             Err(FrameError::InvalidTolerance { .. })
