@@ -344,7 +344,7 @@ mod tests {
             assert_eq!(Axis::from_unit(v), axis, "{v:?}");
             assert_eq!(axis.vector(), v);
         }
-        // One ulp off a coordinate axis is a general axis, kept as given.
+        // Off a coordinate axis by the smallest normal component: a general axis, kept as given.
         let near = [1.0, 0.0, f64::MIN_POSITIVE];
         assert_eq!(Axis::from_unit(near), Axis::General(near));
         let tilted = [0.6, 0.0, -0.8];
