@@ -15,6 +15,7 @@
 //! the input matrix to ~1e-15. At a singularity the representation is undefined and a
 //! [`Singular`] error is returned; no function returns NaN for a finite rotation.
 
+use crate::joint::normalize_axis;
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Unit, Vector3, Vector4};
 use std::f64::consts::{PI, TAU};
 
@@ -711,11 +712,10 @@ pub fn from_direction_cosines(
     }
     let mut unit = [Vector3::zeros(); 3];
     for (i, a) in axes.iter().enumerate() {
-        let n = a.norm();
-        if n == 0.0 || !n.is_finite() {
-            return Err(FrameError::ZeroAxis { axis: i + 1 });
-        }
-        unit[i] = a / n;
+        // Scaled by the largest component first, so that an axis of tiny or huge (finite)
+        // components is normalised rather than taken for zero or infinite.
+        let u = normalize_axis([a.x, a.y, a.z]).ok_or(FrameError::ZeroAxis { axis: i + 1 })?;
+        unit[i] = Vector3::from(u);
     }
     let deviation = unit[0]
         .dot(&unit[1])

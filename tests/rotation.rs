@@ -231,6 +231,31 @@ fn bounds_are_where_the_documentation_puts_them() {
             Err(FrameError::InvalidTolerance { .. })
         ));
     }
+    // Axes of tiny or huge finite components are directions like any other: their squares
+    // would underflow to 0 or overflow to ∞, so they are scaled before they are normalised.
+    let (s30, c30) = 30f64.to_radians().sin_cos();
+    let tilted = [
+        Vector3::new(c30, s30, 0.0),
+        Vector3::new(-s30, c30, 0.0),
+        Vector3::z(),
+    ];
+    let expected = from_direction_cosines(tilted, 1e-15).unwrap();
+    for factor in [1e-200, 1e-300, 1e200, 1e300] {
+        let a = from_direction_cosines(tilted.map(|v| v * factor), 1e-15);
+        assert!(
+            a.is_ok_and(|a| max_diff(&a, &expected) <= 4.0 * f64::EPSILON),
+            "{factor:e}"
+        );
+    }
+    for bad in [f64::NAN, f64::INFINITY] {
+        assert_eq!(
+            from_direction_cosines(
+                [Vector3::x(), Vector3::y(), Vector3::new(0.0, 0.0, bad)],
+                0.1
+            ),
+            Err(FrameError::ZeroAxis { axis: 3 })
+        );
+    }
     // z-x-z rates fail when |sin θ| < RATE_SINGULARITY, and sin θ = θ exactly this close to 0.
     let w = Vector3::new(0.1, -0.2, 0.3);
     let at = |theta: f64| EulerZxz {
