@@ -1,6 +1,7 @@
 //! Chains built in code: what the builder is given is what the built chain reports and where
 //! its evaluation puts the links.
 
+use kinechain::nalgebra::{Point3, Vector3};
 use kinechain::{
     Chain, ChainBuilder, Data, JointKind, JointSpec, ModelError, Transform, forward_kinematics,
 };
@@ -188,4 +189,42 @@ fn a_mimic_of_a_mimic_follows_the_primary_through_both() {
         .rotation();
     let total = 0.3 + (2.0 * 0.3 + 0.1) + tip;
     assert!((r[(1, 0)] - total.sin()).abs() < 1e-15 && (r[(0, 0)] - total.cos()).abs() < 1e-15);
+}
+
+#[test]
+fn joint_axes_pass_through_the_joint_frames() {
+    let (mut b, _) = placed_arm();
+    b.link("tool").joint(
+        JointSpec::new("flange", JointKind::Fixed, "lower", "tool")
+            .with_origin(Transform::from_xyz_rpy([0.0, 0.0, 0.1], [0.2, 0.0, 0.0])),
+    );
+    let chain = b.build().unwrap();
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &[0.4, 0.05]).unwrap();
+    let pose = |link: &str| poses.world_from_link(chain.link_id(link).unwrap());
+    let axis = |joint: &str| poses.joint_axis(chain.joint_id(joint).unwrap());
+    let close = |a: Vector3<f64>, b: Vector3<f64>| (a - b).amax() < 4.0 * f64::EPSILON;
+    let upper = pose("upper");
+    // The turning shoulder's axis passes through the origin of the link it turns, in the
+    // direction it was given (normalised) turned into the world.
+    let (point, direction) = axis("shoulder").unwrap();
+    assert!(close(point.coords, upper.translation()), "{point}");
+    let given = Vector3::new(0.0, 0.6, 0.8);
+    assert!(close(direction, upper.rotation() * given), "{direction}");
+    // The elbow's axis starts at its joint frame, 0.3 m along the upper link's x, and the lower
+    // link's origin slides along it by d = 0.125 + q.
+    let (point, direction) = axis("elbow").unwrap();
+    let joint_frame = upper.transform_point(&Point3::new(0.3, 0.0, 0.0));
+    assert!(close(point.coords, joint_frame.coords), "{point}");
+    assert!(
+        close(direction, upper.rotation() * Vector3::z()),
+        "{direction}"
+    );
+    let lower = pose("lower").translation();
+    assert!(
+        close(lower, point.coords + (0.125 + 0.05) * direction),
+        "{lower}"
+    );
+    // A fixed joint has no axis.
+    assert_eq!(axis("flange"), None);
 }
