@@ -888,7 +888,7 @@ fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<L
 }
 
 /// `f ← f · p` for every frame of a block, `p` of shape `SHAPE`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn block_place<A: Arith, const SHAPE: u8>(out: &mut [Frame<Lanes>], p: &CheapPlacement) {
     if SHAPE == 0 {
         return;
@@ -907,7 +907,7 @@ fn block_place<A: Arith, const SHAPE: u8>(out: &mut [Frame<Lanes>], p: &CheapPla
 }
 
 /// `f ← f · M(θ, d)` about z for every frame of a block, the kinds of θ and d in `MOTION`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn block_motion<A: Arith, const MOTION: u8>(
     out: &mut [Frame<Lanes>],
     body: &Body,

@@ -779,7 +779,7 @@ fn z_tail<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, tail: &ZTail, q: &[N]
 }
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see [`ZTail::motion`]).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
     f: &mut Frame<N>,
     body: &Body,
@@ -803,6 +803,12 @@ pub(crate) fn z_motion<N: Num, A: Arith, const MOTION: u8>(
 /// Calls `$f::<…, SHAPE>(args)` for a four-bit shape code `$shape` resolved at load time (a
 /// [`CheapPlacement::shape`], a [`ZTail::motion`]): one jump through a table instead of one
 /// test per step, each arm the code for its shape.
+///
+/// The functions it calls are always inlined in optimised builds only (`debug_assertions` off,
+/// as in `--release`): without optimisation nothing shares stack slots, and sixteen inlined arms
+/// at each of a kernel's steps gave the batch kernel a frame of 2.1 MB, more than a spawned
+/// thread's 2 MiB stack (a crate's own tests, run in debug, overflowed it). Called instead, they
+/// run the same arithmetic, without the caller's target features.
 macro_rules! by_shape {
     ($shape:expr, $f:ident::<$($g:ty),*>($($arg:expr),*)) => {
         match $shape & 15 {
@@ -836,7 +842,7 @@ fn cheap_place<N: Num, A: Arith>(f: &mut Frame<N>, p: &CheapPlacement) {
 }
 
 /// The steps of a [`CheapPlacement`] of shape `SHAPE`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 pub(crate) fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p: &CheapPlacement) {
     if SHAPE & CheapPlacement::ALONG_X != 0 {
         f.p = axpy::<N, A>(N::splat(p.x), f.r[0], f.p);
@@ -891,7 +897,7 @@ fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 /// [`Body::z_tail`]): the operations of `place` and `apply_motion` without matching on kinds, and
 /// a translation along x as one multiply–add per entry rather than three whose other two add
 /// exact zeros.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 pub(crate) fn pose_step<N: Num, A: Arith>(
     parent: Option<&Frame<N>>,
     body: &Body,

@@ -279,7 +279,7 @@ fn z_tail<A: Arith>(
 }
 
 /// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::z_motion`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn z_motion<A: Arith, const MOTION: u8>(
     f: &mut [A::Col; 4],
     body: &Body,
@@ -307,7 +307,7 @@ fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
 }
 
 /// The steps of a [`CheapPlacement`] of shape `SHAPE` (see `kernel::cheap_steps`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacement) {
     if SHAPE & CheapPlacement::ALONG_X != 0 {
         f[3] = A::Col::mul_add(A::Col::splat(p.x), f[0], f[3]);
@@ -344,7 +344,7 @@ fn columns_or_world<C: Col>(parent: Option<&Frame4<C>>) -> [C; 4] {
 
 /// The frame of a body from its parent's frame (`None`: the body hangs from the world), with the
 /// steps of `kernel::pose_step`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 pub(crate) fn pose_step<A: Arith>(
     parent: Option<&Frame4<A::Col>>,
     body: &Body,
