@@ -266,6 +266,66 @@ fn lane_checks_decide_as_check_q_does() {
     assert!(accepted >= 18 && rejected >= 18, "{accepted} / {rejected}");
 }
 
+/// With limits that are not one interval per entry (a mimic finger bounding its primary's entry
+/// with the opposite scale) the kernels cannot check the lanes; the batch checks the
+/// configurations apart and decides as `check_q` does, by every entry point, in `f64` and `f32`.
+#[test]
+fn batches_decide_as_check_q_does_when_lanes_cannot() {
+    let chain = Chain::from_urdf_str(MIMIC_GRIPPER).unwrap();
+    let tool = chain.link_id("right").unwrap();
+    let mut batch = BatchData::new(&chain);
+    let mut batch32 = sp::BatchData::new(&chain);
+    // (entry, value): the right finger out of [−0.04, 0] (0.01 − 0.005 > 0), the left out of
+    // [0, 0.04], inside both, and non-finite values at the joint that has no limits (which
+    // accepts any finite value).
+    let probes = [
+        (2, 0.005),
+        (2, 0.045),
+        (2, 0.03),
+        (0, f64::NAN),
+        (0, f64::INFINITY),
+        (0, 100.0),
+    ];
+    let (mut accepted, mut rejected) = (0, 0);
+    for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
+        batch.set_limit_policy(policy);
+        batch32.set_limit_policy(policy);
+        // 19 configurations (blocks of eight and a rest) and 5000 (checked in parts in parallel).
+        for (n, bads) in [(19, &[0, 7, 8, 18][..]), (5000, &[0, 2999, 4999][..])] {
+            for &bad in bads {
+                for (entry, x) in probes {
+                    let mut qs = [0.7, -0.4, 0.02].repeat(n);
+                    qs[3 * bad + entry] = x;
+                    let want = qs
+                        .chunks(3)
+                        .position(|q| kinechain::check_q(&chain, q, policy).is_err());
+                    let got = [
+                        forward_kinematics_batch(&chain, &mut batch, &qs).err(),
+                        forward_kinematics_batch_par(&chain, &mut batch, &qs).err(),
+                        forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, false).err(),
+                        forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, true).err(),
+                        sp::forward_kinematics_batch(&chain, &mut batch32, &qs).err(),
+                        sp::forward_kinematics_batch_par(&chain, &mut batch32, &qs).err(),
+                    ];
+                    for (i, e) in got.into_iter().enumerate() {
+                        let e = e.map(|e| e.index);
+                        assert_eq!(
+                            e, want,
+                            "{policy:?}: entry point {i}, {x} at {entry} of {bad}"
+                        );
+                    }
+                    match want {
+                        None => accepted += 1,
+                        Some(_) => rejected += 1,
+                    }
+                }
+            }
+        }
+    }
+    // Enforced, four probes fail at each position; ignored, the two non-finite ones.
+    assert_eq!((accepted, rejected), (7 * 2 + 7 * 4, 7 * 4 + 7 * 2));
+}
+
 /// A chain without moving joints has empty configurations, which a flat batch cannot count:
 /// every batch entry point refuses it with an error that says so, while a single evaluation
 /// works.
@@ -465,4 +525,49 @@ fn folded_batches_name_the_first_bad_configuration() {
             assert!(matches!(e.source, StateError::WrongLength { .. }), "{e:?}");
         }
     }
+}
+
+/// Every evaluation runs in a thread of 512 KiB of stack, in an unoptimised build too (`cargo test
+/// --config profile.test.opt-level=0`), where no two values share a stack slot and the kernels'
+/// frames are largest: a dependent crate's tests, built that way, run in threads of 2 MiB.
+#[test]
+fn evaluations_fit_a_small_thread_stack() {
+    let run = || {
+        for file in [
+            "robots/panda.urdf",
+            "tests/data/reference/urdf/tiago_no_hand.urdf",
+        ] {
+            let chain = repo_chain(file);
+            let n = chain.dof();
+            let end = chain.end_link();
+            let qs: Vec<f64> = (0..40 * n).map(|i| 0.01 * i as f64).collect();
+            let mut batch = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+            let mut batch32 = sp::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+            forward_kinematics_batch(&chain, &mut batch, &qs).unwrap();
+            forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap();
+            forward_kinematics_batch_to(&chain, &mut batch, &qs, end, false).unwrap();
+            sp::forward_kinematics_batch(&chain, &mut batch32, &qs).unwrap();
+            sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, end, false).unwrap();
+            let count = |n: usize, _: usize, poses: BatchPoses<'_>| n + poses.len();
+            let folded = forward_kinematics_batch_fold(
+                &chain,
+                &qs,
+                LimitPolicy::Ignore,
+                false,
+                || 0,
+                count,
+                |a, b| a + b,
+            );
+            assert_eq!(folded.unwrap(), 40);
+            let mut data = kinechain::Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+            let (q, qd, qdd) = (&qs[..n], &qs[n..2 * n], &qs[2 * n..3 * n]);
+            kinechain::forward_accelerations(&chain, &mut data, q, qd, qdd).unwrap();
+            kinechain::forward_kinematics_incremental(&chain, &mut data, qd).unwrap();
+            kinechain::forward_kinematics_to(&chain, &mut data, q, end).unwrap();
+        }
+    };
+    let thread = std::thread::Builder::new()
+        .stack_size(512 * 1024)
+        .spawn(run);
+    thread.unwrap().join().unwrap();
 }

@@ -122,6 +122,36 @@ fn an_incremental_update_back_to_the_previous_configuration_restores_its_poses()
 }
 
 #[test]
+fn changes_with_equal_bit_patterns_are_seen_wherever_they_are() {
+    // The unchanged head is skipped by comparing bits four entries at a time: entries moved
+    // from zero (the home pose), or several moved alike from one value, have changes with equal
+    // (or no common) bits, which a careless combination of the comparisons cancels out.
+    for chain in chains() {
+        let (mut fresh, mut inc) = (unchecked(&chain), unchecked(&chain));
+        let n = chain.dof().min(12);
+        for from in [0.0, 0.1] {
+            let q0 = vec![from; chain.dof()];
+            for i in 0..n {
+                for j in i..n {
+                    forward_kinematics_incremental(&chain, &mut inc, &q0).unwrap();
+                    let mut q1 = q0.clone();
+                    (q1[i], q1[j]) = (0.3, 0.3);
+                    let moved = forward_kinematics_incremental(&chain, &mut inc, &q1).unwrap();
+                    let moved = link_poses(&chain, &moved);
+                    let full = forward_kinematics(&chain, &mut fresh, &q1).unwrap();
+                    assert_eq!(
+                        moved,
+                        link_poses(&chain, &full),
+                        "{} from {from}, entries {i} and {j}",
+                        chain.name()
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn a_partial_evaluation_does_not_leave_stale_poses_for_incremental_use() {
     let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
     let mut data = Data::new(&chain);
@@ -170,6 +200,61 @@ fn incremental_updates_check_what_changed_and_respect_a_new_limit_policy() {
     data.set_limit_policy(LimitPolicy::Enforce);
     let err = forward_kinematics_incremental(&chain, &mut data, &bad).unwrap_err();
     assert!(matches!(err, StateError::OutOfLimits { .. }), "{err}");
+}
+
+#[test]
+fn limits_checked_apart_from_the_kernels_give_the_same_results() {
+    // Under `Enforce` the limits of this chain are checked on their own before evaluating; under
+    // `Ignore` only finiteness is, inside the kernels. Both evaluate the same numbers.
+    let chain = Chain::from_urdf_str(MIMIC_GRIPPER).unwrap();
+    let (q, qd, qdd) = ([0.7, -0.4, 0.02], [0.3, -1.1, 0.05], [-0.8, 0.6, -0.2]);
+    let mut enforced = Data::new(&chain);
+    let mut ignored = unchecked(&chain);
+    let a = forward_accelerations(&chain, &mut enforced, &q, &qd, &qdd).unwrap();
+    let b = forward_accelerations(&chain, &mut ignored, &q, &qd, &qdd).unwrap();
+    for link in chain.links() {
+        let id = chain.link_id(link.name()).unwrap();
+        let name = link.name();
+        assert_eq!(a.world_from_link(id), b.world_from_link(id), "{name}");
+        assert_eq!(a.velocity(id), b.velocity(id), "{name}");
+        assert_eq!(a.acceleration(id), b.acceleration(id), "{name}");
+    }
+    // The right finger moves against the left one: its slide is 0.01 − q₂ along the same axis.
+    let (left, right) = (
+        chain.link_id("left").unwrap(),
+        chain.link_id("right").unwrap(),
+    );
+    let gap = a.world_from_link(left).translation() - a.world_from_link(right).translation();
+    let axis = a.world_from_link(left).rotation() * nalgebra::Vector3::y();
+    assert!((gap - (2.0 * q[2] - 0.01) * axis).amax() < 1e-16, "{gap}");
+    let closing = a.velocity(left).v - a.velocity(right).v;
+    let omega = a.velocity(left).omega;
+    let want = 2.0 * qd[2] * axis + omega.cross(&gap);
+    assert!((closing - want).amax() < 1e-15, "{closing} {want}");
+    let palm = chain.link_id("palm").unwrap();
+    for id in [palm, left, right] {
+        // (In buffers of their own: `enforced` holds these velocities from the call above.)
+        let (va, vb) = (
+            forward_velocities(&chain, &mut Data::new(&chain), &q, &qd)
+                .unwrap()
+                .velocity(id),
+            forward_velocities(&chain, &mut unchecked(&chain), &q, &qd)
+                .unwrap()
+                .velocity(id),
+        );
+        assert_eq!(va, vb);
+        let (pa, pb) = (
+            forward_kinematics_to(&chain, &mut enforced, &q, id).unwrap(),
+            forward_kinematics_to(&chain, &mut ignored, &q, id).unwrap(),
+        );
+        assert_eq!(pa, pb);
+        let full = forward_kinematics(&chain, &mut enforced, &q).unwrap();
+        assert_eq!(full.world_from_link(id), pb);
+    }
+    // And the limits are enforced: the mimic finger leaves [−0.04, 0] when q₂ < 0.01.
+    let err = forward_velocities(&chain, &mut enforced, &[0.7, -0.4, 0.005], &qd).unwrap_err();
+    assert!(err.to_string().contains("right"), "{err}");
+    forward_velocities(&chain, &mut ignored, &[0.7, -0.4, 0.005], &qd).unwrap();
 }
 
 #[test]

@@ -20,6 +20,26 @@ pub const FIXED_ONLY_URDF: &str = r#"<robot name="fixed">
   </joint>
 </robot>"#;
 
+/// A two-joint arm (the first joint without limits) with a gripper whose second finger mimics
+/// the first with the opposite sign: its limits and its primary's bound one entry of `q` with
+/// different scales, so they are not one interval per entry and evaluations check them apart
+/// from the kernels.
+pub const MIMIC_GRIPPER: &str = r#"<robot name="gripper">
+  <link name="base"/><link name="upper"/><link name="palm"/><link name="left"/><link name="right"/>
+  <joint name="turn" type="continuous"><parent link="base"/><child link="upper"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/></joint>
+  <joint name="lift" type="revolute"><parent link="upper"/><child link="palm"/>
+    <origin xyz="0.2 0 0.1" rpy="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <joint name="left" type="prismatic"><parent link="palm"/><child link="left"/>
+    <origin xyz="0.05 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
+  <joint name="right" type="prismatic"><parent link="palm"/><child link="right"/>
+    <origin xyz="0.05 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-0.04" upper="0" effort="1" velocity="1"/>
+    <mimic joint="left" multiplier="-1" offset="0.01"/></joint>
+</robot>"#;
+
 /// Root of the copied reference data.
 pub fn reference_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/reference")
