@@ -326,6 +326,54 @@ fn batches_decide_as_check_q_does_when_lanes_cannot() {
     assert_eq!((accepted, rejected), (7 * 2 + 7 * 4, 7 * 4 + 7 * 2));
 }
 
+/// The parallel paths, when the kernels cannot check the lanes, check each part before
+/// evaluating it, and then evaluate every part: into buffers that no other call has filled, they
+/// give what the single-threaded paths give, configuration by configuration.
+#[test]
+fn parallel_batches_checked_apart_from_the_kernels_evaluate_every_part() {
+    let chain = Chain::from_urdf_str(MIMIC_GRIPPER).unwrap();
+    let (n, links, tool) = (5000, link_ids(&chain), chain.link_id("right").unwrap());
+    let qs: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            let t = f64::from(i) / f64::from(n);
+            [6.0 * t - 3.0, 1.5 - 3.0 * t, 0.01 + 0.03 * t]
+        })
+        .collect();
+    let mut serial = BatchData::new(&chain);
+    let want = forward_kinematics_batch(&chain, &mut serial, &qs).unwrap();
+    let mut fresh = BatchData::new(&chain);
+    let got = forward_kinematics_batch_par(&chain, &mut fresh, &qs).unwrap();
+    for i in 0..n as usize {
+        for &l in &links {
+            assert_eq!(
+                got.world_from_link(i, l),
+                want.world_from_link(i, l),
+                "{i} {l:?}"
+            );
+        }
+    }
+    let mut serial = BatchData::new(&chain);
+    let want = forward_kinematics_batch_to(&chain, &mut serial, &qs, tool, false).unwrap();
+    let mut fresh = BatchData::new(&chain);
+    let got = forward_kinematics_batch_to(&chain, &mut fresh, &qs, tool, true).unwrap();
+    for i in 0..n as usize {
+        assert_eq!(got.world_from_link(i), want.world_from_link(i), "{i}");
+    }
+    let mut serial = sp::BatchData::new(&chain);
+    let want = sp::forward_kinematics_batch(&chain, &mut serial, &qs).unwrap();
+    let mut fresh = sp::BatchData::new(&chain);
+    let got = sp::forward_kinematics_batch_par(&chain, &mut fresh, &qs).unwrap();
+    for i in 0..n as usize {
+        for &l in &links {
+            assert_eq!(
+                got.world_from_link(i, l),
+                want.world_from_link(i, l),
+                "f32 {i} {l:?}"
+            );
+        }
+    }
+}
+
 /// A chain without moving joints has empty configurations, which a flat batch cannot count:
 /// every batch entry point refuses it with an error that says so, while a single evaluation
 /// works.
