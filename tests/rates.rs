@@ -13,13 +13,48 @@ use kinechain::{
 use proptest::prelude::*;
 
 fn robots() -> Vec<(String, Chain)> {
-    robot_files()
+    let mut out: Vec<(String, Chain)> = robot_files()
         .into_iter()
         .map(|p| {
             let name = p.file_name().unwrap().to_string_lossy().into_owned();
             (name, Chain::from_file(&p).unwrap())
         })
-        .collect()
+        .collect();
+    out.push((
+        "placed before and after".to_string(),
+        placed_before_and_after(),
+    ));
+    out
+}
+
+/// Joints of every kind placed both before and after their motion, about z, y, x and a general
+/// axis, one of them with nothing before it: the forms of the rate recursion that no robot file
+/// gives (files place a joint on one side only).
+fn placed_before_and_after() -> Chain {
+    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    let origin = Transform::from_xyz_rpy([0.1, -0.2, 0.3], [0.4, -0.5, 0.6]);
+    let post = Transform::from_xyz_rpy([0.2, 0.1, -0.1], [-0.3, 0.2, 0.7]);
+    let mut b = ChainBuilder::new("placed");
+    for link in ["l0", "l1", "l2", "l3", "l4", "l5"] {
+        b.link(link);
+    }
+    let joint = |name, kind, parent, child, axis: [f64; 3]| {
+        JointSpec::new(name, kind, parent, child)
+            .with_axis(axis)
+            .with_post(post)
+    };
+    b.joint(joint("j1", JointKind::Revolute, "l0", "l1", [0.0, 0.0, 1.0]).with_origin(origin));
+    b.joint(joint("j2", JointKind::Prismatic, "l1", "l2", [0.0, 1.0, 0.0]).with_origin(origin));
+    b.joint(joint("j3", JointKind::Cylindrical, "l2", "l3", [0.6, 0.0, 0.8]).with_origin(origin));
+    b.joint(joint(
+        "j4",
+        JointKind::Revolute,
+        "l3",
+        "l4",
+        [1.0, 0.0, 0.0],
+    ));
+    b.joint(joint("j5", JointKind::Cylindrical, "l4", "l5", [0.0, 0.0, 1.0]).with_origin(origin));
+    b.build().unwrap()
 }
 
 /// Poses of every link along `q(t) = q + q̇ t + q̈ t²/2`.
