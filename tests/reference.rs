@@ -130,3 +130,117 @@ fn rates_are_within_8_ulp_of_the_50_digit_reference() {
         );
     }
 }
+
+/// The crate's own 256-bit evaluation ([`kinechain::reference`], against which `kinechain bench`
+/// and the stress tests measure errors) agrees with the independent 50-digit references: poses
+/// and ω, v, α, a of every link and sample within 4 ulp (of the reach, of 1 for rotation entries,
+/// of each quantity's largest magnitude in the file). It takes the model's constants as loaded, so
+/// what is left is their rounding at load time and the final rounding to `f64`: nothing on the DH
+/// models, whose constants are the file's numbers, up to 1 ulp on the URDF robots, 3.5 on the
+/// 12-joint axis-form chain, each of whose joints turns `rpy` into a rounded matrix (against
+/// that file the kernels' rotation entries err by 5.5 ulp).
+#[test]
+fn the_256_bit_evaluation_matches_the_50_digit_reference() {
+    use kinechain::reference::{link_motion, link_poses};
+    for path in reference_files() {
+        let chain = reference_chain(&path, &read_json(&path));
+        let exact = read_json(&hp_path(&path));
+        let reach = scale_of(&exact, "pose");
+        let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+        let (mut worst, mut largest) = ([0.0_f64; 4], [0.0_f64; 4]);
+        for sample in exact["samples"].as_array().unwrap() {
+            let [q, qd, qdd] = ["q", "qd", "qdd"].map(|k| joint_vector(&chain, &sample[k]));
+            let poses = link_poses(&chain, &q);
+            let motion = link_motion(&chain, &q, &qd, &qdd);
+            for (name, link) in sample["links"].as_object().unwrap() {
+                let i = chain.link_id(name).unwrap().index();
+                // The two evaluations are the same arithmetic and round to the same pose.
+                assert_eq!(poses[i], motion[i].pose, "{name}");
+                let (got, want) = (poses[i].to_rows(), matrix4(&link["pose"]));
+                for r in 0..3 {
+                    for c in 0..3 {
+                        rotation = rotation.max((got[r][c] - want[r][c]).abs());
+                    }
+                    position = position.max((got[r][3] - want[r][3]).abs());
+                }
+                let m = &motion[i];
+                for (k, got) in [m.omega, m.v, m.alpha, m.a].iter().enumerate() {
+                    let want = vec3(&link[RATE_FIELDS[k]]);
+                    for c in 0..3 {
+                        worst[k] = worst[k].max((got[c] - want[c]).abs());
+                        largest[k] = largest[k].max(want[c].abs());
+                    }
+                }
+            }
+        }
+        let (position, rotation) = (position / (reach * f64::EPSILON), rotation / f64::EPSILON);
+        let rates: [f64; 4] = std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON));
+        eprintln!(
+            "{}: position {position:.2} rotation {rotation:.2} omega {:.2} v {:.2} alpha {:.2} a {:.2} ulp",
+            path.file_name().unwrap().to_string_lossy(),
+            rates[0],
+            rates[1],
+            rates[2],
+            rates[3]
+        );
+        assert!(
+            position <= 4.0 && rotation <= 4.0 && rates.iter().all(|&e| e <= 4.0),
+            "{}: position {position:.2}, rotation {rotation:.2}, rates {rates:.2?} ulp",
+            path.display()
+        );
+    }
+}
+
+/// The error measures of [`kinechain::reference`] report the largest difference, wherever it
+/// is: a position, a rotation entry, or one component of one rate of one link, in metres (or the
+/// rate's unit) and in ulps of that rate's largest magnitude.
+#[test]
+fn the_error_measures_find_the_largest_difference() {
+    use kinechain::reference::{LinkMotion, max_errors, max_rate_errors};
+    let chain = repo_chain("robots/panda.urdf");
+    let q = vec![0.3; chain.dof()];
+    let exact = kinechain::reference::link_motion(&chain, &q, &vec![0.5; chain.dof()], &q);
+    let poses: Vec<Transform> = exact.iter().map(|m| m.pose).collect();
+    assert_eq!(max_errors(&poses, &poses), (0.0, 0.0));
+    // Entry (row, column) of a pose moved by `by`.
+    let nudge = |t: &Transform, row: usize, column: usize, by: f64| {
+        let mut m = t.to_rows();
+        m[row][column] += by;
+        Transform::from_rows(&[m[0], m[1], m[2]])
+    };
+    let mut moved = poses.clone();
+    moved[5] = nudge(&poses[5], 2, 3, 3e-9);
+    moved[7] = nudge(&poses[7], 0, 3, -1e-9);
+    moved[9] = nudge(&poses[9], 2, 1, 2e-12);
+    let entry = |t: &Transform, row: usize, column: usize| t.to_rows()[row][column];
+    let (position, rotation) = max_errors(&moved, &poses);
+    assert_eq!(
+        position,
+        (entry(&moved[5], 2, 3) - entry(&poses[5], 2, 3)).abs()
+    );
+    assert_eq!(
+        rotation,
+        (entry(&moved[9], 2, 1) - entry(&poses[9], 2, 1)).abs()
+    );
+
+    let rows = |m: &LinkMotion| [m.omega, m.v, m.alpha, m.a];
+    let mut got: Vec<[[f64; 3]; 4]> = exact.iter().map(rows).collect();
+    assert!(
+        max_rate_errors(&got, &exact)
+            .iter()
+            .all(|&e| e == (0.0, 0.0))
+    );
+    for (k, link, c) in [(0, 3, 1), (1, 8, 2), (2, 11, 0), (3, 12, 2)] {
+        got[link][k][c] += 1e-6 * (k + 1) as f64;
+    }
+    let errors = max_rate_errors(&got, &exact);
+    for (k, link, c) in [(0, 3, 1), (1, 8, 2), (2, 11, 0), (3, 12, 2)] {
+        let want = rows(&exact[link])[k][c];
+        let largest = exact
+            .iter()
+            .flat_map(|m| rows(m)[k])
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        let error = (got[link][k][c] - want).abs();
+        assert_eq!(errors[k], (error, error / (largest * f64::EPSILON)), "{k}");
+    }
+}
