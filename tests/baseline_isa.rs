@@ -38,3 +38,22 @@ fn baseline_batches_equal_baseline_single_evaluations_bit_for_bit() {
         22,
     );
 }
+
+#[test]
+fn baseline_lane_checks_decide_as_check_q_does() {
+    use_baseline();
+    assert_lane_checks_decide_as_check_q_does();
+}
+
+/// Without a fused multiply–add the fast reduction is exact only below 1.6·10⁶ rad, so larger
+/// angles must reach the standard library's `sin`/`cos` (with FMA the reduction stays accurate
+/// far beyond, and this could go unnoticed).
+#[test]
+fn baseline_poses_at_large_angles_are_as_accurate_as_at_small_ones() {
+    use_baseline();
+    let (position, rotation) = large_angle_pose_ulps("robots/puma560.yaml");
+    assert!(
+        position <= 8.0 && rotation <= 8.0,
+        "position {position:.2} ulp of reach, rotation {rotation:.2} ulp"
+    );
+}

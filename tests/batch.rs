@@ -227,43 +227,12 @@ fn one_link_batches_name_the_first_bad_configuration() {
     }
 }
 
-/// The kernels check each chunk's lanes as they transpose them: at every lane and chunk position,
-/// at and one ulp past the limits, and for non-finite values, a batch is accepted exactly when
-/// every configuration passes `check_q`, by all three entry points.
+/// The kernels check each chunk's lanes as they transpose them: see
+/// [`assert_lane_checks_decide_as_check_q_does`] (the AVX2 and baseline lanes are checked by
+/// `fused_isas.rs` and `baseline_isa.rs`).
 #[test]
 fn lane_checks_decide_as_check_q_does() {
-    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
-    let tool = chain.link_id("tool").unwrap();
-    let limits = chain.joints()[5].limits()[0].unwrap();
-    let values: Vec<f64> = [0.0].into_iter().chain(limit_probes(&limits)).collect();
-    let mut batch = BatchData::new(&chain);
-    let (mut accepted, mut rejected) = (0, 0);
-    for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
-        batch.set_limit_policy(policy);
-        for bad in [0, 3, 7, 8, 13, 18] {
-            for &x in &values {
-                let mut qs = vec![0.1; 6 * 19];
-                qs[6 * bad + 5] = x;
-                let want = qs
-                    .chunks(6)
-                    .position(|q| kinechain::check_q(&chain, q, policy).is_err());
-                let got = [
-                    forward_kinematics_batch(&chain, &mut batch, &qs).err(),
-                    forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, false).err(),
-                    forward_kinematics_batch_par(&chain, &mut batch, &qs).err(),
-                ];
-                for e in got {
-                    assert_eq!(e.map(|e| e.index), want, "{policy:?}, {x} at {bad}");
-                }
-                match want {
-                    None => accepted += 1,
-                    Some(_) => rejected += 1,
-                }
-            }
-        }
-    }
-    // Both outcomes occur under each policy's values.
-    assert!(accepted >= 18 && rejected >= 18, "{accepted} / {rejected}");
+    assert_lane_checks_decide_as_check_q_does();
 }
 
 /// With limits that are not one interval per entry (a mimic finger bounding its primary's entry

@@ -84,6 +84,12 @@ fn avx2_and_avx512_kernels_meet_the_bounds_and_agree_bit_for_bit() {
             );
         }
         assert_batches_equal_single_evaluations(&FILES, 23);
+        assert_lane_checks_decide_as_check_q_does();
+        let (position, rotation) = large_angle_pose_ulps("robots/puma560.yaml");
+        assert!(
+            position <= 8.0 && rotation <= 8.0,
+            "{wanted}, large angles: position {position:.2} ulp of reach, rotation {rotation:.2} ulp"
+        );
         let prints: Vec<Vec<u64>> = FILES.iter().map(|f| fingerprint(f, 7)).collect();
         fingerprints.push((wanted, prints));
     }

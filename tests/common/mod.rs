@@ -476,7 +476,14 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
         let chain = repo_chain(file);
         let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let mut batch = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
-        let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let mut qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        // Angles beyond the fast reduction's range, which the lanes hand to the standard library:
+        // single entries among ordinary ones, and one configuration with every entry there.
+        let dof = chain.dof();
+        for (configuration, entry, x) in [(3, 0, 1e6 + 0.3), (20, dof - 1, -2.5e7), (21, 0, 3e9)] {
+            qs[configuration * dof + entry] = x;
+        }
+        qs[25 * dof..26 * dof].fill(-8.4e5);
         let links = link_ids(&chain);
         let expected: Vec<Vec<Transform>> = qs
             .chunks(chain.dof())
@@ -513,6 +520,78 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
             );
         }
     }
+}
+
+/// Batches check each chunk's lanes as they transpose them (with the instruction set in use): at
+/// every lane and chunk position, at and one ulp past the limits, and for non-finite values, a
+/// batch is accepted exactly when every configuration passes `check_q`, by all three entry points.
+pub fn assert_lane_checks_decide_as_check_q_does() {
+    use kinechain::batch::{
+        BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
+        forward_kinematics_batch_to,
+    };
+    let chain = Chain::from_file(robots_dir().join("puma560.yaml")).unwrap();
+    let tool = chain.link_id("tool").unwrap();
+    let limits = chain.joints()[5].limits()[0].unwrap();
+    let values: Vec<f64> = [0.0].into_iter().chain(limit_probes(&limits)).collect();
+    let mut batch = BatchData::new(&chain);
+    let (mut accepted, mut rejected) = (0, 0);
+    for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
+        batch.set_limit_policy(policy);
+        for bad in [0, 3, 7, 8, 13, 18] {
+            for &x in &values {
+                let mut qs = vec![0.1; 6 * 19];
+                qs[6 * bad + 5] = x;
+                let want = qs
+                    .chunks(6)
+                    .position(|q| kinechain::check_q(&chain, q, policy).is_err());
+                let got = [
+                    forward_kinematics_batch(&chain, &mut batch, &qs).err(),
+                    forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, false).err(),
+                    forward_kinematics_batch_par(&chain, &mut batch, &qs).err(),
+                ];
+                for e in got {
+                    assert_eq!(e.map(|e| e.index), want, "{policy:?}, {x} at {bad}");
+                }
+                match want {
+                    None => accepted += 1,
+                    Some(_) => rejected += 1,
+                }
+            }
+        }
+    }
+    // Both outcomes occur under each policy's values.
+    assert!(accepted >= 18 && rejected >= 18, "{accepted} / {rejected}");
+}
+
+/// Worst errors of `file`'s link poses at joint angles of up to 10⁷, 10⁹ and 10¹⁵ rad (beyond
+/// the fast reduction, where the standard library takes over) against the 256-bit evaluation:
+/// positions in ulps of the reach, rotation entries in ulps.
+pub fn large_angle_pose_ulps(file: &str) -> (f64, f64) {
+    let chain = repo_chain(file);
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    let mut rng = rng(11);
+    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    for scale in [1e7, 1e9, 1e15] {
+        for _ in 0..8 {
+            let q = random_vec(chain.dof(), scale, &mut rng);
+            let exact = kinechain::reference::link_poses(&chain, &q);
+            let reach = exact
+                .iter()
+                .fold(1e-300_f64, |m, t| m.max(t.translation().amax()));
+            let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+            for (id, want) in link_ids(&chain).into_iter().zip(&exact) {
+                let (g, w) = (poses.world_from_link(id).to_rows(), want.to_rows());
+                for r in 0..3 {
+                    position = position.max((g[r][3] - w[r][3]).abs() / (reach * f64::EPSILON));
+                    for c in 0..3 {
+                        rotation = rotation.max((g[r][c] - w[r][c]).abs() / f64::EPSILON);
+                    }
+                }
+            }
+        }
+    }
+    (position, rotation)
 }
 
 /// Values that probe a limit check on `limits`: both bounds, the doubles just outside them, and
