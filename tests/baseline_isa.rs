@@ -25,6 +25,21 @@ fn baseline_poses_are_within_8_ulp_of_the_50_digit_reference() {
     }
 }
 
+/// The baseline rate kernels (ω, v, α, a of every link) against the 50-digit references, within
+/// the 8 ulp of each quantity's largest magnitude that the default path meets.
+#[test]
+fn baseline_rates_are_within_8_ulp_of_the_50_digit_reference() {
+    use_baseline();
+    for path in reference_files() {
+        let rates = rate_ulps(&path);
+        assert!(
+            rates.iter().all(|&e| e <= 8.0),
+            "{}: omega, v, alpha, a {rates:.2?} ulp of the largest value",
+            path.display()
+        );
+    }
+}
+
 #[test]
 fn baseline_batches_equal_baseline_single_evaluations_bit_for_bit() {
     use_baseline();
