@@ -10,6 +10,7 @@ use crate::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_to, forward_velocities,
 };
+use crate::measure::worse;
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
@@ -1487,7 +1488,7 @@ impl<'a> Workload<'a> {
             let single: Vec<Transform> = all.iter().map(|&l| rough.world_from_link(i, l)).collect();
             for (e, got) in errors.iter_mut().zip([ours, single]) {
                 let (p, r) = crate::reference::max_errors(&got, &exact);
-                *e = (e.0.max(p), e.1.max(r));
+                *e = (worse(e.0, p), worse(e.1, r));
             }
         }
         Ok(errors)
@@ -1844,7 +1845,7 @@ fn rate_errors(
         };
         let errors = crate::reference::max_rate_errors(&ours, &exact);
         for (w, e) in worst.iter_mut().zip(errors) {
-            *w = (w.0.max(e.0), w.1.max(e.1));
+            *w = (worse(w.0, e.0), worse(w.1, e.1));
         }
     }
     Ok(worst)

@@ -52,6 +52,25 @@ pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The larger of two errors, NaN if either is: `f64::max` drops a NaN, and a result that is NaN
+/// would then read as exact.
+///
+/// # Examples
+/// ```
+/// use kinechain::measure::worse;
+/// assert_eq!([1e-16, 3e-16, 2e-16].into_iter().fold(0.0, worse), 3e-16);
+/// assert!([1e-16, f64::NAN, 2e-16].into_iter().fold(0.0, worse).is_nan());
+/// assert_eq!([1e-16, f64::NAN].into_iter().fold(0.0, f64::max), 1e-16);
+/// ```
+#[must_use]
+pub fn worse(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
 /// Times of several methods measured in alternation: round `r` runs every method once, each for
 /// its own fixed number of calls (chosen so that a run lasts at least `min_run`), starting with a
 /// different method each round. On a shared or virtual machine whose speed drifts, methods then

@@ -9,6 +9,7 @@
 
 use crate::chain::{Body, Chain, LinkId, Placement};
 use crate::joint::Term;
+use crate::measure::worse;
 use crate::transform::Transform;
 use dashu_float::FBig;
 use dashu_float::round::mode::HalfEven;
@@ -146,15 +147,16 @@ pub fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
         .collect()
 }
 
-/// Largest position error (m) and rotation-entry error of `poses` against [`link_poses`].
+/// Largest position error (m) and rotation-entry error of `poses` against [`link_poses`] (NaN if
+/// an entry of `poses` is NaN).
 #[must_use]
 pub fn max_errors(poses: &[Transform], reference: &[Transform]) -> (f64, f64) {
     let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
     for (a, b) in poses.iter().zip(reference) {
         for j in 0..3 {
-            position = position.max((a.p[j] - b.p[j]).abs());
+            position = worse(position, (a.p[j] - b.p[j]).abs());
             for i in 0..3 {
-                rotation = rotation.max((a.r[j][i] - b.r[j][i]).abs());
+                rotation = worse(rotation, (a.r[j][i] - b.r[j][i]).abs());
             }
         }
     }
@@ -164,7 +166,7 @@ pub fn max_errors(poses: &[Transform], reference: &[Transform]) -> (f64, f64) {
 /// For each of ω, v, α and a, in that order: the largest difference between `got` (one entry per
 /// link, the four vectors in that order) and [`link_motion`]'s `exact`, over links and
 /// components, and that difference in ulps of the quantity's largest component in `exact` over
-/// all links.
+/// all links (NaN if a component of `got` is NaN).
 #[must_use]
 pub fn max_rate_errors(got: &[[[f64; 3]; 4]], exact: &[LinkMotion]) -> [(f64, f64); 4] {
     let want: Vec<[[f64; 3]; 4]> = exact.iter().map(|m| [m.omega, m.v, m.alpha, m.a]).collect();
@@ -177,7 +179,7 @@ pub fn max_rate_errors(got: &[[[f64; 3]; 4]], exact: &[LinkMotion]) -> [(f64, f6
             .iter()
             .zip(&want)
             .flat_map(|(g, w)| (0..3).map(move |c| (g[k][c] - w[k][c]).abs()))
-            .fold(0.0_f64, f64::max);
+            .fold(0.0_f64, worse);
         (
             error,
             error / (largest.max(f64::MIN_POSITIVE) * f64::EPSILON),

@@ -63,6 +63,7 @@ fn baseline_lane_checks_decide_as_check_q_does() {
 /// Without a fused multiply–add the fast reduction is exact only below 1.6·10⁶ rad, so larger
 /// angles must reach the standard library's `sin`/`cos` (with FMA the reduction stays accurate
 /// far beyond, and this could go unnoticed).
+#[cfg(feature = "reference")]
 #[test]
 fn baseline_poses_at_large_angles_are_as_accurate_as_at_small_ones() {
     use_baseline();

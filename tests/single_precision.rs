@@ -39,9 +39,9 @@ fn errors(path: &std::path::Path) -> (f64, f64) {
             assert_eq!(alone.world_from_link(i), got, "{name}, sample {i}");
             let (got, want) = (got.to_rows(), matrix4(&sample["links"][name]["pose"]));
             for r in 0..3 {
-                position = position.max((got[r][3] - want[r][3]).abs());
+                position = worse(position, (got[r][3] - want[r][3]).abs());
                 for c in 0..3 {
-                    rotation = rotation.max((got[r][c] - want[r][c]).abs());
+                    rotation = worse(rotation, (got[r][c] - want[r][c]).abs());
                 }
             }
         }
@@ -192,7 +192,7 @@ fn bundled_robots_agree_with_the_f64_batch() {
                     &single.world_from_link(i, link),
                     &double.world_from_link(i, link).to_rows(),
                 );
-                worst = worst.max(error / reach);
+                worst = worse(worst, error / reach);
             }
         }
         assert!(worst <= 16.0 * ULP32, "{}: {worst:e}", path.display());

@@ -79,13 +79,13 @@ struct Errors {
 impl Errors {
     fn max(self, o: Errors) -> Errors {
         Errors {
-            position: self.position.max(o.position),
-            rotation: self.rotation.max(o.rotation),
-            orthonormality: self.orthonormality.max(o.orthonormality),
-            omega: self.omega.max(o.omega),
-            v: self.v.max(o.v),
-            alpha: self.alpha.max(o.alpha),
-            a: self.a.max(o.a),
+            position: worse(self.position, o.position),
+            rotation: worse(self.rotation, o.rotation),
+            orthonormality: worse(self.orthonormality, o.orthonormality),
+            omega: worse(self.omega, o.omega),
+            v: worse(self.v, o.v),
+            alpha: worse(self.alpha, o.alpha),
+            a: worse(self.a, o.a),
         }
     }
 }
@@ -120,13 +120,13 @@ fn measure(chain: &Chain, seed: u64, q_scale: f64) -> Errors {
         for got in [pose, pose_only[i]] {
             let (g, w) = (got.to_rows(), want.pose.to_rows());
             for r in 0..3 {
-                e.position = e.position.max((g[r][3] - w[r][3]).abs() / (reach * EPS));
+                e.position = worse(e.position, (g[r][3] - w[r][3]).abs() / (reach * EPS));
                 for c in 0..3 {
-                    e.rotation = e.rotation.max((g[r][c] - w[r][c]).abs() / EPS);
+                    e.rotation = worse(e.rotation, (g[r][c] - w[r][c]).abs() / EPS);
                 }
             }
         }
-        e.orthonormality = e.orthonormality.max(pose.orthonormality_error() / EPS);
+        e.orthonormality = worse(e.orthonormality, pose.orthonormality_error() / EPS);
         let (v, a) = (acc.velocity(id), acc.acceleration(id));
         rates.push([v.omega.into(), v.v.into(), a.alpha.into(), a.a.into()]);
     }
@@ -357,7 +357,7 @@ fn long_chains_error_growth() {
         let e = ((ours[i].translation() - ours[i - 1].translation())
             - (exact[i].translation() - exact[i - 1].translation()))
         .norm();
-        own = own.max(e / (len * EPS));
+        own = worse(own, e / (len * EPS));
     }
     println!(
         "mixed 1e-6 m / 1e3 m links: link-to-link vectors err by up to {own:.3e} ulp of their own length (world coordinates of order 1e3 m)"
@@ -395,8 +395,8 @@ fn jacobian_ulps(chain: &Chain, q: &[f64], qd: &[f64], reach: f64) -> [f64; 3] {
         let j = vel.poses().jacobian(id);
         for (i, column) in columns.iter().enumerate() {
             for k in 0..3 {
-                linear = linear.max((j[(k, i)] - column[l].v[k]).abs());
-                angular = angular.max((j[(3 + k, i)] - column[l].omega[k]).abs());
+                linear = worse(linear, (j[(k, i)] - column[l].v[k]).abs());
+                angular = worse(angular, (j[(3 + k, i)] - column[l].omega[k]).abs());
             }
         }
         let j_dot_qd = vel.jacobian_dot(id) * &qd;
@@ -408,7 +408,7 @@ fn jacobian_ulps(chain: &Chain, q: &[f64], qd: &[f64], reach: f64) -> [f64; 3] {
             .into_iter()
             .enumerate()
             {
-                bias[m] = bias[m].max((got - want).abs());
+                bias[m] = worse(bias[m], (got - want).abs());
                 largest[m] = largest[m].max(want.abs());
             }
         }
@@ -432,7 +432,7 @@ fn jacobians_against_the_256_bit_recursion() {
         let reach = chain.reach().max(f64::MIN_POSITIVE);
         let e = jacobian_ulps(chain, q, &qd, reach);
         for (w, x) in worst.iter_mut().zip(e) {
-            *w = w.max(x);
+            *w = worse(*w, x);
         }
         assert!(e.iter().all(|&x| x <= 8.0), "{name}: {e:?} ulps");
     };
