@@ -390,6 +390,13 @@ fn bench_prints_times_ratios_and_errors() {
     ] {
         assert!(text.contains(needle), "missing '{needle}' in:\n{text}");
     }
+    // The header names the instruction set of the kernels.
+    let isa = match kinechain::isa() {
+        kinechain::Isa::Avx512 => "avx512",
+        kinechain::Isa::Avx2 => "avx2+fma",
+        kinechain::Isa::Baseline => "baseline",
+    };
+    assert!(text.contains(&format!("kernels: {isa}")), "{text}");
     // Where single evaluations split their `sin`/`cos` into 256-bit halves (AVX-512 on Intel), a
     // row times the 512-bit form they avoid, and the header says so; elsewhere neither appears.
     let narrow = kinechain::isa() == kinechain::Isa::Avx512 && kinechain::narrow_trig();
