@@ -991,7 +991,7 @@ mod tests {
             .flatten()
             .zip(b.iter().flatten())
             .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, crate::measure::worse)
     }
 
     #[test]

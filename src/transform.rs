@@ -300,14 +300,24 @@ impl Transform {
         Vector3::from(self.apply((*u).into()))
     }
 
-    /// Largest entry of `|RᵀR − I|`: how far the rotation block is from orthonormal.
+    /// Largest entry of `|RᵀR − I|`: how far the rotation block is from orthonormal (NaN or
+    /// infinite if an entry is not finite).
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::Transform;
+    /// let mut rows = Transform::rot_z(0.3).to_rows();
+    /// assert!(Transform::from_rows(&[rows[0], rows[1], rows[2]]).orthonormality_error() < 1e-15);
+    /// rows[1][2] = f64::NAN;
+    /// assert!(Transform::from_rows(&[rows[0], rows[1], rows[2]]).orthonormality_error().is_nan());
+    /// ```
     #[must_use]
     pub fn orthonormality_error(&self) -> f64 {
         let mut worst = 0.0_f64;
         for i in 0..3 {
             for j in 0..3 {
                 let d = dot3(self.r[i], self.r[j]) - if i == j { 1.0 } else { 0.0 };
-                worst = worst.max(d.abs());
+                worst = crate::measure::worse(worst, d.abs());
             }
         }
         worst
