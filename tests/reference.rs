@@ -147,7 +147,7 @@ fn the_256_bit_evaluation_matches_the_50_digit_reference() {
         let chain = reference_chain(&path, &read_json(&path));
         let exact = read_json(&hp_path(&path));
         let reach = scale_of(&exact, "pose");
-        let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+        let mut pose = (0.0_f64, 0.0_f64);
         let (mut worst, mut largest) = ([0.0_f64; 4], [0.0_f64; 4]);
         for sample in exact["samples"].as_array().unwrap() {
             let [q, qd, qdd] = ["q", "qd", "qdd"].map(|k| joint_vector(&chain, &sample[k]));
@@ -157,13 +157,7 @@ fn the_256_bit_evaluation_matches_the_50_digit_reference() {
                 let i = chain.link_id(name).unwrap().index();
                 // The two evaluations are the same arithmetic and round to the same pose.
                 assert_eq!(poses[i], motion[i].pose, "{name}");
-                let (got, want) = (poses[i].to_rows(), matrix4(&link["pose"]));
-                for r in 0..3 {
-                    for c in 0..3 {
-                        rotation = worse(rotation, (got[r][c] - want[r][c]).abs());
-                    }
-                    position = worse(position, (got[r][3] - want[r][3]).abs());
-                }
+                pose = worse_pose(pose, &poses[i].to_rows(), &matrix4(&link["pose"]));
                 let m = &motion[i];
                 for (k, got) in [m.omega, m.v, m.alpha, m.a].iter().enumerate() {
                     let want = vec3(&link[RATE_FIELDS[k]]);
@@ -174,7 +168,7 @@ fn the_256_bit_evaluation_matches_the_50_digit_reference() {
                 }
             }
         }
-        let (position, rotation) = (position / (reach * f64::EPSILON), rotation / f64::EPSILON);
+        let (position, rotation) = (pose.0 / (reach * f64::EPSILON), pose.1 / f64::EPSILON);
         let rates: [f64; 4] = std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON));
         eprintln!(
             "{}: position {position:.2} rotation {rotation:.2} omega {:.2} v {:.2} alpha {:.2} a {:.2} ulp",

@@ -37,13 +37,8 @@ fn errors(path: &std::path::Path) -> (f64, f64) {
             let got = all.world_from_link(i, link);
             // The one-link path does the same operations on the path's bodies.
             assert_eq!(alone.world_from_link(i), got, "{name}, sample {i}");
-            let (got, want) = (got.to_rows(), matrix4(&sample["links"][name]["pose"]));
-            for r in 0..3 {
-                position = worse(position, (got[r][3] - want[r][3]).abs());
-                for c in 0..3 {
-                    rotation = worse(rotation, (got[r][c] - want[r][c]).abs());
-                }
-            }
+            let want = matrix4(&sample["links"][name]["pose"]);
+            (position, rotation) = worse_pose((position, rotation), &got.to_rows(), &want);
         }
     }
     (position / (reach * ULP32), rotation / ULP32)

@@ -118,13 +118,9 @@ fn measure(chain: &Chain, seed: u64, q_scale: f64) -> Errors {
         // The poses of the rate kernels and of the pose kernels (which differ in how they
         // compute `sin`/`cos`).
         for got in [pose, pose_only[i]] {
-            let (g, w) = (got.to_rows(), want.pose.to_rows());
-            for r in 0..3 {
-                e.position = worse(e.position, (g[r][3] - w[r][3]).abs() / (reach * EPS));
-                for c in 0..3 {
-                    e.rotation = worse(e.rotation, (g[r][c] - w[r][c]).abs() / EPS);
-                }
-            }
+            let (position, rotation) = pose_entry_errors(&got.to_rows(), &want.pose.to_rows());
+            e.position = worse(e.position, position / (reach * EPS));
+            e.rotation = worse(e.rotation, rotation / EPS);
         }
         e.orthonormality = worse(e.orthonormality, pose.orthonormality_error() / EPS);
         let (v, a) = (acc.velocity(id), acc.acceleration(id));

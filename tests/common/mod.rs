@@ -326,14 +326,27 @@ pub fn joint_vector(chain: &Chain, map: &Value) -> Vec<f64> {
 
 /// Largest absolute difference between the top three rows of two poses.
 pub fn pose_error(a: &Transform, b: &[[f64; 4]; 4]) -> f64 {
-    let a = a.to_rows();
-    let mut worst: f64 = 0.0;
-    for i in 0..3 {
-        for j in 0..4 {
-            worst = worse(worst, (a[i][j] - b[i][j]).abs());
+    let (position, rotation) = pose_entry_errors(&a.to_rows(), b);
+    worse(position, rotation)
+}
+
+/// Largest absolute differences between the positions and between the rotation entries of two
+/// poses given as rows, `(position, rotation)`; NaN when either pose has a NaN there.
+pub fn pose_entry_errors(got: &[[f64; 4]; 4], want: &[[f64; 4]; 4]) -> (f64, f64) {
+    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    for (g, w) in got.iter().zip(want).take(3) {
+        position = worse(position, (g[3] - w[3]).abs());
+        for c in 0..3 {
+            rotation = worse(rotation, (g[c] - w[c]).abs());
         }
     }
-    worst
+    (position, rotation)
+}
+
+/// Folds one pose's [`pose_entry_errors`] into the worst so far.
+pub fn worse_pose(worst: (f64, f64), got: &[[f64; 4]; 4], want: &[[f64; 4]; 4]) -> (f64, f64) {
+    let (position, rotation) = pose_entry_errors(got, want);
+    (worse(worst.0, position), worse(worst.1, rotation))
 }
 
 pub fn vec_error(a: &kinechain::nalgebra::Vector3<f64>, b: [f64; 3]) -> f64 {
@@ -402,7 +415,7 @@ pub fn pose_ulps(path: &Path) -> (f64, f64) {
     let chain = reference_chain(path, &reference);
     let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
     let reach = scale_of(&exact, "pose");
-    let (mut position, mut rotation) = (0.0_f64, 0.0_f64);
+    let mut worst = (0.0_f64, 0.0_f64);
     for sample in exact["samples"].as_array().unwrap() {
         let q = joint_vector(&chain, &sample["q"]);
         let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
@@ -410,16 +423,10 @@ pub fn pose_ulps(path: &Path) -> (f64, f64) {
             let got = poses
                 .world_from_link(chain.link_id(name).unwrap())
                 .to_rows();
-            let want = matrix4(&link["pose"]);
-            for i in 0..3 {
-                for j in 0..3 {
-                    rotation = worse(rotation, (got[i][j] - want[i][j]).abs());
-                }
-                position = worse(position, (got[i][3] - want[i][3]).abs());
-            }
+            worst = worse_pose(worst, &got, &matrix4(&link["pose"]));
         }
     }
-    (position / (reach * ULP), rotation / ULP)
+    (worst.0 / (reach * ULP), worst.1 / ULP)
 }
 
 /// The fields of a reference file's link rates: ω, v, α and a.
@@ -583,15 +590,12 @@ pub fn large_angle_pose_ulps(file: &str) -> (f64, f64) {
                 .iter()
                 .fold(1e-300_f64, |m, t| m.max(t.translation().amax()));
             let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+            let mut worst = (0.0_f64, 0.0_f64);
             for (id, want) in link_ids(&chain).into_iter().zip(&exact) {
-                let (g, w) = (poses.world_from_link(id).to_rows(), want.to_rows());
-                for r in 0..3 {
-                    position = worse(position, (g[r][3] - w[r][3]).abs() / (reach * f64::EPSILON));
-                    for c in 0..3 {
-                        rotation = worse(rotation, (g[r][c] - w[r][c]).abs() / f64::EPSILON);
-                    }
-                }
+                worst = worse_pose(worst, &poses.world_from_link(id).to_rows(), &want.to_rows());
             }
+            position = worse(position, worst.0 / (reach * f64::EPSILON));
+            rotation = worse(rotation, worst.1 / f64::EPSILON);
         }
     }
     (position, rotation)
