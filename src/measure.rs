@@ -3,6 +3,7 @@
 //! timing their own code can do likewise).
 
 use crate::Chain;
+use std::f64::consts::{PI, TAU};
 use std::time::{Duration, Instant};
 
 /// SplitMix64: a small, fast, seedable generator (reproducible across platforms).
@@ -19,8 +20,9 @@ impl SplitMix {
     }
 }
 
-/// `n` configurations drawn uniformly within the joint limits (±π for an entry without finite
-/// limits), the same for the same `seed`.
+/// `n` configurations drawn uniformly within the joint limits, the same for the same `seed`. An
+/// entry without limits is drawn from `[−π, π]`, one with only a finite lower (upper) limit from
+/// the 2π above (below) it.
 ///
 /// # Examples
 /// ```
@@ -40,9 +42,12 @@ pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
             for j in chain.joints() {
                 let Some(first) = j.q_index() else { continue };
                 for (k, l) in j.limits().iter().enumerate() {
-                    let (lo, hi) = match l {
-                        Some(l) if l.lower.is_finite() && l.upper.is_finite() => (l.lower, l.upper),
-                        _ => (-std::f64::consts::PI, std::f64::consts::PI),
+                    let (lower, upper) = l.map_or((f64::NAN, f64::NAN), |l| (l.lower, l.upper));
+                    let (lo, hi) = match (lower.is_finite(), upper.is_finite()) {
+                        (true, true) => (lower, upper),
+                        (true, false) => (lower, lower + TAU),
+                        (false, true) => (upper - TAU, upper),
+                        (false, false) => (-PI, PI),
                     };
                     q[first + k] = lo + (hi - lo) * rng.unit();
                 }
@@ -181,6 +186,134 @@ pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_generator_is_splitmix64() {
+        // The first outputs of SplitMix64 from state 0 (Vigna's reference implementation),
+        // as the 53 high bits over 2^53.
+        let mut g = SplitMix(0);
+        for want in [
+            0xE220_A839_7B1D_CDAF_u64,
+            0x6E78_9E6A_A1B9_65F4,
+            0x06C4_5D18_8009_454F,
+        ] {
+            assert_eq!(g.unit(), (want >> 11) as f64 / (1u64 << 53) as f64);
+        }
+    }
+
+    #[test]
+    fn configurations_fill_the_limits_and_a_turn_where_they_are_open() {
+        use crate::{ChainBuilder, JointKind, JointSpec};
+        // Finite limits, none (a continuous joint), limits that are not both finite, and a
+        // cylindrical joint's two entries.
+        let mut b = ChainBuilder::new("five");
+        b.link("l0")
+            .link("l1")
+            .link("l2")
+            .link("l3")
+            .link("l4")
+            .link("l5");
+        let joint = |name: &str, kind, parent: &str, child: &str| {
+            JointSpec::new(name, kind, parent, child).with_axis([0.0, 0.0, 1.0])
+        };
+        b.joint(joint("limited", JointKind::Revolute, "l0", "l1").with_limits(-0.5, 2.0));
+        b.joint(joint("free", JointKind::Continuous, "l1", "l2"));
+        b.joint(joint("open", JointKind::Revolute, "l2", "l3").with_limits(0.0, f64::INFINITY));
+        b.joint(joint("wide", JointKind::Revolute, "l3", "l4").with_limits(-f64::INFINITY, 1.0));
+        let mut sleeve = joint("sleeve", JointKind::Cylindrical, "l4", "l5");
+        sleeve.limits = [
+            None,
+            Some(crate::Limits {
+                lower: 0.1,
+                upper: 0.3,
+            }),
+        ];
+        b.joint(sleeve);
+        let chain = b.build().unwrap();
+        let qs = configurations(&chain, 4000, 7);
+        let want = [
+            (-0.5, 2.0),
+            (-PI, PI),
+            (0.0, TAU),
+            (1.0 - TAU, 1.0),
+            (-PI, PI),
+            (0.1, 0.3),
+        ];
+        assert_eq!(chain.dof(), want.len());
+        for (k, (lo, hi)) in want.into_iter().enumerate() {
+            let x: Vec<f64> = qs.iter().map(|q| q[k]).collect();
+            assert!(x.iter().all(|&x| (lo..=hi).contains(&x)), "entry {k}");
+            // Uniform: the extremes come close to the limits, and the mean to the middle
+            // (its standard deviation is (hi - lo) / √(12 · 4000) ≈ 0.005 (hi - lo)).
+            let (min, max) = x.iter().fold((hi, lo), |(a, b), &x| (a.min(x), b.max(x)));
+            assert!(
+                min - lo < 0.01 * (hi - lo) && hi - max < 0.01 * (hi - lo),
+                "entry {k}"
+            );
+            let mean = x.iter().sum::<f64>() / x.len() as f64;
+            assert!(
+                (mean - (lo + hi) / 2.0).abs() < 0.025 * (hi - lo),
+                "entry {k}: {mean}"
+            );
+        }
+    }
+
+    /// Round `r` starts with method `r mod m`, and every method runs once per round (with a
+    /// minimum run of zero, one call is enough).
+    #[test]
+    fn the_methods_take_turns_starting_a_round() {
+        let order = std::cell::RefCell::new(Vec::new());
+        let (mut a, mut b, mut c) = (
+            || order.borrow_mut().push(0),
+            || order.borrow_mut().push(1),
+            || order.borrow_mut().push(2),
+        );
+        let t = Interleaved::run(Duration::ZERO, 4, &mut [&mut a, &mut b, &mut c]);
+        assert_eq!(t.ns.len(), 4);
+        // One call of each to choose the number of calls, then the rounds.
+        let order = order.into_inner();
+        assert_eq!(order, [0, 1, 2, 0, 1, 2, 1, 2, 0, 2, 0, 1, 0, 1, 2]);
+    }
+
+    #[test]
+    fn worse_keeps_a_nan_from_either_side() {
+        assert!(worse(f64::NAN, 1.0).is_nan() && worse(1.0, f64::NAN).is_nan());
+        assert_eq!((worse(1.0, 2.0), worse(2.0, 1.0)), (2.0, 2.0));
+    }
+
+    #[test]
+    fn the_median_is_the_middle_value() {
+        assert_eq!(median(vec![5.0, 1.0, 4.0, 2.0, 3.0]), 3.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 3.0);
+    }
+
+    /// A method that takes at least 20 µs per call is timed at that or a little more, and runs
+    /// often enough to fill the minimum run. The upper bound is 50 times the spin, far above
+    /// what a loaded machine adds and far below a time not divided by the number of calls.
+    #[test]
+    fn a_call_is_timed_per_call_over_runs_of_the_minimum_length() {
+        const SPIN: Duration = Duration::from_micros(20);
+        let mut calls = 0u64;
+        let mut spin = || {
+            calls += 1;
+            let t = Instant::now();
+            while t.elapsed() < SPIN {}
+        };
+        let t = Interleaved::run(Duration::from_millis(2), 3, &mut [&mut spin]);
+        let spin_ns = SPIN.as_nanos() as f64;
+        assert!(
+            (spin_ns..50.0 * spin_ns).contains(&t.median(0)),
+            "{}",
+            t.median(0)
+        );
+        // At least the 2 ms run of each of the three rounds.
+        assert!(calls >= 3 * 100, "{calls}");
+        let per_call = time_per_call(Duration::from_millis(2), 3, || {
+            let t = Instant::now();
+            while t.elapsed() < SPIN {}
+        });
+        assert!((spin_ns..50.0 * spin_ns).contains(&per_call), "{per_call}");
+    }
 
     #[test]
     fn per_item_times_and_ratios() {
