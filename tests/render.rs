@@ -106,3 +106,246 @@ fn drawn_origins_are_the_fk_positions_under_the_stated_projection() {
         );
     }
 }
+
+/// The projections are the ones the module documents, checked on one point.
+#[test]
+fn the_views_project_as_documented() {
+    let p = kinechain::nalgebra::Point3::new(1.0, 2.0, 3.0);
+    let c30 = 30f64.to_radians().cos();
+    let want = [
+        (View::Front, (1.0, 3.0)),
+        (View::Side, (2.0, 3.0)),
+        (View::Top, (1.0, 2.0)),
+        (View::Isometric, (-c30, 4.5)),
+    ];
+    for (view, (u, v)) in want {
+        let got = view.project(&p);
+        assert!(
+            (got.0 - u).abs() < 1e-15 && (got.1 - v).abs() < 1e-15,
+            "{view:?}: {got:?}"
+        );
+    }
+    assert_eq!(
+        View::ALL.map(View::name),
+        ["front", "side", "top", "isometric"]
+    );
+}
+
+/// A point drawn at `(x, y)` in pixels.
+type Px = (f64, f64);
+
+fn attr(n: &roxmltree::Node, a: &str) -> f64 {
+    let text = n.attribute(a).unwrap_or_else(|| panic!("no {a}"));
+    text.parse().unwrap_or_else(|e| panic!("{a}={text}: {e}"))
+}
+
+fn line_ends(n: &roxmltree::Node) -> (Px, Px) {
+    (
+        (attr(n, "x1"), attr(n, "y1")),
+        (attr(n, "x2"), attr(n, "y2")),
+    )
+}
+
+/// `b − a` is along `d` (a direction in pixels): parallel and pointing the same way, unless `d`
+/// is too short to have a direction at the written precision.
+fn along(a: Px, b: Px, d: Px) -> bool {
+    let (x, y) = (b.0 - a.0, b.1 - a.1);
+    let len = d.0.hypot(d.1);
+    len < 1.0 || ((x * d.1 - y * d.0).abs() <= 2e-3 * len && x * d.0 + y * d.1 > 0.0)
+}
+
+fn near(a: Px, b: Px) -> bool {
+    (a.0 - b.0).abs() <= 1e-3 && (a.1 - b.1).abs() <= 1e-3
+}
+
+/// Where each piece of the drawing goes: every link is a segment between the origins of its
+/// joint's parent and child, every axis arrow starts on the axis and points along it, every
+/// triad line starts at its link's origin along the frame's axis (x red, y green, z blue), the
+/// base and tool markers sit on their origins; the origins and arrows of each view fill its
+/// panel's inner square (the largest orthographic extent and the isometric one span it, both
+/// centred), and the scale bar is a round length drawn at the orthographic scale.
+#[test]
+fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels() {
+    const PANEL: f64 = 360.0;
+    const INNER: f64 = 300.0;
+    let mut rng = rng(92);
+    for name in [
+        "puma560.yaml",
+        "panda.urdf",
+        "stanford.yaml",
+        "planar3.yaml",
+    ] {
+        let chain = Chain::from_file(robots_dir().join(name)).unwrap();
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let q = random_q(&chain, &mut rng);
+        let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+        let text = svg(&chain, &poses);
+        let doc = roxmltree::Document::parse(&text).unwrap();
+        let panels: Vec<_> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("panel"))
+            .collect();
+        assert_eq!(panels.len(), 4, "{name}");
+        let origin = |id: kinechain::LinkId| {
+            kinechain::nalgebra::Point3::from(poses.world_from_link(id).translation())
+        };
+        let mut ortho_span: f64 = 0.0;
+        for (i, (panel, view)) in panels.iter().zip(View::ALL).enumerate() {
+            assert_eq!(panel.attribute("data-view"), Some(view.name()));
+            let (x0, y0, s) = (
+                attr(panel, "data-origin-x"),
+                attr(panel, "data-origin-y"),
+                attr(panel, "data-scale"),
+            );
+            let at = |p: &kinechain::nalgebra::Point3<f64>| {
+                let (u, v) = view.project(p);
+                (x0 + s * u, y0 - s * v)
+            };
+            let dir = |d: &kinechain::nalgebra::Vector3<f64>| {
+                let (u, v) = view.project(&kinechain::nalgebra::Point3::from(*d));
+                (s * u, -s * v)
+            };
+            let lines = |class: &str| -> Vec<(Px, Px)> {
+                panel
+                    .children()
+                    .filter(|c| c.attribute("class") == Some(class))
+                    .map(|c| line_ends(&c))
+                    .collect()
+            };
+            let segments = lines("segment");
+            assert_eq!(segments.len(), chain.joints().len(), "{name} {i}");
+            for (j, (a, b)) in chain.joints().iter().zip(&segments) {
+                assert!(near(*a, at(&origin(j.parent()))), "{name} {i} {}", j.name());
+                assert!(near(*b, at(&origin(j.child()))), "{name} {i} {}", j.name());
+            }
+            let mut drawn = Vec::new();
+            let moving = chain.joints().iter().filter_map(|j| {
+                let id = chain.joint_id(j.name()).unwrap();
+                poses.joint_axis(id)
+            });
+            let arrows = lines("axis");
+            assert_eq!(arrows.len(), moving.clone().count(), "{name} {i}");
+            for ((p, z), (a, b)) in moving.zip(arrows) {
+                assert!(near(a, at(&p)), "{name} {i}");
+                assert!(along(a, b, dir(&z)), "{name} {i}");
+                drawn.extend([a, b]);
+            }
+            for (k, link) in chain.links().iter().enumerate() {
+                let id = chain.link_id(link.name()).unwrap();
+                let group = doc
+                    .descendants()
+                    .find(|n| n.attribute("data-link") == Some(link.name()))
+                    .unwrap();
+                let o = at(&origin(id));
+                // Per view: the triad's three lines, the base or tool marker if any, the origin.
+                let elements: Vec<_> = group
+                    .children()
+                    .filter(|c| c.is_element() && !c.has_tag_name("title"))
+                    .collect();
+                let chunks: Vec<_> = elements
+                    .split_inclusive(|c| c.attribute("class") == Some("origin"))
+                    .collect();
+                assert_eq!(chunks.len(), 4, "{name} {k}");
+                let (circle, rest) = chunks[i].split_last().unwrap();
+                assert_eq!(circle.attribute("data-view"), Some(view.name()));
+                assert!(
+                    near((attr(circle, "cx"), attr(circle, "cy")), o),
+                    "{name} {k}"
+                );
+                drawn.push(o);
+                let (triad, marker) = rest.split_at(3);
+                let rotation = poses.world_from_link(id).rotation();
+                for (axis, (line, color)) in triad.iter().zip(["#d00", "#080", "#00d"]).enumerate()
+                {
+                    assert!(line.has_tag_name("line"));
+                    assert_eq!(line.attribute("stroke"), Some(color));
+                    let (a, b) = line_ends(line);
+                    assert!(near(a, o), "{name} {k}");
+                    let column = rotation.column(axis).into_owned();
+                    assert!(along(a, b, dir(&column)), "{name} {k} axis {axis}");
+                }
+                match (group.attribute("class").unwrap(), marker) {
+                    ("link base", [m]) => {
+                        assert!(m.has_tag_name("rect"));
+                        let c = (attr(m, "x") + 5.0, attr(m, "y") + 5.0);
+                        assert!(near(c, o), "{name}: base marker");
+                    }
+                    ("link tool", [m]) => {
+                        assert!(m.has_tag_name("circle"));
+                        assert!(near((attr(m, "cx"), attr(m, "cy")), o), "{name}: tool");
+                    }
+                    ("link", []) => {}
+                    (class, marker) => panic!("{name} {k}: {class} with {} markers", marker.len()),
+                }
+            }
+            // The origins and arrows span the inner square of this panel, centred on it.
+            let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+            let (lo, hi) = drawn.iter().fold(
+                ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN)),
+                |(lo, hi), p| {
+                    (
+                        (lo.0.min(p.0), lo.1.min(p.1)),
+                        (hi.0.max(p.0), hi.1.max(p.1)),
+                    )
+                },
+            );
+            let centre = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+            assert!(
+                (centre.0 - (px + PANEL / 2.0)).abs() < 2e-3
+                    && (centre.1 - (py + PANEL / 2.0)).abs() < 2e-3,
+                "{name} {i}: centred at {centre:?}"
+            );
+            let span = (hi.0 - lo.0).max(hi.1 - lo.1);
+            assert!(span <= INNER + 2e-3, "{name} {i}: {span}");
+            if view == View::Isometric {
+                assert!(
+                    (span - INNER).abs() < 2e-3,
+                    "{name}: isometric spans {span}"
+                );
+            } else {
+                ortho_span = ortho_span.max(span);
+                assert_eq!(
+                    s,
+                    attr(&panels[0], "data-scale"),
+                    "{name}: one orthographic scale"
+                );
+            }
+        }
+        assert!(
+            (ortho_span - INNER).abs() < 2e-3,
+            "{name}: orthographic spans {ortho_span}"
+        );
+        // The scale bar: 1, 2 or 5 × 10ⁿ m, drawn between a tenth and a quarter of the inner
+        // square at the orthographic scale.
+        let bar = doc
+            .descendants()
+            .find(|n| n.attribute("class") == Some("scale-bar"))
+            .unwrap();
+        let line = bar.children().find(|c| c.has_tag_name("line")).unwrap();
+        let ((x1, _), (x2, _)) = line_ends(&line);
+        let label = bar.children().find(|c| c.has_tag_name("text")).unwrap();
+        let metres: f64 = label
+            .text()
+            .unwrap()
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let mantissa = metres / 10f64.powf(metres.log10().floor());
+        assert!(
+            [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-9),
+            "{name}: {metres} m"
+        );
+        let ortho = attr(&panels[0], "data-scale");
+        assert!(
+            ((x2 - x1) - metres * ortho).abs() < 2e-3,
+            "{name}: bar of {metres} m"
+        );
+        assert!(
+            (0.1 * INNER..=0.25 * INNER).contains(&(x2 - x1)),
+            "{name}: {}",
+            x2 - x1
+        );
+    }
+}
