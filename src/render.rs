@@ -1,6 +1,7 @@
 //! An SVG drawing of a chain at one configuration (`kinechain render`): three orthographic views
 //! and an isometric one, links as segments between frame origins, each moving joint's axis as a
-//! short arrow, small RGB triads for the frames, names on hover, a scale bar, base and tool
+//! short arrow (12% of the reach, the largest distance of a link origin from the world origin),
+//! small RGB triads for the frames (8% of the reach), names on hover, a scale bar, base and tool
 //! marked. The output depends only on its inputs (same chain and pose, same bytes).
 //!
 //! Projections, with `(u, v)` the drawing's horizontal and upward coordinates in metres, then
@@ -111,7 +112,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
     let arrow = 0.12 * reach;
     let mut points: Vec<Point3<f64>> = origins.clone();
     for (_, p, z) in &axes {
-        points.push(p + z * arrow);
+        points.extend([*p, p + z * arrow]);
     }
     let (panels, ortho) = layout(&points);
 

@@ -169,18 +169,32 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
     const PANEL: f64 = 360.0;
     const INNER: f64 = 300.0;
     let mut rng = rng(92);
-    for name in [
-        "puma560.yaml",
-        "panda.urdf",
-        "stanford.yaml",
-        "planar3.yaml",
-    ] {
-        let chain = Chain::from_file(robots_dir().join(name)).unwrap();
+    let files = robot_files();
+    for (path, round) in files.iter().flat_map(|f| [(f, 0), (f, 1), (f, 2)]) {
+        let chain = Chain::from_file(path).unwrap();
+        let name = format!("{} ({round})", chain.name());
         let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let q = random_q(&chain, &mut rng);
         let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
         let text = svg(&chain, &poses);
         let doc = roxmltree::Document::parse(&text).unwrap();
+        let reach = chain
+            .links()
+            .iter()
+            .map(|l| {
+                poses
+                    .world_from_link(chain.link_id(l.name()).unwrap())
+                    .translation()
+                    .norm()
+            })
+            .fold(0.0, f64::max);
+        // Lengths in metres of the triads and arrows, read back from the drawing where a line is
+        // long enough (5 px) for its three written decimals to give it to 1e-3.
+        let (mut triads, mut arrow_lengths) = (Vec::new(), Vec::new());
+        let length = |(a, b): (Px, Px), d: Px| {
+            let pixels = (b.0 - a.0).hypot(b.1 - a.1);
+            (pixels >= 5.0).then(|| pixels / d.0.hypot(d.1))
+        };
         let panels: Vec<_> = doc
             .descendants()
             .filter(|n| n.attribute("class") == Some("panel"))
@@ -228,6 +242,7 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
             for ((p, z), (a, b)) in moving.zip(arrows) {
                 assert!(near(a, at(&p)), "{name} {i}");
                 assert!(along(a, b, dir(&z)), "{name} {i}");
+                arrow_lengths.extend(length((a, b), dir(&z)));
                 drawn.extend([a, b]);
             }
             for (k, link) in chain.links().iter().enumerate() {
@@ -263,6 +278,7 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
                     assert!(near(a, o), "{name} {k}");
                     let column = rotation.column(axis).into_owned();
                     assert!(along(a, b, dir(&column)), "{name} {k} axis {axis}");
+                    triads.extend(length((a, b), dir(&column)));
                 }
                 match (group.attribute("class").unwrap(), marker) {
                     ("link base", [m]) => {
@@ -278,8 +294,12 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
                     (class, marker) => panic!("{name} {k}: {class} with {} markers", marker.len()),
                 }
             }
-            // The origins and arrows span the inner square of this panel, centred on it.
+            // The panel's frame is its square of the 2 × 2 grid, and the origins and arrows span
+            // its inner square, centred on it.
             let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+            let frame = panel.children().find(|c| c.has_tag_name("rect")).unwrap();
+            let corners = ["x", "y", "width", "height"].map(|a| attr(&frame, a));
+            assert_eq!(corners, [px, py, PANEL, PANEL], "{name} {i}");
             let (lo, hi) = drawn.iter().fold(
                 ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN)),
                 |(lo, hi), p| {
@@ -315,6 +335,19 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
             (ortho_span - INNER).abs() < 2e-3,
             "{name}: orthographic spans {ortho_span}"
         );
+        for (what, lengths, fraction) in [("triad", &triads, 0.08), ("arrow", &arrow_lengths, 0.12)]
+        {
+            assert!(
+                !lengths.is_empty(),
+                "{name}: no {what} long enough to measure"
+            );
+            for l in lengths {
+                assert!(
+                    (l / reach - fraction).abs() < 1e-3,
+                    "{name}: {what} of {l} m"
+                );
+            }
+        }
         // The scale bar: 1, 2 or 5 × 10ⁿ m, drawn between a tenth and a quarter of the inner
         // square at the orthographic scale.
         let bar = doc
@@ -346,6 +379,24 @@ fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels(
             (0.1 * INNER..=0.25 * INNER).contains(&(x2 - x1)),
             "{name}: {}",
             x2 - x1
+        );
+        // Its label follows it, and the canvas ends just below the legend.
+        let label_x = attr(&label, "x");
+        assert!(
+            label_x > x2 && label_x < x2 + 20.0,
+            "{name}: label at {label_x}"
+        );
+        let svg = doc.root_element();
+        let (width, height) = (attr(&svg, "width"), attr(&svg, "height"));
+        let bottom = attr(&label, "y");
+        assert_eq!(width, 2.0 * PANEL, "{name}");
+        assert!(
+            bottom > 2.0 * PANEL && bottom < height && height <= bottom + 20.0,
+            "{name}"
+        );
+        assert_eq!(
+            svg.attribute("viewBox"),
+            Some(&*format!("0 0 {width} {height}"))
         );
     }
 }
