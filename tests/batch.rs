@@ -275,6 +275,10 @@ fn batches_decide_as_check_q_does_when_lanes_cannot() {
                         forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, true).err(),
                         sp::forward_kinematics_batch(&chain, &mut batch32, &qs).err(),
                         sp::forward_kinematics_batch_par(&chain, &mut batch32, &qs).err(),
+                        sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, tool, false)
+                            .err(),
+                        sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, tool, true)
+                            .err(),
                     ];
                     for (i, e) in got.into_iter().enumerate() {
                         let e = e.map(|e| e.index);
