@@ -521,10 +521,14 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     let dir = scratch_dir("batch");
     let batch = dir.join("many.jsonl");
     let mut f = std::fs::File::create(&batch).unwrap();
-    // 600 lines: poses in several kernel batches, with a rate line and two bad lines inside.
-    for i in 0..600 {
+    // 1000 lines: poses in several kernel batches (of up to 256 lines), with rate lines (which
+    // are evaluated one by one) and bad lines inside: one whose evaluation fails (a rate line
+    // beyond a limit), one of the wrong length, one that is not JSON. The failures are counted
+    // across the batches held and flushed after them.
+    for i in 0..1000 {
         match i {
-            100 => writeln!(f, r#"{{"q": [0.1, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
+            100 | 500 => writeln!(f, r#"{{"q": [0.1, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
+            200 => writeln!(f, r#"{{"q": [10.0, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
             300 => writeln!(f, r#"{{"q": [0.1, 0.0]}}"#).unwrap(),
             450 => writeln!(f, "not json").unwrap(),
             _ => writeln!(f, r#"{{"q": [{}, 0.0, 0.0]}}"#, 0.001 * i as f64).unwrap(),
@@ -533,29 +537,33 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     drop(f);
     let arg = batch.to_str().unwrap();
 
-    // Without --keep-going: the 300 lines before the first bad one are written.
+    // Without --keep-going: the 200 lines before the first bad one are written.
     let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg]);
     assert!(!out.status.success());
-    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 300);
-    assert!(String::from_utf8(out.stderr).unwrap().contains("line 301"));
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 200);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("line 201") && stderr.contains("j1"),
+        "{stderr}"
+    );
 
     // With --keep-going: one output line per input line, error objects in place, exit non-zero.
     let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg, "--keep-going"]);
     assert!(!out.status.success());
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(
-        stderr.starts_with("error: ") && stderr.contains("2 line(s) failed"),
+        stderr.starts_with("error: ") && stderr.contains("3 line(s) failed"),
         "{stderr}"
     );
     let lines: Vec<Value> = json_lines(out.stdout);
-    assert_eq!(lines.len(), 600);
+    assert_eq!(lines.len(), 1000);
     for (i, v) in lines.iter().enumerate() {
         match i {
-            300 | 450 => {
+            200 | 300 | 450 => {
                 assert_eq!(v["line"], i + 1);
                 assert!(v["error"].as_str().unwrap().len() > 5);
             }
-            100 => assert!(v["links"]["link3"].get("omega").is_some()),
+            100 | 500 => assert!(v["links"]["link3"].get("omega").is_some()),
             _ => {
                 // The tip of the planar arm at q1 = 0.001 i: (9 cos, 9 sin).
                 let x = position(v, "link3")[0];
@@ -633,6 +641,56 @@ fn a_chain_without_moving_joints_in_batch_and_bench() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// In a table, each point is a line with its position, and its velocity and acceleration when
+/// the rates are given: the values of the JSON output.
+#[test]
+fn points_print_in_a_table() {
+    let base = ["fk", "robots/planar3.yaml", "--q", "[0.3, 0.2, 0.1]"];
+    let points = ["--point", "link3:0.5,0.2,1", "--point", "link1:0,1,0"];
+    for rates in [
+        &[][..],
+        &["--qd", "[1, 0, 0]"],
+        &["--qd", "[1, 0, 0]", "--qdd", "[0, 1, 0]"],
+    ] {
+        let args = [&base[..], rates, &points].concat();
+        let json = &ok_json(&args)[0]["points"];
+        let table = ok_text(&[&args[..], &["--format", "table"]].concat());
+        let lines: Vec<&str> = table.lines().filter(|l| l.starts_with("point ")).collect();
+        assert_eq!(lines.len(), 2, "{table}");
+        for (line, want) in lines.iter().zip(json.as_array().unwrap()) {
+            let link = want["link"].as_str().unwrap();
+            assert!(line.starts_with(&format!("point {link} (")), "{line}");
+            let fields = ["position", "velocity", "acceleration"];
+            let shown: Vec<&str> = fields
+                .into_iter()
+                .filter(|f| want.get(*f).is_some())
+                .collect();
+            assert_eq!(shown.len(), 1 + rates.len() / 2, "{line}");
+            for field in fields {
+                let Some(at) = line.find(&format!("{field} (")) else {
+                    assert!(!shown.contains(&field), "{field} missing: {line}");
+                    continue;
+                };
+                let text = &line[at + field.len() + 2..];
+                let values: Vec<f64> = text[..text.find(')').unwrap()]
+                    .split(", ")
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                let want: Vec<f64> = want[field]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap())
+                    .collect();
+                assert_eq!(values.len(), 3, "{line}");
+                for (v, w) in values.iter().zip(&want) {
+                    assert!((v - w).abs() <= 5e-7, "{field}: {line} against {want:?}");
+                }
+            }
+        }
+    }
+}
+
 /// A reader that stops early (`kinechain fk … | head -1`) ends the run quietly: exit 0 and
 /// nothing on stderr, rather than an error about the broken pipe.
 #[test]
@@ -666,6 +724,25 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
     // The reader is dropped here, closing the pipe.
     assert_quiet_success(&child.wait_with_output().unwrap());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Any other failure to write the output (here a full device) is an error, not a quiet exit.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_output_that_cannot_be_written_is_an_error() {
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args(["fk", "robots/planar3.yaml", "--q", "[0.1, 0.2, 0.3]"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(full)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("cannot write output"), "{stderr}");
 }
 
 /// Results too large for `f64` (finite joint values whose sum overflows) are errors naming the
@@ -771,6 +848,20 @@ fn tables_print_the_orientation_asked_for() {
     assert!(residues >= 3, "{residues}");
     assert!(!table.contains("-0.000000"), "{table}");
     let q = "[0.3, -0.5, -1.2, 0.1, -0.7, 2.9]";
+    // A matrix's rows, and the axis before its angle, are groups separated by `;`.
+    for (kind, sizes) in [("matrix", &[3, 3, 3][..]), ("axis-angle", &[3, 1])] {
+        let args = ["fk", "robots/puma560.yaml", "--q", q, "--orientation", kind];
+        let table = ok_text(&[&args[..], &["--format", "table"]].concat());
+        for line in table.lines().skip(1) {
+            let shown = line.split("   ").last().unwrap().trim();
+            if shown != "undefined" {
+                let groups: Vec<usize> = (shown.trim_matches(['[', ']']).split(';'))
+                    .map(|g| g.split_whitespace().count())
+                    .collect();
+                assert_eq!(groups, sizes, "{kind}: {line}");
+            }
+        }
+    }
     for (kind, header, key) in [
         ("quat", "quaternion (w x y z)", "quaternion"),
         ("rpy", "rpy (roll pitch yaw)", "rpy"),
