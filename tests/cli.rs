@@ -810,6 +810,8 @@ fn results_that_overflow_are_errors() {
     assert_eq!(lines[1]["line"], 2);
     assert!(lines[1]["error"].as_str().unwrap().contains("overflows"));
     assert_eq!(position(&lines[2], "link2")[2], 7.0);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("1 line(s) failed"), "{stderr}");
     let out = kinechain(&["fk", robot, "--batch", batch]);
     assert!(!out.status.success());
     assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1);
@@ -818,6 +820,32 @@ fn results_that_overflow_are_errors() {
             .unwrap()
             .contains("line 2: pose of link 'link2'")
     );
+
+    // Lines that overflow in each batch of poses held, whatever ends the batch: a line that is
+    // not JSON, a rate line (evaluated alone), the batch's size (256 lines), the end of the file.
+    let overflow = "{\"q\": [1e308, 1e308]}";
+    let mut text = format!("{{\"q\": [1, 2]}}\n{overflow}\nnot json\n{overflow}\n");
+    text.push_str("{\"q\": [3, 4], \"qd\": [0, 0]}\n");
+    text.push_str(&format!("{overflow}\n"));
+    text.push_str(&"{\"q\": [1, 2]}\n".repeat(255));
+    text.push_str(&format!("{overflow}\n"));
+    let many = dir.join("many.jsonl");
+    std::fs::write(&many, text).unwrap();
+    let out = kinechain(&[
+        "fk",
+        robot,
+        "--batch",
+        many.to_str().unwrap(),
+        "--keep-going",
+    ]);
+    assert!(!out.status.success());
+    let failed: Vec<u64> = json_lines(out.stdout)
+        .iter()
+        .filter_map(|v| v["line"].as_u64())
+        .collect();
+    assert_eq!(failed, [2, 3, 4, 6, 262]);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("5 line(s) failed"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
