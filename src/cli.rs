@@ -1922,3 +1922,50 @@ fn k_method<'a>(
     });
     Some((label.to_string(), call))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reads every line of `input` through a reader that returns at most `chunk` bytes at a
+    /// time, with lines capped at `limit` bytes: `Some(text)` per line kept, `None` per line
+    /// too long.
+    fn lines(input: &[u8], chunk: usize, limit: usize) -> Vec<Option<String>> {
+        let mut reader = std::io::BufReader::with_capacity(chunk, input);
+        let (mut buf, mut out) = (Vec::new(), Vec::new());
+        loop {
+            match read_capped_line(&mut reader, &mut buf, limit).unwrap() {
+                CappedLine::Line => out.push(Some(String::from_utf8(buf.clone()).unwrap())),
+                CappedLine::TooLong => out.push(None),
+                CappedLine::End => return out,
+            }
+        }
+    }
+
+    /// A line of exactly the cap is kept and one byte more is not, whether the line arrives in
+    /// one piece or many; a long line is skipped to its end, and the lines around it are read.
+    #[test]
+    fn lines_are_capped_at_exactly_the_limit() {
+        for chunk in [4, 7, 64, 1 << 16] {
+            let (at, over) = ("a".repeat(40), "b".repeat(41));
+            let input = format!("x\n{at}\n{over}\r\ny\r\n{}\nlast", "c".repeat(500));
+            let got = lines(input.as_bytes(), chunk, 40);
+            let want = [
+                Some("x".into()),
+                Some(at.clone()),
+                None,
+                Some("y".into()),
+                None,
+                Some("last".into()),
+            ];
+            assert_eq!(got, want, "chunks of {chunk}");
+        }
+        // A line far longer than the reader's buffer and within the cap is whole.
+        let long = "d".repeat(100_000);
+        assert_eq!(
+            lines(format!("{long}\n").as_bytes(), 8192, 1 << 20),
+            [Some(long)]
+        );
+        assert_eq!(lines(b"", 16, 40), []);
+    }
+}
