@@ -431,6 +431,29 @@ fn bench_prints_times_ratios_and_errors() {
         .unwrap();
     assert!(size * 8 >= 2 * kinechain::batch::PARALLEL_WORK, "{text}");
     assert_eq!(size % 4, 0, "whole copies of the 4 configurations: {text}");
+    // Their times are per configuration of that batch: on two threads no slower than a few
+    // times the one-thread rows (counted per copy, they would read about four times slower).
+    let threads = text
+        .lines()
+        .find_map(|l| l.strip_prefix(&format!("kinechain, batch of {size}, ")))
+        .and_then(|l| l.split(' ').next())
+        .unwrap();
+    for (one, two) in [
+        (
+            "kinechain, batch, 1 thread",
+            format!("kinechain, batch of {size}, {threads} threads"),
+        ),
+        (
+            "kinechain, batch, end link only, 1 thread",
+            format!("kinechain, batch of {size}, end link only, {threads} threads"),
+        ),
+    ] {
+        let (one, two) = (ns_of(&text, one), ns_of(&text, &two));
+        assert!(
+            two < 3.0 * one,
+            "{two} ns against {one} ns on one thread:\n{text}"
+        );
+    }
     // Another link than the farthest one, and a name the robot does not have.
     let text = ok_text(&[
         "bench",
@@ -512,6 +535,15 @@ fn ulps_before(text: &str, marker: &str) -> f64 {
         .and_then(|s| s.rsplit('(').next())
         .and_then(|s| s.trim().parse().ok())
         .unwrap_or_else(|| panic!("no number before '{marker}' in:\n{text}"))
+}
+
+/// The time of the row `label` of a `kinechain bench` table, ns per configuration.
+fn ns_of(text: &str, label: &str) -> f64 {
+    text.lines()
+        .find_map(|l| l.strip_prefix(label))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no row '{label}' in:\n{text}"))
 }
 
 /// The number that follows `label` in `text`, up to the next space or line end.
