@@ -1968,4 +1968,14 @@ mod tests {
         );
         assert_eq!(lines(b"", 16, 40), []);
     }
+
+    #[test]
+    fn bench_takes_two_to_the_most_configurations() {
+        for (text, ok) in [("1", false), ("2", true), ("65536", true), ("65537", false)] {
+            let got = configuration_count(text);
+            assert_eq!(got.is_ok(), ok, "{text}: {got:?}");
+        }
+        assert_eq!(configuration_count("65536"), Ok(MAX_BENCH_CONFIGURATIONS));
+        assert!(configuration_count("many").is_err());
+    }
 }
