@@ -724,12 +724,7 @@ fn points_print_in_a_table() {
                     .split(", ")
                     .map(|x| x.parse().unwrap())
                     .collect();
-                let want: Vec<f64> = want[field]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|x| x.as_f64().unwrap())
-                    .collect();
+                let want = common::vec3(&want[field]);
                 assert_eq!(values.len(), 3, "{line}");
                 for (v, w) in values.iter().zip(&want) {
                     assert!((v - w).abs() <= 5e-7, "{field}: {line} against {want:?}");
