@@ -293,13 +293,16 @@ mod tests {
     #[test]
     fn a_call_is_timed_per_call_over_runs_of_the_minimum_length() {
         const SPIN: Duration = Duration::from_micros(20);
-        let mut calls = 0u64;
-        let mut spin = || {
-            calls += 1;
+        fn spin() {
             let t = Instant::now();
             while t.elapsed() < SPIN {}
+        }
+        let mut calls = 0u64;
+        let mut counted = || {
+            calls += 1;
+            spin();
         };
-        let t = Interleaved::run(Duration::from_millis(2), 3, &mut [&mut spin]);
+        let t = Interleaved::run(Duration::from_millis(2), 3, &mut [&mut counted]);
         let spin_ns = SPIN.as_nanos() as f64;
         assert!(
             (spin_ns..50.0 * spin_ns).contains(&t.median(0)),
@@ -308,10 +311,7 @@ mod tests {
         );
         // At least the 2 ms run of each of the three rounds.
         assert!(calls >= 3 * 100, "{calls}");
-        let per_call = time_per_call(Duration::from_millis(2), 3, || {
-            let t = Instant::now();
-            while t.elapsed() < SPIN {}
-        });
+        let per_call = time_per_call(Duration::from_millis(2), 3, spin);
         assert!((spin_ns..50.0 * spin_ns).contains(&per_call), "{per_call}");
     }
 

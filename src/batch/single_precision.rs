@@ -673,6 +673,16 @@ mod tests {
     use crate::arith::Separate;
     use crate::measure::worse;
 
+    /// Sixteen angles uniform in `[−scale, scale)`, from the xorshift generator `state`.
+    fn angles(state: &mut u64, scale: f64) -> [f64; WIDTH] {
+        std::array::from_fn(|_| {
+            *state ^= *state << 13;
+            *state ^= *state >> 7;
+            *state ^= *state << 17;
+            scale * ((*state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
+        })
+    }
+
     /// The single-precision `sin`/`cos` against the standard library's `f64` ones, over angles
     /// from 10⁻⁸ to 10⁵ rad: within 2⁻²³ absolutely (one `f32` ulp near 1; measured 9.2·10⁻⁸,
     /// at values near 0.74, where that is 1.5 ulp), as accurate at 10⁵ rad as near 0 since the
@@ -683,12 +693,7 @@ mod tests {
         let mut worst_abs = 0.0_f64;
         for scale in [1e-8, 1e-3, 1.0, 3.0, 10.0, 1e3, 1e5] {
             for _ in 0..20_000 {
-                let theta: [f64; WIDTH] = std::array::from_fn(|_| {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
-                    scale * ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
-                });
+                let theta = angles(&mut state, scale);
                 let (s, c) = sin_cos::<Separate>(theta);
                 for i in 0..WIDTH {
                     let (sw, cw) = theta[i].sin_cos();
@@ -715,12 +720,7 @@ mod tests {
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
         let (mut sum, mut count) = (0.0_f64, 0u64);
         for _ in 0..50_000 {
-            let theta: [f64; WIDTH] = std::array::from_fn(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                10.0 * ((state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
-            });
+            let theta = angles(&mut state, 10.0);
             let (s, _) = sin_cos::<Separate>(theta);
             for i in 0..WIDTH {
                 let want = theta[i].sin();
