@@ -24,6 +24,7 @@ fn robots() -> Vec<(String, Chain)> {
         "placed before and after".to_string(),
         placed_before_and_after(),
     ));
+    out.push(("scaled mimics".to_string(), scaled_mimics()));
     out
 }
 
@@ -54,6 +55,50 @@ fn placed_before_and_after() -> Chain {
         [1.0, 0.0, 0.0],
     ));
     b.joint(joint("j5", JointKind::Cylindrical, "l4", "l5", [0.0, 0.0, 1.0]).with_origin(origin));
+    b.build().unwrap()
+}
+
+/// Mimic joints whose multipliers are not ±1 (every bundled robot's are): a turning joint
+/// following another at half its angle, a sliding one at −2.5 times another's travel, and one
+/// following the first mimic (so its primary's entry at 0.5 · 3 = 1.5 times).
+fn scaled_mimics() -> Chain {
+    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    let origin = Transform::from_xyz_rpy([0.3, 0.1, 0.2], [0.2, 0.3, -0.4]);
+    let mut b = ChainBuilder::new("mimics");
+    for link in ["l0", "l1", "l2", "l3", "l4", "l5"] {
+        b.link(link);
+    }
+    let joint = |name, kind, parent, child, axis: [f64; 3]| {
+        JointSpec::new(name, kind, parent, child)
+            .with_axis(axis)
+            .with_origin(origin)
+    };
+    b.joint(joint(
+        "drive",
+        JointKind::Revolute,
+        "l0",
+        "l1",
+        [0.0, 0.0, 1.0],
+    ));
+    b.joint(joint(
+        "slide",
+        JointKind::Prismatic,
+        "l1",
+        "l2",
+        [0.0, 1.0, 0.0],
+    ));
+    b.joint(
+        joint("half", JointKind::Revolute, "l2", "l3", [0.6, 0.0, 0.8])
+            .with_mimic("drive", 0.5, 0.3),
+    );
+    b.joint(
+        joint("follow", JointKind::Prismatic, "l3", "l4", [1.0, 0.0, 0.0])
+            .with_mimic("slide", -2.5, 0.1),
+    );
+    b.joint(
+        joint("triple", JointKind::Revolute, "l4", "l5", [0.0, 1.0, 0.0])
+            .with_mimic("half", 3.0, -0.2),
+    );
     b.build().unwrap()
 }
 
