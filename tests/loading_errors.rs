@@ -1,7 +1,9 @@
 //! One bad file per failure mode (`tests/data/bad/`): each load fails with the expected error
 //! kind, naming the file, the joint or link, and the field.
 
-use kinechain::{Chain, FieldProblem, LoadError, LoadErrorKind, ModelError, NotRigid};
+use kinechain::{
+    Chain, Data, FieldProblem, LoadError, LoadErrorKind, ModelError, NotRigid, forward_kinematics,
+};
 use std::path::Path;
 
 fn load(relative: &str) -> LoadError {
@@ -141,6 +143,12 @@ fn yaml_parser_errors_name_the_field() {
             Some("j1"),
             None,
         ),
+        // Beside a merge key, whose entries come after the keys written out.
+        (
+            "convention: standard\njoints:\n  - &rev {name: j1, type: revolute, a: 1, alpha: 0, d: 0, theta: 0, limits: [-3, 3]}\n  - {<<: *rev, name: j2, d: oops}\n",
+            Some("j2"),
+            Some("d"),
+        ),
     ];
     for (text, joint, field) in cases {
         let e = Chain::from_dh_yaml_str(text).unwrap_err();
@@ -150,6 +158,61 @@ fn yaml_parser_errors_name_the_field() {
             "{text}: {e:?}"
         );
     }
+}
+
+/// A file that writes its joints through anchors, aliases and merge keys loads as the same file
+/// written out (with 59 aliases to each of two anchors, beyond the ratio the parser refuses by
+/// default), and an error in its last joint is still placed (the parses stop replaying aliases
+/// at four events per byte of the file; this one replays about 0.6).
+#[test]
+fn anchors_aliases_and_merge_keys() {
+    let joints = 60;
+    let template = "  - &rev {name: j1, type: revolute, a: 0.25, alpha: 1.5, d: 0.125, theta: 0, limits: &turn [-3, 3]}\n";
+    let written = |i: usize| {
+        format!(
+            "  - {{name: j{i}, type: revolute, a: 0.25, alpha: 1.5, d: 0.125, theta: 0, limits: [-3, 3]}}\n"
+        )
+    };
+    let aliased =
+        |i: usize, last: &str| format!("  - {{<<: *rev, name: j{i}, limits: *turn{last}}}\n");
+    let header = "convention: standard\njoints:\n";
+    let mut short = header.to_string() + template;
+    let mut long = header.to_string() + &written(1);
+    for i in 2..=joints {
+        short += &aliased(i, "");
+        long += &written(i);
+    }
+    let (short, long) = (
+        Chain::from_dh_yaml_str(&short).unwrap(),
+        Chain::from_dh_yaml_str(&long).unwrap(),
+    );
+    assert_eq!(short.dof(), joints);
+    let q: Vec<f64> = (0..joints).map(|i| (i as f64 * 0.37).sin()).collect();
+    let (mut a, mut b) = (Data::new(&short), Data::new(&long));
+    let (pa, pb) = (
+        forward_kinematics(&short, &mut a, &q).unwrap(),
+        forward_kinematics(&long, &mut b, &q).unwrap(),
+    );
+    let tip = |c: &Chain| c.link_id(&format!("link{joints}")).unwrap();
+    assert_eq!(
+        pa.world_from_link(tip(&short)).to_rows(),
+        pb.world_from_link(tip(&long)).to_rows()
+    );
+    for (j, k) in short.joints().iter().zip(long.joints()) {
+        assert_eq!(j.limits(), k.limits(), "{}", j.name());
+    }
+
+    let mut bad = header.to_string() + template;
+    for i in 2..=joints {
+        bad += &aliased(i, if i == joints { ", a: x" } else { "" });
+    }
+    let e = Chain::from_dh_yaml_str(&bad).unwrap_err();
+    let last = format!("j{joints}");
+    assert_eq!(
+        (yaml(&e).0, yaml_field(&e)),
+        (Some(last.as_str()), Some("a")),
+        "{e:?}"
+    );
 }
 
 #[test]
@@ -857,8 +920,8 @@ fn every_bad_file_is_exercised() {
     }
 }
 
-/// Resource attacks end quickly with an error: an alias bomb, 20 000-deep nesting (YAML and
-/// XML), an XML entity bomb, binary data, and a file over the size limit.
+/// Resource attacks end quickly with an error: an alias bomb, a merge bomb, 20 000-deep nesting
+/// (YAML and XML), an XML entity bomb, binary data, and a file over the size limit.
 #[test]
 fn resource_attacks_fail_fast() {
     let timed = |file: &str| {
@@ -877,6 +940,8 @@ fn resource_attacks_fail_fast() {
         "{}",
         message(&e)
     );
+    let e = timed("yaml/merge_bomb.yaml");
+    assert!(yaml(&e).2.contains("alias replay limit"), "{}", message(&e));
     let e = timed("yaml/deep_nesting.yaml");
     assert!(yaml(&e).2.contains("recursion limit"), "{}", message(&e));
     let e = timed("urdf/deep_nesting.urdf");

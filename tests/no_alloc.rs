@@ -1,5 +1,6 @@
-//! Evaluations on a reused `Data` allocate nothing (counted by a per-thread counting allocator,
-//! so tests running in parallel do not disturb each other).
+//! Evaluations on a reused `Data` allocate nothing, and loading an alias or merge bomb allocates
+//! in proportion to the file's size (counted by a per-thread counting allocator, so tests running in
+//! parallel do not disturb each other).
 
 use kinechain::{
     Chain, Data, forward_accelerations, forward_kinematics, forward_kinematics_incremental,
@@ -91,6 +92,30 @@ fn evaluations_allocate_nothing() {
             allocations() - before,
             100,
             "{file}: only the 100 clones of q allocate"
+        );
+    }
+}
+
+/// Files whose aliases replay exponentially more than they hold are refused after a number of
+/// allocations in proportion to their size: an alias bomb (ten anchors, each a list of nine
+/// aliases to the one before: 9¹⁰ leaves in 555 bytes) and a merge bomb (each joint merging the
+/// two before it). At most 64 per byte (measured: 11.5 and 34); under the parser's own limit of
+/// a million replayed events they allocated 1 400 and 1 500 times per byte.
+#[test]
+fn bombs_allocate_in_proportion_to_their_size() {
+    for file in ["alias_bomb.yaml", "merge_bomb.yaml"] {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/bad/yaml")
+            .join(file);
+        let bytes = std::fs::metadata(&path).unwrap().len() as usize;
+        let before = allocations();
+        let loaded = Chain::from_file(&path);
+        let allocated = allocations() - before;
+        assert!(loaded.is_err(), "{file}");
+        println!("{file}: {bytes} bytes, {allocated} allocations");
+        assert!(
+            allocated <= 64 * bytes,
+            "{file} of {bytes} bytes took {allocated} allocations"
         );
     }
 }

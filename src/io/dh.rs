@@ -492,6 +492,10 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     let options = serde_saphyr::options! {
         angle_conversions: true,
         reject_unsupported_tags: true,
+        budget: budget(),
+        alias_limits: serde_saphyr::alias_limits! {
+            max_total_replayed_events: replay_limit(source),
+        },
     };
     let raw: RawRobot =
         serde_saphyr::from_str_with_options(source, options).map_err(|e| yaml_error(source, &e))?;
@@ -552,6 +556,16 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     Ok(b)
 }
 
+/// The parser's resource limits, less its test of the ratio of aliases to anchors (from a
+/// hundred aliases on, more than ten per anchor is refused), which refuses a long chain whose
+/// joints repeat one anchored template or limits pair, and does not see the bombs that
+/// [`replay_limit`] stops (the ratio of a bomb of nested anchors is below ten).
+fn budget() -> Option<serde_saphyr::Budget> {
+    serde_saphyr::budget! {
+        enforce_alias_anchor_ratio: false,
+    }
+}
+
 /// Turns a parser error into [`LoadErrorKind::Yaml`], naming the joint entry and the field it
 /// falls in.
 fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
@@ -584,6 +598,16 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
     }
 }
 
+/// How many events aliases may replay in a parse of `source`: four per byte of the file. An
+/// alias is a few bytes that replay what its anchor holds, so a robot file that repeats a joint
+/// template or a limits pair through aliases replays about one event per byte (a 60-joint chain
+/// written through one template: 0.6); an alias bomb, nested anchors or merge keys that merge
+/// merged templates, replays exponentially more than its size. Both parses, the typed one and the
+/// one that places errors, stop there, so an error in a file the first could read is placed.
+fn replay_limit(source: &str) -> usize {
+    source.len().saturating_mul(4)
+}
+
 /// The joint entry (its name, or `#n` for the n-th entry without one) and the field (`a`,
 /// `origin.xyz`, `base.rpy`) that hold the position `at` (line, column) of the parser's
 /// `message`, if the file parses leniently.
@@ -592,6 +616,10 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
 /// wrong length, an unknown or duplicate key) on its key. A position on a map's first key is
 /// also where the map begins, and a missing key is reported there, so that key is not named;
 /// nor is a key the message names itself.
+///
+/// This parse builds the whole document as a tree, aliases replayed into it, up to
+/// [`replay_limit`] replayed events (the parser's own limit, a million, let an alias bomb of a
+/// few hundred bytes build a million nodes first).
 fn locate(source: &str, at: (u32, u32), message: &str) -> (Option<String>, Option<String>) {
     let Ok(root) = serde_saphyr::from_str_with_options::<Spanned<Node>>(
         source,
@@ -599,6 +627,10 @@ fn locate(source: &str, at: (u32, u32), message: &str) -> (Option<String>, Optio
             angle_conversions: true,
             // Every entry, so that a repeated key is found where it is repeated.
             duplicate_keys: serde_saphyr::DuplicateKeyPolicy::PassThrough,
+            budget: budget(),
+            alias_limits: serde_saphyr::alias_limits! {
+                max_total_replayed_events: replay_limit(source),
+            },
         },
     ) else {
         return (None, None);
@@ -612,7 +644,16 @@ fn locate(source: &str, at: (u32, u32), message: &str) -> (Option<String>, Optio
     loop {
         match &node.value {
             Node::Map(entries) => {
-                let Some(i) = entries.iter().rposition(|(k, _)| start(k) <= at) else {
+                // The key starting last at or before `at`. Not the last such entry in order: a
+                // merge key (`<<: *template`) appends the template's entries, placed where the
+                // alias stands, after the keys written out beside it.
+                let Some(i) = entries
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, (k, _))| start(k) <= at)
+                    .max_by_key(|(_, (k, _))| start(k))
+                    .map(|(i, _)| i)
+                else {
                     break;
                 };
                 let (key, value) = &entries[i];
