@@ -586,6 +586,12 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
             message.truncate(i);
         }
     }
+    // The parser's counts mean little without the rule they broke.
+    if message.starts_with("alias replay limit exceeded") {
+        message.push_str(&format!(
+            " (aliases may replay {REPLAYS_PER_BYTE} events per byte of the file)"
+        ));
+    }
     let (joint, field) = line
         .zip(column)
         .map_or((None, None), |at| locate(source, at, &message));
@@ -598,15 +604,19 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
     }
 }
 
-/// How many events aliases may replay in a parse of `source`: four per byte of the file. An
-/// alias is a few bytes that replay what its anchor holds, so a robot file that repeats a joint
-/// template or a limits pair through aliases replays about one event per byte (a 60-joint chain
-/// written through one template: 0.6); an alias bomb, nested anchors or merge keys that merge
-/// merged templates, replays exponentially more than its size. Both parses, the typed one and the
-/// one that places errors, stop there, so an error in a file the first could read is placed.
+/// How many events aliases may replay in a parse of `source`: [`REPLAYS_PER_BYTE`] per byte of
+/// the file. An alias is a few bytes that replay what its anchor holds, so a robot file that
+/// repeats a joint template or a limits pair through aliases replays about one event per byte (a
+/// 60-joint chain written through one template: 0.6); an alias bomb, nested anchors or merge keys
+/// that merge merged templates, replays exponentially more than its size. Both parses, the typed
+/// one and the one that places errors, stop there, so an error in a file the first could read is
+/// placed.
 fn replay_limit(source: &str) -> usize {
-    source.len().saturating_mul(4)
+    source.len().saturating_mul(REPLAYS_PER_BYTE)
 }
+
+/// See [`replay_limit`].
+const REPLAYS_PER_BYTE: usize = 4;
 
 /// The joint entry (its name, or `#n` for the n-th entry without one) and the field (`a`,
 /// `origin.xyz`, `base.rpy`) that hold the position `at` (line, column) of the parser's
