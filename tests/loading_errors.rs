@@ -215,6 +215,23 @@ fn anchors_aliases_and_merge_keys() {
     );
 }
 
+/// A file beyond one of the YAML parser's limits (here 250 000 nodes: 20 000 joints of 13 nodes
+/// each) is refused with the parser's count and what the limit is for.
+#[test]
+fn a_parser_limit_says_what_it_is_for() {
+    let joints: String = (0..20_000)
+        .map(|i| format!("  - {{name: j{i}, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}}\n"))
+        .collect();
+    let text = format!("convention: standard\njoints:\n{joints}");
+    let e = Chain::from_dh_yaml_str(&text).unwrap_err();
+    let message = yaml(&e).2;
+    assert!(
+        message.starts_with("budget breached: Nodes")
+            && message.ends_with("(a limit of the YAML parser against hostile files)"),
+        "{message}"
+    );
+}
+
 #[test]
 fn yaml_missing_and_mistyped_fields() {
     let e = load("yaml/missing_field.yaml");

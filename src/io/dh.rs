@@ -591,6 +591,8 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
         message.push_str(&format!(
             " (aliases may replay {REPLAYS_PER_BYTE} events per byte of the file)"
         ));
+    } else if message.starts_with("budget breached") {
+        message.push_str(" (a limit of the YAML parser against hostile files)");
     }
     let (joint, field) = line
         .zip(column)
