@@ -114,6 +114,32 @@ fn the_reach_bounds_every_link_within_the_limits() {
     assert!(farthest > chain.reach() - 0.25, "{farthest}");
 }
 
+/// The travel counted is the farther end of the slide from the joint's offset (here the lower
+/// end: d = 0.3 − 0.9), and a placement after the joint's motion adds its length: 0.6 + 0.25.
+#[test]
+fn the_reach_counts_the_farther_end_of_a_slide_and_the_placement_after_it() {
+    let mut b = ChainBuilder::new("slide");
+    b.link("a").link("b").joint(
+        JointSpec::new("slide", JointKind::Prismatic, "a", "b")
+            .with_offsets(0.0, 0.3)
+            .with_limits(-0.9, 0.1)
+            .with_post(Transform::from_xyz_rpy([0.0, 0.25, 0.0], [0.0; 3])),
+    );
+    let chain = b.build().unwrap();
+    assert!(
+        (chain.reach() - 0.85).abs() < 4.0 * f64::EPSILON,
+        "{}",
+        chain.reach()
+    );
+    // Reached at the lower end, where the slide's −0.6 along z and the 0.25 along y add up.
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &[-0.9]).unwrap();
+    let p = poses
+        .world_from_link(chain.link_id("b").unwrap())
+        .translation();
+    assert!(p.norm() <= chain.reach() && p.norm() > 0.6, "{p}");
+}
+
 #[test]
 fn an_open_ended_slide_leaves_the_reach_finite() {
     // Travel counts only where both limits are finite; otherwise the offset stands for it.

@@ -293,6 +293,43 @@ fn joint_4x4_forms_equal_the_vector_forms_and_differentiate_t() {
     }
 }
 
+/// Every joint's screw (θ and d from the joint's entry of `q`, its multiplier and offset for a
+/// mimic joint, and its constant offsets) composes the link poses: the child's pose is the
+/// parent's · origin · `T(θ, d)` (eq. 2.119) · post, within 4 ulp of the reach (measured: 1.9),
+/// on every bundled robot and the chains built in code (mimic joints with offsets among them).
+#[test]
+fn joint_screws_compose_the_link_poses() {
+    let mut rng = rng(41);
+    let mut checked = 0;
+    for (name, chain) in robots() {
+        let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let reach = chain.reach().max(1.0);
+        for _ in 0..3 {
+            let q = random_q(&chain, &mut rng);
+            let zero = vec![0.0; chain.dof()];
+            let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+            for (joint, spec) in chain.joints().iter().zip(chain.description().joints()) {
+                assert_eq!(joint.name(), spec.name);
+                let id = chain.joint_id(joint.name()).unwrap();
+                let screw = chain.joint_screw(id, &q, &zero, &zero).unwrap();
+                let composed = poses.world_from_link(joint.parent()).to_homogeneous()
+                    * spec.origin.to_homogeneous()
+                    * screw.transform()
+                    * spec.post.to_homogeneous();
+                let child = poses.world_from_link(joint.child()).to_homogeneous();
+                let error = (composed - child).abs().max();
+                assert!(
+                    error < 4.0 * f64::EPSILON * reach,
+                    "{name} joint {}: {error:e}",
+                    joint.name()
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 200, "{checked}");
+}
+
 /// The chain composes the joints' relative motion: for a one-joint chain the link's velocity
 /// equals `Ṫ` applied to the origin, and ω = θ̇ v (eq. 2.116).
 #[test]

@@ -253,6 +253,67 @@ fn mimic_joints_are_checked_against_their_own_limits() {
     );
 }
 
+/// A mimic joint whose primary has no limits is the only check of the primary's entry: its
+/// limits bound `multiplier · q + offset` (here 2 q + 0.5 within [−1, 1.5], so q within
+/// [−0.75, 0.5]) at every entry point, single and batch (the lanes' checks), `f64` and `f32`.
+#[test]
+fn a_mimic_of_an_unlimited_joint_bounds_its_primarys_entry() {
+    use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision as sp};
+    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    let mut b = ChainBuilder::new("mimic");
+    b.link("a").link("b").link("c");
+    b.joint(JointSpec::new("drive", JointKind::Continuous, "a", "b"));
+    b.joint(
+        JointSpec::new("follow", JointKind::Revolute, "b", "c")
+            .with_mimic("drive", 2.0, 0.5)
+            .with_limits(-1.0, 1.5),
+    );
+    let chain = b.build().unwrap();
+    let mut data = Data::new(&chain);
+    let mut batch = BatchData::new(&chain);
+    let mut batch32 = sp::BatchData::new(&chain);
+    let above = 0.5 + f64::EPSILON;
+    let below = -0.75 - f64::EPSILON;
+    for (q, admitted) in [
+        (0.5, true),
+        (above, false),
+        (-0.75, true),
+        (below, false),
+        (0.0, true),
+    ] {
+        let single = forward_kinematics(&chain, &mut data, &[q]);
+        assert_eq!(single.is_ok(), admitted, "{q}");
+        if let Err(e) = single {
+            assert!(
+                matches!(&e, StateError::OutOfLimits { joint, .. } if joint == "follow"),
+                "{e:?}"
+            );
+        }
+        assert_eq!(
+            kinechain::check_q(&chain, &[q], LimitPolicy::Enforce).is_ok(),
+            admitted
+        );
+        // 19 configurations (two blocks of eight and a rest), the probe at index 9.
+        let mut qs = vec![0.0; 19];
+        qs[9] = q;
+        let want = (!admitted).then_some(9);
+        assert_eq!(
+            forward_kinematics_batch(&chain, &mut batch, &qs)
+                .err()
+                .map(|e| e.index),
+            want,
+            "{q}"
+        );
+        assert_eq!(
+            sp::forward_kinematics_batch(&chain, &mut batch32, &qs)
+                .err()
+                .map(|e| e.index),
+            want,
+            "{q}"
+        );
+    }
+}
+
 /// JSON read from text keeps each value's type (the reader that refuses repeated member names
 /// builds the values itself): an entry that is not a number is named with the type it has.
 #[test]
