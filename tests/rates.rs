@@ -28,78 +28,72 @@ fn robots() -> Vec<(String, Chain)> {
     out
 }
 
+/// A serial chain of links `l0`…`l5` joined by `joints` (name, kind, axis), each joint's spec
+/// finished by `finish(index, spec)`.
+fn five_joints(
+    name: &str,
+    joints: [(&str, kinechain::JointKind, [f64; 3]); 5],
+    finish: impl Fn(usize, kinechain::JointSpec) -> kinechain::JointSpec,
+) -> Chain {
+    let mut b = kinechain::ChainBuilder::new(name);
+    b.link("l0");
+    for (i, (joint, kind, axis)) in joints.into_iter().enumerate() {
+        let (parent, child) = (format!("l{i}"), format!("l{}", i + 1));
+        b.link(child.clone());
+        b.joint(finish(
+            i,
+            kinechain::JointSpec::new(joint, kind, parent, child).with_axis(axis),
+        ));
+    }
+    b.build().unwrap()
+}
+
 /// Joints of every kind placed both before and after their motion, about z, y, x and a general
 /// axis, one of them with nothing before it: the forms of the rate recursion that no robot file
 /// gives (files place a joint on one side only).
 fn placed_before_and_after() -> Chain {
-    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    use kinechain::JointKind::{Cylindrical, Prismatic, Revolute};
     let origin = Transform::from_xyz_rpy([0.1, -0.2, 0.3], [0.4, -0.5, 0.6]);
     let post = Transform::from_xyz_rpy([0.2, 0.1, -0.1], [-0.3, 0.2, 0.7]);
-    let mut b = ChainBuilder::new("placed");
-    for link in ["l0", "l1", "l2", "l3", "l4", "l5"] {
-        b.link(link);
-    }
-    let joint = |name, kind, parent, child, axis: [f64; 3]| {
-        JointSpec::new(name, kind, parent, child)
-            .with_axis(axis)
-            .with_post(post)
-    };
-    b.joint(joint("j1", JointKind::Revolute, "l0", "l1", [0.0, 0.0, 1.0]).with_origin(origin));
-    b.joint(joint("j2", JointKind::Prismatic, "l1", "l2", [0.0, 1.0, 0.0]).with_origin(origin));
-    b.joint(joint("j3", JointKind::Cylindrical, "l2", "l3", [0.6, 0.0, 0.8]).with_origin(origin));
-    b.joint(joint(
-        "j4",
-        JointKind::Revolute,
-        "l3",
-        "l4",
-        [1.0, 0.0, 0.0],
-    ));
-    b.joint(joint("j5", JointKind::Cylindrical, "l4", "l5", [0.0, 0.0, 1.0]).with_origin(origin));
-    b.build().unwrap()
+    let joints = [
+        ("j1", Revolute, [0.0, 0.0, 1.0]),
+        ("j2", Prismatic, [0.0, 1.0, 0.0]),
+        ("j3", Cylindrical, [0.6, 0.0, 0.8]),
+        ("j4", Revolute, [1.0, 0.0, 0.0]),
+        ("j5", Cylindrical, [0.0, 0.0, 1.0]),
+    ];
+    five_joints("placed", joints, |i, spec| {
+        let spec = spec.with_post(post);
+        if i == 3 {
+            spec
+        } else {
+            spec.with_origin(origin)
+        }
+    })
 }
 
 /// Mimic joints whose multipliers are not ±1 (every bundled robot's are): a turning joint
 /// following another at half its angle, a sliding one at −2.5 times another's travel, and one
 /// following the first mimic (so its primary's entry at 0.5 · 3 = 1.5 times).
 fn scaled_mimics() -> Chain {
-    use kinechain::{ChainBuilder, JointKind, JointSpec};
+    use kinechain::JointKind::{Prismatic, Revolute};
     let origin = Transform::from_xyz_rpy([0.3, 0.1, 0.2], [0.2, 0.3, -0.4]);
-    let mut b = ChainBuilder::new("mimics");
-    for link in ["l0", "l1", "l2", "l3", "l4", "l5"] {
-        b.link(link);
-    }
-    let joint = |name, kind, parent, child, axis: [f64; 3]| {
-        JointSpec::new(name, kind, parent, child)
-            .with_axis(axis)
-            .with_origin(origin)
-    };
-    b.joint(joint(
-        "drive",
-        JointKind::Revolute,
-        "l0",
-        "l1",
-        [0.0, 0.0, 1.0],
-    ));
-    b.joint(joint(
-        "slide",
-        JointKind::Prismatic,
-        "l1",
-        "l2",
-        [0.0, 1.0, 0.0],
-    ));
-    b.joint(
-        joint("half", JointKind::Revolute, "l2", "l3", [0.6, 0.0, 0.8])
-            .with_mimic("drive", 0.5, 0.3),
-    );
-    b.joint(
-        joint("follow", JointKind::Prismatic, "l3", "l4", [1.0, 0.0, 0.0])
-            .with_mimic("slide", -2.5, 0.1),
-    );
-    b.joint(
-        joint("triple", JointKind::Revolute, "l4", "l5", [0.0, 1.0, 0.0])
-            .with_mimic("half", 3.0, -0.2),
-    );
-    b.build().unwrap()
+    let joints = [
+        ("drive", Revolute, [0.0, 0.0, 1.0]),
+        ("slide", Prismatic, [0.0, 1.0, 0.0]),
+        ("half", Revolute, [0.6, 0.0, 0.8]),
+        ("follow", Prismatic, [1.0, 0.0, 0.0]),
+        ("triple", Revolute, [0.0, 1.0, 0.0]),
+    ];
+    five_joints("mimics", joints, |i, spec| {
+        let spec = spec.with_origin(origin);
+        match i {
+            2 => spec.with_mimic("drive", 0.5, 0.3),
+            3 => spec.with_mimic("slide", -2.5, 0.1),
+            4 => spec.with_mimic("half", 3.0, -0.2),
+            _ => spec,
+        }
+    })
 }
 
 /// Poses of every link along `q(t) = q + q̇ t + q̈ t²/2`.
