@@ -611,8 +611,7 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
 /// repeats a joint template or a limits pair through aliases replays about one event per byte (a
 /// 60-joint chain written through one template: 0.6); an alias bomb, nested anchors or merge keys
 /// that merge merged templates, replays exponentially more than its size. Both parses, the typed
-/// one and the one that places errors, stop there, so an error in a file the first could read is
-/// placed.
+/// one and the one that places errors, stop there.
 fn replay_limit(source: &str) -> usize {
     source.len().saturating_mul(REPLAYS_PER_BYTE)
 }
