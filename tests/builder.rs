@@ -131,7 +131,8 @@ fn the_reach_counts_the_farther_end_of_a_slide_and_the_placement_after_it() {
         "{}",
         chain.reach()
     );
-    // Reached at the lower end, where the slide's −0.6 along z and the 0.25 along y add up.
+    // At the lower end the link is 0.65 m out (the slide's −0.6 along z and the 0.25 along y,
+    // at right angles): within the reach, and farther than the slide alone.
     let mut data = Data::new(&chain);
     let poses = forward_kinematics(&chain, &mut data, &[-0.9]).unwrap();
     let p = poses

@@ -255,7 +255,8 @@ fn mimic_joints_are_checked_against_their_own_limits() {
 
 /// A mimic joint whose primary has no limits is the only check of the primary's entry: its
 /// limits bound `multiplier · q + offset` (here 2 q + 0.5 within [−1, 1.5], so q within
-/// [−0.75, 0.5]) at every entry point, single and batch (the lanes' checks), `f64` and `f32`.
+/// [−0.75, 0.5]) in a single evaluation, `check_q` and batches (the lanes' checks), `f64` and
+/// `f32`.
 #[test]
 fn a_mimic_of_an_unlimited_joint_bounds_its_primarys_entry() {
     use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision as sp};
