@@ -489,14 +489,13 @@ impl Reader<'_> {
 
 /// Parses DH YAML text into a chain description.
 pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, LoadErrorKind> {
-    let options = serde_saphyr::options! {
-        angle_conversions: true,
-        reject_unsupported_tags: true,
-        budget: budget(),
-        alias_limits: serde_saphyr::alias_limits! {
-            max_total_replayed_events: replay_limit(source),
+    let options = with_limits(
+        serde_saphyr::options! {
+            angle_conversions: true,
+            reject_unsupported_tags: true,
         },
-    };
+        source,
+    );
     let raw: RawRobot =
         serde_saphyr::from_str_with_options(source, options).map_err(|e| yaml_error(source, &e))?;
     let unit = raw.angle_unit;
@@ -556,14 +555,19 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     Ok(b)
 }
 
-/// The parser's resource limits, less its test of the ratio of aliases to anchors (from a
-/// hundred aliases on, more than ten per anchor is refused), which refuses a long chain whose
-/// joints repeat one anchored template or limits pair, and does not see the bombs that
-/// [`replay_limit`] stops (the ratio of a bomb of nested anchors is below ten).
-fn budget() -> Option<serde_saphyr::Budget> {
-    serde_saphyr::budget! {
+/// `options` with the resource limits both parses of `source` share: at most [`replay_limit`]
+/// events replayed by aliases, and the parser's budget less its test of the ratio of aliases to
+/// anchors (from a hundred aliases on, more than ten per anchor is refused), which refuses a long
+/// chain whose joints repeat one anchored template or limits pair, and does not see the bombs
+/// that the replay limit stops (the ratio of a bomb of nested anchors is below ten).
+fn with_limits(mut options: serde_saphyr::Options, source: &str) -> serde_saphyr::Options {
+    options.budget = serde_saphyr::budget! {
         enforce_alias_anchor_ratio: false,
-    }
+    };
+    options.alias_limits = serde_saphyr::alias_limits! {
+        max_total_replayed_events: replay_limit(source),
+    };
+    options
 }
 
 /// Turns a parser error into [`LoadErrorKind::Yaml`], naming the joint entry and the field it
@@ -628,21 +632,20 @@ const REPLAYS_PER_BYTE: usize = 4;
 /// also where the map begins, and a missing key is reported there, so that key is not named;
 /// nor is a key the message names itself.
 ///
-/// This parse builds the whole document as a tree, aliases replayed into it, up to
-/// [`replay_limit`] replayed events (the parser's own limit, a million, let an alias bomb of a
-/// few hundred bytes build a million nodes first).
+/// This parse builds the whole document as a tree, aliases replayed into it, under the typed
+/// parse's limits ([`with_limits`]; the parser's own replay limit, a million events, let an alias
+/// bomb of a few hundred bytes build a million nodes first).
 fn locate(source: &str, at: (u32, u32), message: &str) -> (Option<String>, Option<String>) {
     let Ok(root) = serde_saphyr::from_str_with_options::<Spanned<Node>>(
         source,
-        serde_saphyr::options! {
-            angle_conversions: true,
-            // Every entry, so that a repeated key is found where it is repeated.
-            duplicate_keys: serde_saphyr::DuplicateKeyPolicy::PassThrough,
-            budget: budget(),
-            alias_limits: serde_saphyr::alias_limits! {
-                max_total_replayed_events: replay_limit(source),
+        with_limits(
+            serde_saphyr::options! {
+                angle_conversions: true,
+                // Every entry, so that a repeated key is found where it is repeated.
+                duplicate_keys: serde_saphyr::DuplicateKeyPolicy::PassThrough,
             },
-        },
+            source,
+        ),
     ) else {
         return (None, None);
     };
