@@ -89,7 +89,9 @@ struct RawJoint {
     alpha: Option<Angle>,
     d: Option<Plain>,
     theta: Option<Angle>,
-    origin: Option<RawFrame>,
+    /// Boxed: a frame's spanned numbers take about 2 kB, which rows of a DH table (no `origin`)
+    /// would otherwise each hold until the chain is built.
+    origin: Option<Box<RawFrame>>,
     axis: Option<[Plain; 3]>,
     limits: Option<RawLimits>,
 }
