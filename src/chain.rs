@@ -252,6 +252,15 @@ impl ChainBuilder {
     /// joint referring to a missing joint or forming a cycle, a zero axis, a non-finite number,
     /// reversed limits, a placement that is not rigid.
     pub fn build(&self) -> Result<Chain, ModelError> {
+        build(self.clone())
+    }
+
+    /// [`ChainBuilder::build`] keeping this description in the chain rather than a copy of it
+    /// (the loaders': a load then holds one description at a time), without the room its lists
+    /// grew while it was read.
+    pub(crate) fn into_chain(mut self) -> Result<Chain, ModelError> {
+        self.links.shrink_to_fit();
+        self.joints.shrink_to_fit();
         build(self)
     }
 }
@@ -1172,7 +1181,8 @@ fn norm(p: [f64; 3]) -> f64 {
 
 /// Validates `spec` and lays it out for evaluation, in stages whose errors come in this order:
 /// names, each joint's numbers, the tree, mimic joints.
-fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
+fn build(description: ChainBuilder) -> Result<Chain, ModelError> {
+    let spec = &description;
     let (link_of, joint_of) = name_indices(spec)?;
     let axes = checked_axes(spec)?;
     let tree = Tree::new(spec, &link_of)?;
@@ -1260,7 +1270,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         tail_start,
         reach,
         warnings: spec.warnings.clone(),
-        source: spec.clone(),
+        source: description,
     })
 }
 

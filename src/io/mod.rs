@@ -99,7 +99,7 @@ fn parse(text: &str, format: Format, default_name: &str) -> Result<Chain, LoadEr
         Format::DhYaml => dh::parse(text, default_name)?,
         Format::Urdf => urdf::parse(text)?,
     };
-    Ok(builder.build()?)
+    Ok(builder.into_chain()?)
 }
 
 /// Nothing but whitespace (and, for YAML, comments).
