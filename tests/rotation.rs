@@ -311,12 +311,21 @@ fn consistent(e: &EulerParameters, omega: &Vector3<f64>) {
         xyz.to_matrix(),
         rpy.to_matrix(),
         zxz.to_euler_parameters().to_matrix(),
+        rodriguez.to_euler_parameters().to_matrix(),
     ] {
         assert!(max_diff(&m, &a) < 2e-15, "{}", max_diff(&m, &a));
     }
     // Problem 20: Euler angles ↔ Euler parameters.
     let from_angles = zxz.to_euler_parameters();
     assert!((from_angles.as_vector() - e.as_vector()).norm() < 1e-15);
+    // Rodriguez parameters → Euler parameters (the inverse of eq. 2.88), which gives e₀ > 0: `e`
+    // or `−e`, the same rotation.
+    let from_gamma = rodriguez.to_euler_parameters().as_vector();
+    let e_positive = e.as_vector() * e.e0.signum();
+    assert!(
+        (from_gamma - e_positive).norm() < 1e-15,
+        "{from_gamma} vs {e_positive}"
+    );
 
     let e_dot = e.rates(omega);
     let g_dot = rodriguez.rates(omega);
