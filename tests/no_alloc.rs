@@ -4,8 +4,8 @@
 //! other).
 
 use kinechain::{
-    Chain, Data, forward_accelerations, forward_kinematics, forward_kinematics_incremental,
-    forward_kinematics_to, forward_velocities,
+    Chain, Data, LoadError, forward_accelerations, forward_kinematics,
+    forward_kinematics_incremental, forward_kinematics_to, forward_velocities,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -181,14 +181,12 @@ fn long_chain(n: usize) -> (String, String) {
 fn loading_holds_memory_in_proportion_to_the_joints() {
     let n = 2000;
     let (urdf, dh) = long_chain(n);
-    for (format, text) in [("URDF", &urdf), ("DH YAML", &dh)] {
-        let (chain, held, peak) = footprint(|| {
-            if format == "URDF" {
-                Chain::from_urdf_str(text)
-            } else {
-                Chain::from_dh_yaml_str(text)
-            }
-        });
+    let loaders: [(&str, &str, fn(&str) -> Result<Chain, LoadError>); 2] = [
+        ("URDF", &urdf, Chain::from_urdf_str),
+        ("DH YAML", &dh, Chain::from_dh_yaml_str),
+    ];
+    for (format, text, load) in loaders {
+        let (chain, held, peak) = footprint(|| load(text));
         let chain = chain.unwrap();
         assert_eq!(chain.dof(), n, "{format}");
         let bytes = text.len();
