@@ -181,7 +181,8 @@ fn long_chain(n: usize) -> (String, String) {
 fn loading_holds_memory_in_proportion_to_the_joints() {
     let n = 2000;
     let (urdf, dh) = long_chain(n);
-    let loaders: [(&str, &str, fn(&str) -> Result<Chain, LoadError>); 2] = [
+    type Loader = fn(&str) -> Result<Chain, LoadError>;
+    let loaders: [(&str, &str, Loader); 2] = [
         ("URDF", &urdf, Chain::from_urdf_str),
         ("DH YAML", &dh, Chain::from_dh_yaml_str),
     ];
