@@ -1179,8 +1179,8 @@ fn norm(p: [f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
 }
 
-/// Validates `spec` and lays it out for evaluation, in stages whose errors come in this order:
-/// names, each joint's numbers, the tree, mimic joints.
+/// Validates `description` and lays it out for evaluation, in stages whose errors come in this
+/// order: names, each joint's numbers, the tree, mimic joints. The chain keeps `description`.
 fn build(description: ChainBuilder) -> Result<Chain, ModelError> {
     let spec = &description;
     let (link_of, joint_of) = name_indices(spec)?;

@@ -89,8 +89,8 @@ struct RawJoint {
     alpha: Option<Angle>,
     d: Option<Plain>,
     theta: Option<Angle>,
-    /// Boxed: a frame's spanned numbers take about 2 kB, which rows of a DH table (no `origin`)
-    /// would otherwise each hold until the chain is built.
+    /// Boxed: a frame's spanned numbers take about 2 kB, which every row of a DH table (no
+    /// `origin`) would otherwise hold while the file is read.
     origin: Option<Box<RawFrame>>,
     axis: Option<[Plain; 3]>,
     limits: Option<RawLimits>,
