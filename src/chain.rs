@@ -11,6 +11,7 @@ use crate::error::{ModelError, NameError, StateError, closest_name};
 use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
 use crate::transform::{NotRigid, Transform};
 use nalgebra::{Matrix4, Unit, Vector3};
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 /// Index of a link in a [`Chain`] (valid only for the chain that produced it).
@@ -252,7 +253,7 @@ impl ChainBuilder {
     /// joint referring to a missing joint or forming a cycle, a zero axis, a non-finite number,
     /// reversed limits, a placement that is not rigid.
     pub fn build(&self) -> Result<Chain, ModelError> {
-        build(self.clone())
+        build(Cow::Borrowed(self))
     }
 
     /// [`ChainBuilder::build`] keeping this description in the chain rather than a copy of it
@@ -261,7 +262,7 @@ impl ChainBuilder {
     pub(crate) fn into_chain(mut self) -> Result<Chain, ModelError> {
         self.links.shrink_to_fit();
         self.joints.shrink_to_fit();
-        build(self)
+        build(Cow::Owned(self))
     }
 }
 
@@ -1180,9 +1181,10 @@ fn norm(p: [f64; 3]) -> f64 {
 }
 
 /// Validates `description` and lays it out for evaluation, in stages whose errors come in this
-/// order: names, each joint's numbers, the tree, mimic joints. The chain keeps `description`.
-fn build(description: ChainBuilder) -> Result<Chain, ModelError> {
-    let spec = &description;
+/// order: names, each joint's numbers, the tree, mimic joints. The chain keeps `description`
+/// (copied only when it is borrowed and valid).
+fn build(description: Cow<'_, ChainBuilder>) -> Result<Chain, ModelError> {
+    let spec = description.as_ref();
     let (link_of, joint_of) = name_indices(spec)?;
     let axes = checked_axes(spec)?;
     let tree = Tree::new(spec, &link_of)?;
@@ -1270,7 +1272,7 @@ fn build(description: ChainBuilder) -> Result<Chain, ModelError> {
         tail_start,
         reach,
         warnings: spec.warnings.clone(),
-        source: description,
+        source: description.into_owned(),
     })
 }
 

@@ -14,8 +14,8 @@ struct Counting;
 
 thread_local! {
     static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-    /// Bytes allocated minus bytes freed on this thread (wrapping: a block freed on another
-    /// thread than the one that allocated it is counted on each).
+    /// Bytes allocated minus bytes freed on this thread (wrapping, since a block may be freed
+    /// by another thread than the one that allocated it).
     static LIVE: Cell<usize> = const { Cell::new(0) };
     /// The most `LIVE` has been since [`footprint`] last reset it.
     static PEAK: Cell<usize> = const { Cell::new(0) };
