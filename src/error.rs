@@ -392,12 +392,15 @@ pub enum StateError {
     )]
     NoDegreesOfFreedom,
     /// A joint value is outside the joint's limits.
-    #[error("joint '{joint}'{} = {value} is outside its limits [{lower}, {upper}]{}", component_suffix(component), hint(*value, *lower, *upper))]
+    #[error("joint '{joint}'{} = {value} is outside its limits [{lower}, {upper}]{}", component_suffix(component), hint(*value, *lower, *upper, *angular))]
     OutOfLimits {
         /// The joint.
         joint: String,
         /// For a cylindrical joint, `theta` or `d`.
         component: Option<&'static str>,
+        /// Whether the coordinate is an angle (rad) rather than a length (m). Only an angle's
+        /// message suggests that the value may have been given in degrees.
+        angular: bool,
         /// The value (for a mimic joint, the value implied by its primary joint).
         value: f64,
         /// Lower limit.
@@ -411,9 +414,11 @@ fn component_suffix(c: &Option<&'static str>) -> String {
     c.map(|c| format!(" {c}")).unwrap_or_default()
 }
 
-fn hint(value: f64, lower: f64, upper: f64) -> &'static str {
+/// The degrees hint: for an angle beyond a full turn whose value read as degrees is within the
+/// limits.
+fn hint(value: f64, lower: f64, upper: f64, angular: bool) -> &'static str {
     let deg = value.to_radians();
-    if value.abs() > 2.0 * std::f64::consts::PI && deg >= lower && deg <= upper {
+    if angular && value.abs() > 2.0 * std::f64::consts::PI && deg >= lower && deg <= upper {
         " (the value looks like degrees; angles are in radians)"
     } else {
         ""

@@ -88,7 +88,9 @@ fn yaml_unknown_keys_name_the_key_and_the_joint() {
     assert_eq!(joint, Some("j2"));
     assert_eq!(line, Some(7));
     assert!(msg.contains("unknown field `alhpa`"), "{msg}");
-    assert!(message(&e).contains("joint 'j2'"));
+    // The whole message places it: line and column (of the key), then the joint.
+    let whole = message(&e);
+    assert!(whole.contains("line 7 column 5: joint 'j2': "), "{whole}");
 
     let e = load("yaml/unknown_top_key.yaml");
     let (joint, _, msg) = yaml(&e);

@@ -189,6 +189,7 @@ fn in_kernel_checks_decide_as_check_q_does() {
 fn limits_are_enforced_by_default_and_can_be_ignored() {
     let chain = robot("puma560.yaml");
     let mut data = Data::new(&chain);
+    assert_eq!(data.limit_policy(), LimitPolicy::Enforce);
     // 90 passed where 90° (1.57 rad) was meant.
     let q = [0.0, 90.0, 0.0, 0.0, 0.0, 0.0];
     let e = forward_kinematics(&chain, &mut data, &q).unwrap_err();
@@ -196,11 +197,13 @@ fn limits_are_enforced_by_default_and_can_be_ignored() {
         StateError::OutOfLimits {
             joint,
             component,
+            angular,
             value,
             lower,
             upper,
         } => {
             assert_eq!((joint.as_str(), *component, *value), ("j2", None, 90.0));
+            assert!(*angular);
             assert!((lower - (-45f64).to_radians()).abs() < 1e-15);
             assert!((upper - 225f64.to_radians()).abs() < 1e-15);
         }
@@ -209,7 +212,10 @@ fn limits_are_enforced_by_default_and_can_be_ignored() {
     assert!(e.to_string().contains("looks like degrees"), "{e}");
     // The same value is evaluated when the caller asks for it.
     data.set_limit_policy(LimitPolicy::Ignore);
+    assert_eq!(data.limit_policy(), LimitPolicy::Ignore);
     assert!(forward_kinematics(&chain, &mut data, &q).is_ok());
+    let built = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    assert_eq!(built.limit_policy(), LimitPolicy::Ignore);
 
     // Cylindrical limits name the coordinate.
     let cyl = robot("cylindrical.yaml");
@@ -226,6 +232,30 @@ fn limits_are_enforced_by_default_and_can_be_ignored() {
         ),
         "{e:?}"
     );
+}
+
+/// The message suggests degrees only for an angle beyond a full turn that, read as degrees, is
+/// within the limits; never for a length (a slide, a cylindrical joint's `d`).
+#[test]
+fn only_angles_that_fit_as_degrees_get_the_degrees_hint() {
+    fn hinted(file: &str, q: &[f64]) -> bool {
+        let chain = robot(file);
+        let e = forward_kinematics(&chain, &mut Data::new(&chain), q).unwrap_err();
+        assert!(matches!(e, StateError::OutOfLimits { .. }), "{e:?}");
+        e.to_string().contains("looks like degrees")
+    }
+    // Puma j2: [-45°, 225°].
+    let puma = |x: f64| hinted("puma560.yaml", &[0.0, x, 0.0, 0.0, 0.0, 0.0]);
+    assert!(puma(90.0) && puma(-40.0) && puma(7.0));
+    // Within a turn (4 rad, 6 rad, 2π itself), or outside the limits as degrees (300°, -50°).
+    for x in [4.0, 6.0, std::f64::consts::TAU, 300.0, -50.0] {
+        assert!(!puma(x), "{x}");
+    }
+    // Stanford j3 slides over [0.3048, 1.27] m: 50 read as degrees would fit, but it is a length.
+    assert!(!hinted("stanford.yaml", &[0.0, 0.0, 50.0, 0.0, 0.0, 0.0]));
+    // A cylindrical joint: θ gets the hint, d (limits [-5, 5] m) does not.
+    assert!(hinted("cylindrical.yaml", &[90.0, 0.0]));
+    assert!(!hinted("cylindrical.yaml", &[0.0, 60.0]));
 }
 
 #[test]
