@@ -469,6 +469,15 @@ fn yaml_empty_syntax_and_garbage() {
         load("yaml/comment_only.yaml").kind(),
         LoadErrorKind::Empty
     ));
+    // Document markers alone hold no document either.
+    for text in ["---\n", "...\n", "# robot\n---\n...\n"] {
+        let e = Chain::from_dh_yaml_str(text).unwrap_err();
+        assert!(
+            matches!(e.kind(), LoadErrorKind::Empty),
+            "{text:?}: {}",
+            message(&e)
+        );
+    }
     let e = load("yaml/syntax_error.yaml");
     assert!(yaml(&e).1.is_some(), "{}", message(&e));
     // A second document is refused, without the parser's advice on its own functions.
@@ -999,6 +1008,28 @@ fn resource_attacks_fail_fast() {
     assert!(
         matches!(e.kind(), LoadErrorKind::TooLarge { limit, .. } if *limit == kinechain::io::MAX_FILE_BYTES)
     );
+    // A file of exactly the limit, the documented 16 MiB, is read: a one-joint table, then
+    // comments up to the size.
+    assert_eq!(kinechain::io::MAX_FILE_BYTES, 16 << 20);
+    let table = "convention: standard\njoints:\n  - {name: j1, type: revolute, a: 0.1, alpha: 0, d: 0, theta: 0}\n";
+    let mut text = table.to_string();
+    let limit = kinechain::io::MAX_FILE_BYTES as usize;
+    while text.len() < limit {
+        // A line of `room` bytes: `#`, spaces, `\n` (an empty line for the last byte).
+        let room = (limit - text.len()).min(line.len());
+        if room >= 2 {
+            text.push('#');
+            text.push_str(&" ".repeat(room - 2));
+        }
+        text.push('\n');
+    }
+    std::fs::write(&big, &text).unwrap();
+    assert_eq!(
+        std::fs::metadata(&big).unwrap().len(),
+        kinechain::io::MAX_FILE_BYTES
+    );
+    let chain = Chain::from_file(&big).map_err(|e| message(&e)).unwrap();
+    assert_eq!(chain.dof(), 1);
     std::fs::remove_file(&big).unwrap();
 }
 

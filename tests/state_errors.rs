@@ -564,6 +564,24 @@ fn data_of_another_chain_is_a_programming_error() {
 /// An unknown name draws a suggestion only when one name of the chain is clearly the closest:
 /// one or two letters off (a third of the name's length), letter case ignored, and no other
 /// name as close.
+/// The suggestion's bounds: a name at exactly a third of its length from a candidate (in length
+/// and in edits) gets it; two letters swapped are two edits, at the start of a name as elsewhere.
+#[test]
+fn suggestions_are_bounded_by_the_edit_distance() {
+    use kinechain::error::closest_name;
+    let links = ["elbow", "link", "wrist"];
+    for (name, expected) in [
+        ("elbo", Some("elbow")), // one letter short, and a third of four letters is one
+        ("elbw", Some("elbow")), // one letter left out
+        ("xelbow", Some("elbow")), // one letter added at the start
+        ("ilnk", None),          // two edits
+        ("wirst", None),         // two edits
+        ("wristxx", Some("wrist")), // two edits, within a third of seven letters
+    ] {
+        assert_eq!(closest_name(name, links).as_deref(), expected, "{name}");
+    }
+}
+
 #[test]
 fn unknown_names_suggest_only_a_clear_typo() {
     let panda = robot("panda.urdf");

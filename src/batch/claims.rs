@@ -134,6 +134,29 @@ mod tests {
         assert_eq!(results, Ok((0..1000).map(|c| c * c).collect()));
     }
 
+    /// A claim holds at least what the caller asks, and a large batch splits into about
+    /// `CLAIMS_PER_THREAD` claims per thread of the pool.
+    #[test]
+    fn claims_are_sized_for_the_pool() {
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                assert_eq!(claim_len(0, 0), 1);
+                assert_eq!(claim_len(10, 8), 8);
+                let items: usize = 1_000_000;
+                let claims = items.div_ceil(claim_len(items, 1));
+                let aim = threads * CLAIMS_PER_THREAD;
+                assert!(
+                    (aim - 1..=aim).contains(&claims),
+                    "{threads} threads: {claims}"
+                );
+            });
+        }
+    }
+
     #[test]
     fn the_first_failed_claim_is_reported() {
         for threads in [1, 2, 4] {
