@@ -561,9 +561,6 @@ fn data_of_another_chain_is_a_programming_error() {
     let _ = forward_kinematics(&puma, &mut data, &[0.0; 6]);
 }
 
-/// An unknown name draws a suggestion only when one name of the chain is clearly the closest:
-/// one or two letters off (a third of the name's length), letter case ignored, and no other
-/// name as close.
 /// The suggestion's bounds: a name at exactly a third of its length from a candidate (in length
 /// and in edits) gets it; two letters swapped are two edits, at the start of a name as elsewhere.
 #[test]
@@ -582,6 +579,9 @@ fn suggestions_are_bounded_by_the_edit_distance() {
     }
 }
 
+/// An unknown name draws a suggestion only when one name of the chain is clearly the closest:
+/// one or two letters off (a third of the name's length), letter case ignored, and no other
+/// name as close.
 #[test]
 fn unknown_names_suggest_only_a_clear_typo() {
     let panda = robot("panda.urdf");
