@@ -123,14 +123,20 @@ pub(crate) fn claimed_in_order<S, T: Send, E: Send>(
 mod tests {
     use super::*;
 
+    /// `f()` run in a new pool of `threads` threads.
+    fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(f)
+    }
+
     #[test]
     fn results_come_back_in_claim_order() {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
-        let results = pool
-            .install(|| claimed_in_order(1000, || (), |(), c| -> Result<usize, ()> { Ok(c * c) }));
+        let results = in_pool(3, || {
+            claimed_in_order(1000, || (), |(), c| -> Result<usize, ()> { Ok(c * c) })
+        });
         assert_eq!(results, Ok((0..1000).map(|c| c * c).collect()));
     }
 
@@ -139,11 +145,7 @@ mod tests {
     #[test]
     fn claims_are_sized_for_the_pool() {
         for threads in [1, 2, 3] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            in_pool(threads, || {
                 assert_eq!(claim_len(0, 0), 1);
                 assert_eq!(claim_len(10, 8), 8);
                 let items: usize = 1_000_000;
@@ -160,11 +162,7 @@ mod tests {
     #[test]
     fn the_first_failed_claim_is_reported() {
         for threads in [1, 2, 4] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let result = pool.install(|| {
+            let result = in_pool(threads, || {
                 claimed_in_order(
                     500,
                     || (),
@@ -177,12 +175,8 @@ mod tests {
 
     #[test]
     fn the_others_take_what_a_held_up_thread_has_left() {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         let by_caller = Mutex::new(Vec::new());
-        let results = pool.install(|| {
+        let results = in_pool(2, || {
             let caller = std::thread::current().id();
             claimed_in_order(
                 1000,
