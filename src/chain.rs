@@ -749,6 +749,8 @@ pub(crate) struct LimitCheck {
     pub(crate) joint: usize,
     pub(crate) index: usize,
     pub(crate) component: Option<&'static str>,
+    /// Whether the coordinate is an angle (rad) rather than a length (m).
+    pub(crate) angular: bool,
     pub(crate) scale: f64,
     pub(crate) offset: f64,
     pub(crate) limits: Limits,
@@ -1681,15 +1683,16 @@ fn joint_limit_checks(
     if js.kind == JointKind::Continuous {
         return Vec::new();
     }
-    let components: &[Option<&'static str>] = if js.kind == JointKind::Cylindrical {
-        &[Some("theta"), Some("d")]
+    // Each coordinate's name (a cylindrical joint's two) and whether it is an angle.
+    let components: &[(Option<&'static str>, bool)] = if js.kind == JointKind::Cylindrical {
+        &[(Some("theta"), true), (Some("d"), false)]
     } else {
-        &[None]
+        &[(None, js.kind.rotates())]
     };
     components
         .iter()
         .enumerate()
-        .filter_map(|(c, component)| {
+        .filter_map(|(c, &(component, angular))| {
             let limits = js.limits[c]?;
             let (index, scale, offset) = match mimic {
                 Some((primary, m, o)) => (q_index[primary].unwrap_or(0), m, o),
@@ -1698,7 +1701,8 @@ fn joint_limit_checks(
             Some(LimitCheck {
                 joint,
                 index,
-                component: *component,
+                component,
+                angular,
                 scale,
                 offset,
                 limits,

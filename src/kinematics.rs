@@ -38,7 +38,7 @@ use crate::arith::{Arith, Separate, fma_dispatch};
 use crate::chain::{Body, Chain, DenseLimits, LinkId, Placement};
 use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
-use crate::joint::{JointKind, Motion, Term};
+use crate::joint::{Motion, Term};
 use crate::kernel::{self, Lanes};
 use crate::padded::{self, Frame4, Rates4};
 use crate::transform::{Transform, add3, cross3, scale3, sub3};
@@ -657,12 +657,10 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
         for c in &chain.limit_checks {
             let value = c.value(q[c.index]);
             if !c.limits.contains(value) {
-                let joint = &chain.joints()[c.joint];
                 return Err(StateError::OutOfLimits {
-                    joint: joint.name().to_string(),
+                    joint: chain.joints()[c.joint].name().to_string(),
                     component: c.component,
-                    // A slide's coordinate and a cylindrical joint's `d` are lengths.
-                    angular: joint.kind() != JointKind::Prismatic && c.component != Some("d"),
+                    angular: c.angular,
                     value,
                     lower: c.limits.lower,
                     upper: c.limits.upper,
