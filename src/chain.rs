@@ -883,8 +883,8 @@ pub struct Chain {
     /// [`Chain::end_link`].
     end_link: LinkId,
     reach: f64,
-    warnings: Vec<String>,
-    /// The description the chain was built from (for writing it out again).
+    /// The description the chain was built from (for writing it out again), with the loader's
+    /// warnings.
     source: ChainBuilder,
 }
 
@@ -1004,7 +1004,7 @@ impl Chain {
     /// Warnings found while loading (e.g. an angle that looks like degrees).
     #[must_use]
     pub fn warnings(&self) -> &[String] {
-        &self.warnings
+        &self.source.warnings
     }
 
     /// The description this chain was built from: links and joints as given (before fixed joints
@@ -1273,7 +1273,6 @@ fn build(description: Cow<'_, ChainBuilder>) -> Result<Chain, ModelError> {
         serial_run,
         tail_start,
         reach,
-        warnings: spec.warnings.clone(),
         source: description.into_owned(),
     })
 }
