@@ -167,15 +167,15 @@ pub enum CliError {
     #[error(transparent)]
     Convert(#[from] crate::convert::ConvertError),
     /// A result overflowed (finite joint values so large that a position, velocity or
-    /// acceleration exceeds the `f64` range), which JSON could not print.
+    /// acceleration exceeds the `f64` range), which JSON could not print nor `render` draw.
     #[error(
         "{what} of {place} overflows f64 (not finite): the joint values or rates are too large"
     )]
     NotFinite {
         /// The quantity (`pose`, `omega`, `v`, `alpha`, `a`, `velocity`, `acceleration`, `jacobian`,
-        /// `jacobian rate`).
+        /// `jacobian rate`; `axis` of a joint in `render`).
         what: &'static str,
-        /// `link 'NAME'` or `point NAME (x, y, z)`.
+        /// `link 'NAME'`, `point NAME (x, y, z)` or `joint 'NAME'`.
         place: String,
     },
     /// `bench` on a chain without moving joints.
@@ -350,7 +350,11 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
                 data.set_limit_policy(LimitPolicy::Ignore);
             }
             let poses = forward_kinematics(&chain, &mut data, &q)?;
-            write_output(output.as_ref(), &crate::render::svg(&chain, &poses), out)
+            let drawing = crate::render::svg(&chain, &poses).map_err(|e| CliError::NotFinite {
+                what: e.what,
+                place: e.place,
+            })?;
+            write_output(output.as_ref(), &drawing, out)
         }
     }
 }

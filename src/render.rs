@@ -8,6 +8,10 @@
 //! `svg_x = origin_x + scale · u`, `svg_y = origin_y − scale · v` (the values are written on each
 //! panel as `data-origin-x`, `data-origin-y`, `data-scale`):
 //! front `(x, z)`, side `(y, z)`, top `(x, y)`, isometric `((x − y) cos 30°, z + (x + y) sin 30°)`.
+//!
+//! Any finite pose is drawn, however far from the origin (joint values far outside their limits,
+//! with the limits ignored): the geometry is laid out in units of a power of two near the largest
+//! coordinate, which scales every step exactly and keeps squares and spans within `f64`.
 
 use crate::chain::{Chain, LinkId};
 use crate::kinematics::Poses;
@@ -59,11 +63,13 @@ impl View {
 const PANEL: f64 = 360.0;
 const MARGIN: f64 = 30.0;
 
+/// A view's place on the canvas: `(x0, y0)` and `scale` pixels per `unit` metres (see [`svg`]).
 struct Panel {
     view: View,
     x0: f64,
     y0: f64,
     scale: f64,
+    unit: f64,
 }
 
 impl Panel {
@@ -84,37 +90,73 @@ fn round_length(target: f64) -> f64 {
         .fold(base, f64::max)
 }
 
+/// A pose that cannot be drawn: an entry is not finite (joint values so large, with the limits
+/// ignored or absent, that a position overflows `f64`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("the {what} of {place} overflows f64 (not finite): the joint values are too large to draw")]
+pub struct NotFinite {
+    /// `pose` (of a link) or `axis` (of a joint).
+    pub what: &'static str,
+    /// `link 'NAME'` or `joint 'NAME'`.
+    pub place: String,
+}
+
 /// The chain at the configuration of `poses`, as an SVG document.
-#[must_use]
-pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
+///
+/// # Errors
+/// [`NotFinite`] naming the first link whose pose, or joint whose axis, has an entry that is not
+/// finite.
+pub fn svg(chain: &Chain, poses: &Poses<'_>) -> Result<String, NotFinite> {
     let links: Vec<_> = (0..chain.links().len()).map(LinkId).collect();
     let frames: Vec<_> = links.iter().map(|&l| poses.world_from_link(l)).collect();
+    if let Some(l) = frames
+        .iter()
+        .position(|f| f.to_rows().iter().flatten().any(|x| !x.is_finite()))
+    {
+        return Err(NotFinite {
+            what: "pose",
+            place: format!("link '{}'", chain.link(LinkId(l)).name()),
+        });
+    }
+    let mut axes: Vec<(String, Point3<f64>, Vector3<f64>)> = Vec::new();
+    for (i, j) in chain.joints().iter().enumerate() {
+        if let Some((p, z)) = poses.joint_axis(crate::chain::JointId(i)) {
+            if p.iter().chain(z.iter()).any(|x| !x.is_finite()) {
+                return Err(NotFinite {
+                    what: "axis",
+                    place: format!("joint '{}'", j.name()),
+                });
+            }
+            axes.push((j.name().to_string(), p, z));
+        }
+    }
+    // Lengths in `unit` metres from here on (see the module's documentation): every coordinate
+    // of an origin or axis point is then below 2 in magnitude, and no norm or span overflows.
+    let largest = frames
+        .iter()
+        .map(|f| f.translation().amax())
+        .chain(axes.iter().map(|(_, p, _)| p.coords.amax()))
+        .fold(0.0, f64::max);
+    let unit = power_of_two_below(largest);
     let origins: Vec<Point3<f64>> = frames
         .iter()
-        .map(|f| Point3::from(f.translation()))
+        .map(|f| Point3::from(f.translation() / unit))
         .collect();
-    let axes: Vec<(String, Point3<f64>, Vector3<f64>)> = chain
-        .joints()
-        .iter()
-        .enumerate()
-        .filter_map(|(i, j)| {
-            poses
-                .joint_axis(crate::chain::JointId(i))
-                .map(|(p, z)| (j.name().to_string(), p, z))
-        })
-        .collect();
+    for (_, p, _) in &mut axes {
+        *p /= unit;
+    }
     let reach = origins
         .iter()
         .map(|p| p.coords.norm())
         .fold(0.0_f64, f64::max)
-        .max(1e-9);
+        .max(1e-9 / unit);
     let triad = 0.08 * reach;
     let arrow = 0.12 * reach;
     let mut points: Vec<Point3<f64>> = origins.clone();
     for (_, p, z) in &axes {
         points.extend([*p, p + z * arrow]);
     }
-    let (panels, ortho) = layout(&points);
+    let (panels, ortho) = layout(&points, unit);
 
     let mut s = String::new();
     let size = 2.0 * PANEL;
@@ -153,15 +195,32 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> String {
             &columns,
         );
     }
-    write_legend(&mut s, size, ortho);
+    write_legend(&mut s, size, ortho, unit);
     s.push_str("</svg>\n");
-    s
+    Ok(s)
+}
+
+/// The largest power of two not above `x`, or 1 for a zero or subnormal `x` (whose points are
+/// drawn at the smallest span anyway).
+fn power_of_two_below(x: f64) -> f64 {
+    let p = f64::from_bits(x.to_bits() & f64::INFINITY.to_bits());
+    if p == 0.0 { 1.0 } else { p }
+}
+
+/// `x` as the drawing writes a scale or a length: the shortest decimal that reads back to `x`, in
+/// exponent form far from 1 (where the decimal would run to hundreds of digits).
+fn shortest(x: f64) -> String {
+    if x == 0.0 || (1e-5..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// The four panels, each centred on the extent of `points` in its view: one scale for the three
 /// orthographic views (so that the scale bar holds for all), returned as well, and another for
-/// the isometric one.
-fn layout(points: &[Point3<f64>]) -> (Vec<Panel>, f64) {
+/// the isometric one; `points` in `unit` metres, a view's span at least 10⁻⁹ m.
+fn layout(points: &[Point3<f64>], unit: f64) -> (Vec<Panel>, f64) {
     let extent = |v: View| {
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
         for p in points {
@@ -173,7 +232,7 @@ fn layout(points: &[Point3<f64>]) -> (Vec<Panel>, f64) {
     };
     let span = |v: View| {
         let (lo, hi) = extent(v);
-        (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-9)
+        (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-9 / unit)
     };
     let ortho = (PANEL - 2.0 * MARGIN)
         / [View::Front, View::Side, View::Top]
@@ -194,6 +253,7 @@ fn layout(points: &[Point3<f64>]) -> (Vec<Panel>, f64) {
                 x0: px + PANEL / 2.0 - scale * cx,
                 y0: py + PANEL / 2.0 + scale * cy,
                 scale,
+                unit,
             }
         })
         .collect();
@@ -201,7 +261,7 @@ fn layout(points: &[Point3<f64>]) -> (Vec<Panel>, f64) {
 }
 
 /// Panel `i`: its frame and title, the links as segments between the origins of each joint's
-/// parent and child, and the joint axes as arrows of length `arrow`.
+/// parent and child, and the joint axes as arrows of length `arrow` (lengths in the panel's unit).
 fn write_panel(
     s: &mut String,
     chain: &Chain,
@@ -214,11 +274,11 @@ fn write_panel(
     let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
     let _ = writeln!(
         s,
-        r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{:.6}">"#,
+        r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{}">"#,
         p.view.name(),
         p.x0,
         p.y0,
-        p.scale
+        shortest(p.scale / p.unit)
     );
     let _ = writeln!(
         s,
@@ -310,18 +370,19 @@ fn write_link(
     let _ = writeln!(s, "</g>");
 }
 
-/// The scale bar of the orthographic views (drawn at `ortho` pixels per metre), the key, and
-/// the arrowhead's definition, below the panels of a drawing `size` wide.
-fn write_legend(s: &mut String, size: f64, ortho: f64) {
-    let bar = round_length(0.25 * (PANEL - 2.0 * MARGIN) / ortho);
+/// The scale bar of the orthographic views (drawn at `ortho` pixels per `unit` metres), the key,
+/// and the arrowhead's definition, below the panels of a drawing `size` wide.
+fn write_legend(s: &mut String, size: f64, ortho: f64, unit: f64) {
+    let bar = round_length(0.25 * (PANEL - 2.0 * MARGIN) / ortho * unit);
+    let pixels = bar / unit * ortho;
     let (bx, by) = (20.0, size + 20.0);
     let _ = writeln!(
         s,
         r##"<g class="scale-bar"><line x1="{bx}" y1="{by}" x2="{:.3}" y2="{by}" stroke="black" stroke-width="3"/><text x="{:.3}" y="{:.3}">{} m (front, side, top)</text></g>"##,
-        bx + bar * ortho,
-        bx + bar * ortho + 8.0,
+        bx + pixels,
+        bx + pixels + 8.0,
         by + 4.0,
-        bar
+        shortest(bar)
     );
     let _ = writeln!(
         s,

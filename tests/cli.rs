@@ -1272,6 +1272,22 @@ fn convert_and_render_write_files() {
         "[10, 0, 0, 0, 0, 0]",
     ]);
     assert!(m.contains("limits"), "{m}");
+    // A pose that overflows f64 is refused as by `fk`; one that is only far is drawn.
+    let slides = dir.join("slides.yaml");
+    std::fs::write(
+        &slides,
+        "name: slides\nconvention: standard\njoints:\n  \
+         - {name: s1, link: l1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n  \
+         - {name: s2, link: l2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let slides = slides.to_str().unwrap();
+    assert_eq!(
+        error(&["render", slides, "--q", "[1e308, 1e308]"]),
+        "error: pose of link 'l2' overflows f64 (not finite): the joint values or rates are too large"
+    );
+    let far = ok_text(&["render", slides, "--q", "[1e300, 1e300]"]);
+    assert!(far.starts_with("<svg") && !far.contains("NaN"), "{far}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

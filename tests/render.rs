@@ -21,11 +21,11 @@ fn drawn_origins_are_the_fk_positions_under_the_stated_projection() {
         let q = random_q(&chain, &mut rng);
         let text = {
             let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
-            svg(&chain, &poses)
+            svg(&chain, &poses).unwrap()
         };
         let again = {
             let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
-            svg(&chain, &poses)
+            svg(&chain, &poses).unwrap()
         };
         assert_eq!(text, again, "{name}: not deterministic");
         let doc = roxmltree::Document::parse(&text).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -166,26 +166,81 @@ fn near(a: Px, b: Px) -> bool {
 /// centred), and the scale bar is a round length drawn at the orthographic scale.
 #[test]
 fn every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels() {
-    const PANEL: f64 = 360.0;
-    const INNER: f64 = 300.0;
     let mut rng = rng(92);
     let files = robot_files();
     for (path, round) in files.iter().flat_map(|f| [(f, 0), (f, 1), (f, 2)]) {
         let chain = Chain::from_file(path).unwrap();
-        let name = format!("{} ({round})", chain.name());
         let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
         let q = random_q(&chain, &mut rng);
         let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
-        let text = svg(&chain, &poses);
+        check_drawing(&format!("{} ({round})", chain.name()), &chain, &poses);
+    }
+}
+
+/// Poses far outside any robot's workspace (a slide at 10¹⁰⁰ to 1.7·10³⁰⁸ m, the limits ignored)
+/// are drawn like the others: finite numbers only, every piece where its frame puts it, the
+/// scale bar a round length. Before, the reach's norm overflowed from about 10¹⁵⁴ m on and the
+/// drawing was written with `NaN` coordinates.
+#[test]
+fn poses_far_from_the_origin_are_drawn_like_the_others() {
+    let chain = Chain::from_file(robots_dir().join("stanford.yaml")).unwrap();
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    for slide in [1e100, 1e200, 1e300, 1e308, 1.7e308] {
+        let q = [0.3, 0.2, slide, 0.1, 0.2, 0.3];
+        let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+        let text = svg(&chain, &poses).unwrap();
+        assert!(
+            !text.contains("NaN") && !text.contains("inf"),
+            "slide {slide:e}"
+        );
+        // (At 1.7·10³⁰⁸ m the checks' own projection in metres overflows: the isometric view adds
+        // the coordinates. The drawing projects in scaled units.)
+        if slide <= 1e308 {
+            check_drawing(&format!("stanford, slide {slide:e}"), &chain, &poses);
+        }
+    }
+}
+
+/// A pose that overflows `f64` cannot be drawn: the error names the first link whose pose is not
+/// finite, as `fk` does.
+#[test]
+fn a_pose_that_overflows_is_an_error_naming_its_link() {
+    let chain = Chain::from_dh_yaml_str(
+        "name: two_slides\nconvention: standard\njoints:\n  \
+         - {name: s1, link: l1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n  \
+         - {name: s2, link: l2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let mut data = Data::new(&chain);
+    let poses = forward_kinematics(&chain, &mut data, &[1e308, 1e308]).unwrap();
+    let err = svg(&chain, &poses).unwrap_err();
+    assert_eq!((err.what, err.place.as_str()), ("pose", "link 'l2'"));
+    assert_eq!(
+        err.to_string(),
+        "the pose of link 'l2' overflows f64 (not finite): the joint values are too large to draw"
+    );
+    let poses = forward_kinematics(&chain, &mut data, &[1e308, 7e307]).unwrap();
+    assert!(svg(&chain, &poses).is_ok(), "1.7e308 is finite");
+}
+
+/// The checks of [`every_piece_is_drawn_where_its_frame_puts_it_and_the_views_fill_their_panels`]
+/// on the drawing of `poses`.
+fn check_drawing(name: &str, chain: &Chain, poses: &kinechain::Poses<'_>) {
+    const PANEL: f64 = 360.0;
+    const INNER: f64 = 300.0;
+    {
+        let text = svg(chain, poses).unwrap();
         let doc = roxmltree::Document::parse(&text).unwrap();
+        // (Scaled before the norm, which would overflow for the far poses.)
         let reach = chain
             .links()
             .iter()
             .map(|l| {
-                poses
+                let t = poses
                     .world_from_link(chain.link_id(l.name()).unwrap())
-                    .translation()
-                    .norm()
+                    .translation();
+                let m = t.amax();
+                if m == 0.0 { 0.0 } else { m * (t / m).norm() }
             })
             .fold(0.0, f64::max);
         // Lengths in metres of the triads and arrows, read back from the drawing where a line is
