@@ -142,6 +142,9 @@ impl Interleaved {
     }
 
     /// Median over the rounds of method `m`'s ns per call.
+    ///
+    /// # Panics
+    /// If `m` is not the index of a method.
     #[must_use]
     pub fn median(&self, m: usize) -> f64 {
         median(self.ns.iter().map(|row| row[m]).collect())
@@ -149,6 +152,9 @@ impl Interleaved {
 
     /// Median over the rounds of `time(over) / time(m)`: how many times faster `m` ran than
     /// `over` in the same rounds.
+    ///
+    /// # Panics
+    /// If `over` or `m` is not the index of a method.
     #[must_use]
     pub fn ratio(&self, over: usize, m: usize) -> f64 {
         median(self.ns.iter().map(|row| row[over] / row[m]).collect())
