@@ -317,35 +317,56 @@ impl RodriguezParameters {
     /// From Euler parameters (eq. 2.88).
     ///
     /// # Errors
-    /// [`Singular`] when `e₀ = 0` (θ = π).
+    /// [`Singular`] when `e₀ = 0` (θ = π), or so small that `eᵢ/e₀` overflows `f64` (θ within
+    /// about 10⁻³⁰⁸ of π).
     pub fn from_euler_parameters(e: &EulerParameters) -> Result<Self, Singular> {
-        if e.e0 == 0.0 {
+        let g = Vector3::new(e.e1, e.e2, e.e3) / e.e0;
+        if e.e0 == 0.0 || g.iter().any(|x| !x.is_finite()) {
             return Err(Singular {
                 representation: "Rodriguez parameters",
-                reason: "θ = π (tan(θ/2) is infinite)",
+                reason: "θ = π, or too close to π for f64 (tan(θ/2) is infinite)",
             });
         }
-        Ok(RodriguezParameters(Vector3::new(e.e1, e.e2, e.e3) / e.e0))
+        Ok(RodriguezParameters(g))
     }
 
     /// Euler parameters: `e₀ = 1/√(1+γ²)`, `eᵢ = γᵢ e₀` (the inverse of eq. 2.88).
     #[must_use]
     pub fn to_euler_parameters(&self) -> EulerParameters {
         let g = &self.0;
-        let e0 = 1.0 / (1.0 + g.norm_squared()).sqrt();
+        let g2 = g.norm_squared();
+        if g2.is_finite() {
+            let e0 = 1.0 / (1.0 + g2).sqrt();
+            return EulerParameters {
+                e0,
+                e1: g.x * e0,
+                e2: g.y * e0,
+                e3: g.z * e0,
+            };
+        }
+        // γ² overflows (θ within about 10⁻¹⁵⁴ of π): the same with γ scaled by its largest
+        // entry m, e₀ = (1/m)/√(1/m² + |γ/m|²) and eᵢ = (γᵢ/m)/√(1/m² + |γ/m|²).
+        let m = g.amax();
+        let (u, r) = (g / m, 1.0 / m);
+        let d = (r * r + u.norm_squared()).sqrt();
         EulerParameters {
-            e0,
-            e1: g.x * e0,
-            e2: g.y * e0,
-            e3: g.z * e0,
+            e0: r / d,
+            e1: u.x / d,
+            e2: u.y / d,
+            e3: u.z / d,
         }
     }
 
-    /// The rotation matrix (eq. 2.84): `A = I + 2/(1+γ²) ([γ]x + [γ]x²)`.
+    /// The rotation matrix (eq. 2.84): `A = I + 2/(1+γ²) ([γ]x + [γ]x²)`; through the Euler
+    /// parameters (eq. 2.14) when γ² overflows.
     #[must_use]
     pub fn to_matrix(&self) -> Matrix3<f64> {
+        let g2 = self.0.norm_squared();
+        if !g2.is_finite() {
+            return self.to_euler_parameters().to_matrix();
+        }
         let k = skew(&self.0);
-        Matrix3::identity() + (k + k * k) * (2.0 / (1.0 + self.0.norm_squared()))
+        Matrix3::identity() + (k + k * k) * (2.0 / (1.0 + g2))
     }
 
     /// `G` of eq. (2.91), `ω = G γ̇`: `2/(1+γ²) (I + [γ]x)`.
@@ -360,19 +381,21 @@ impl RodriguezParameters {
         (Matrix3::identity() - skew(&self.0)) * (2.0 / (1.0 + self.0.norm_squared()))
     }
 
-    /// `γ̇` from the global angular velocity: `G⁻¹ = ½ (I − [γ]x + γγᵀ)` (no singularity while γ
-    /// is finite).
+    /// `γ̇` from the global angular velocity: `G⁻¹ ω` with `G⁻¹ = ½ (I − [γ]x + γγᵀ)` (no
+    /// singularity while γ is finite), computed as `½ (ω − γ × ω + γ (γ·ω))`: the matrix `γγᵀ`
+    /// would overflow for `|γ|` beyond about 10¹⁵⁴ (θ that close to π) even where `γ̇` is finite.
     #[must_use]
     pub fn rates(&self, omega: &Vector3<f64>) -> Vector3<f64> {
         let g = &self.0;
-        0.5 * (Matrix3::identity() - skew(g) + g * g.transpose()) * omega
+        0.5 * (omega - g.cross(omega) + g * g.dot(omega))
     }
 
-    /// `γ̇` from the body angular velocity: `Ḡ⁻¹ = ½ (I + [γ]x + γγᵀ)`.
+    /// `γ̇` from the body angular velocity: `Ḡ⁻¹ ω̄` with `Ḡ⁻¹ = ½ (I + [γ]x + γγᵀ)`, computed as
+    /// `½ (ω̄ + γ × ω̄ + γ (γ·ω̄))` (see [`RodriguezParameters::rates`]).
     #[must_use]
     pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Vector3<f64> {
         let g = &self.0;
-        0.5 * (Matrix3::identity() + skew(g) + g * g.transpose()) * omega_local
+        0.5 * (omega_local + g.cross(omega_local) + g * g.dot(omega_local))
     }
 }
 

@@ -482,6 +482,60 @@ fn singular_cases_are_errors() {
     assert!(max_diff(&a.to_matrix(), &near) < 4e-16);
 }
 
+/// Rodriguez parameters of a rotation a hair short of a half turn are huge but finite (γ = tan
+/// θ/2 along the axis), and everything computed from them stays finite and right: a half turn
+/// about x whose matrix is off by `ε` in its two off-diagonal entries has `γ = 2/ε` along x, whose
+/// square overflows `f64` from ε ≈ 10⁻¹⁵⁴ on. Closer still, γ itself overflows: an error.
+#[test]
+fn rodriguez_parameters_near_a_half_turn_stay_finite() {
+    let off = |eps: f64| Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, -eps, 0.0, eps, -1.0);
+    assert!(RodriguezParameters::from_matrix(&off(1e-308)).is_err());
+    for eps in [1e-100, 1e-150, 1e-160, 1e-200, 1e-300, 1e-307] {
+        let a = off(eps);
+        let g = RodriguezParameters::from_matrix(&a).unwrap();
+        assert!(
+            g.0.iter().all(|x| x.is_finite()),
+            "ε = {eps:e}: γ = {:?}",
+            g.0
+        );
+        assert_eq!((g.0.y, g.0.z), (0.0, 0.0), "ε = {eps:e}");
+        let e = g.to_euler_parameters();
+        let want = EulerParameters::from_matrix(&a);
+        for (got, expected) in [
+            (e.e0, want.e0),
+            (e.e1, want.e1),
+            (e.e2, want.e2),
+            (e.e3, want.e3),
+        ] {
+            assert!(
+                (got - expected).abs() <= f64::EPSILON,
+                "ε = {eps:e}: {e:?} against {want:?}"
+            );
+        }
+        let back = g.to_matrix();
+        assert!(
+            max_diff(&back, &a) < 4.0 * f64::EPSILON,
+            "ε = {eps:e}: {back}"
+        );
+        for m in [g.g_matrix(), g.g_bar_matrix()] {
+            assert!(m.iter().all(|x| x.is_finite()), "ε = {eps:e}: {m}");
+        }
+        // About an axis across γ, γ̇ = ½ (ω ∓ γ × ω): finite, and exactly so here.
+        let omega = Vector3::new(0.0, 0.5, 0.0);
+        let gx = g.0.x;
+        assert_eq!(
+            g.rates(&omega),
+            Vector3::new(0.0, 0.25, -0.25 * gx),
+            "ε = {eps:e}"
+        );
+        assert_eq!(
+            g.rates_from_local(&omega),
+            Vector3::new(0.0, 0.25, 0.25 * gx),
+            "ε = {eps:e}"
+        );
+    }
+}
+
 #[test]
 fn free_angles_are_in_the_half_open_range_up_to_pi() {
     // Half turns, written exactly: each free angle comes back as +π, never −π.
