@@ -309,7 +309,8 @@ impl RodriguezParameters {
     /// From a rotation matrix.
     ///
     /// # Errors
-    /// [`Singular`] at θ = π, where `tan(θ/2)` is infinite.
+    /// [`Singular`] at θ = π, where `tan(θ/2)` is infinite, and so close to it that
+    /// `tan(θ/2)` overflows `f64` (see [`RodriguezParameters::from_euler_parameters`]).
     pub fn from_matrix(a: &Matrix3<f64>) -> Result<Self, Singular> {
         Self::from_euler_parameters(&EulerParameters::from_matrix(a))
     }
