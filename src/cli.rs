@@ -1785,11 +1785,19 @@ fn error_lines(
 ) -> Result<String, CliError> {
     let [(position, rotation), (position32, rotation32)] = pose_errors;
     let reach = work.chain.reach().max(f64::MIN_POSITIVE);
+    // (A robot far larger than any real one, as a stress test, prints in exponent form.)
+    let reach_text = if reach < 1e6 {
+        format!("{reach:.3}")
+    } else {
+        format!("{reach:.3e}")
+    };
     let mut text = format!(
-        "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach:.3} m reach), rotation {rotation:.2e}",
+        "pose error against a 256-bit evaluation of the same model: position {position:.2e} m ({:.2} ulp of the {reach_text} m reach), rotation {rotation:.2e}",
         position / (reach * f64::EPSILON)
     );
-    if level == Level::Pose {
+    if level == Level::Pose && reach > f64::from(f32::MAX) {
+        text.push_str("\nno error for the batch f32: the reach is beyond the range of f32");
+    } else if level == Level::Pose {
         text.push_str(&format!(
             "\nthe same for the batch f32: position {position32:.2e} m ({:.2} f32 ulp of the reach), rotation {rotation32:.2e} ({:.2} f32 ulp)",
             position32 / (reach * f64::from(f32::EPSILON)),

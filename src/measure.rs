@@ -49,12 +49,23 @@ pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
                         (false, true) => (upper - TAU, upper),
                         (false, false) => (-PI, PI),
                     };
-                    q[first + k] = lo + (hi - lo) * rng.unit();
+                    q[first + k] = between(lo, hi, rng.unit());
                 }
             }
             q
         })
         .collect()
+}
+
+/// The point a fraction `u` of the way from `lo` to `hi`. When `hi − lo` overflows (limits such
+/// as ±10³⁰⁸), as a weighted mean, which stays within the two; otherwise `lo + (hi − lo) u`.
+fn between(lo: f64, hi: f64, u: f64) -> f64 {
+    let span = hi - lo;
+    if span.is_finite() {
+        lo + span * u
+    } else {
+        (lo * (1.0 - u) + hi * u).clamp(lo, hi)
+    }
 }
 
 /// The larger of two errors, NaN if either is: `f64::max` drops a NaN, and a result that is NaN
@@ -262,6 +273,31 @@ mod tests {
                 "entry {k}: {mean}"
             );
         }
+    }
+
+    /// Limits wider apart than `f64` can subtract (a slide between ±10³⁰⁸ m) still give
+    /// configurations within them, spread over both signs. (Before, `hi − lo` overflowed and every
+    /// entry was infinite, which `kinechain bench` then refused.)
+    #[test]
+    fn configurations_within_limits_too_far_apart_to_subtract() {
+        use crate::{ChainBuilder, JointKind, JointSpec};
+        let mut b = ChainBuilder::new("far");
+        b.link("l0").link("l1");
+        b.joint(
+            JointSpec::new("slide", JointKind::Prismatic, "l0", "l1")
+                .with_axis([0.0, 0.0, 1.0])
+                .with_limits(-1e308, 1e308),
+        );
+        let chain = b.build().unwrap();
+        let x: Vec<f64> = configurations(&chain, 1000, 3)
+            .iter()
+            .map(|q| q[0])
+            .collect();
+        assert!(x.iter().all(|x| (-1e308..=1e308).contains(x)));
+        assert!(x.iter().any(|&x| x < -1e307) && x.iter().any(|&x| x > 1e307));
+        assert_eq!(between(-1e308, 1e308, 0.0), -1e308);
+        assert_eq!(between(-1e308, 1e308, 0.5), 0.0);
+        assert_eq!(between(-0.5, 2.0, 0.5), 0.75);
     }
 
     /// Round `r` starts with method `r mod m`, and every method runs once per round (with a

@@ -377,6 +377,30 @@ fn fk_rates_appear_only_when_asked_for() {
     assert!(m.contains("no link named 'hand'"), "{m}");
 }
 
+/// A robot far beyond any real one (a slide between ±10³⁰⁸ m) is measured too: its random
+/// configurations are finite, the reach prints in exponent form, and the f32 batch, whose range
+/// the reach exceeds, gets no error figure rather than `NaN`.
+#[test]
+fn bench_measures_a_robot_beyond_the_f32_range() {
+    let dir = scratch_dir("bench_far");
+    let path = dir.join("far.yaml");
+    std::fs::write(
+        &path,
+        "name: far\nconvention: standard\njoints:\n  \
+         - {name: s1, link: l1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0, limits: [-1e308, 1e308]}\n  \
+         - {name: r1, link: l2, type: revolute, a: 1, alpha: 0, d: 0, theta: 0}\n",
+    )
+    .unwrap();
+    let text = ok_text(&["bench", path.to_str().unwrap(), "--configurations", "4"]);
+    assert!(text.contains("ulp of the 1.000e308 m reach)"), "{text}");
+    assert!(
+        text.contains("no error for the batch f32: the reach is beyond the range of f32"),
+        "{text}"
+    );
+    assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn bench_prints_times_ratios_and_errors() {
     let text = ok_text(&["bench", "robots/panda.urdf", "--configurations", "4"]);
