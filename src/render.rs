@@ -63,19 +63,33 @@ impl View {
 const PANEL: f64 = 360.0;
 const MARGIN: f64 = 30.0;
 
-/// A view's place on the canvas: `(x0, y0)` and `scale` pixels per `unit` metres (see [`svg`]).
+/// A view's place on the canvas: the drawing point `mid` (in `unit` metres) at the pixel
+/// `centre`, and `scale` pixels per `unit` metres.
 struct Panel {
     view: View,
-    x0: f64,
-    y0: f64,
+    centre: (f64, f64),
+    mid: (f64, f64),
     scale: f64,
     unit: f64,
 }
 
 impl Panel {
+    /// The pixel of `p`, from its offset to `mid` (a difference of nearby numbers, where
+    /// `x0 + scale · u` would lose the offset to rounding once `scale · u` is large).
     fn at(&self, p: &Point3<f64>) -> (f64, f64) {
         let (u, v) = self.view.project(p);
-        (self.x0 + self.scale * u, self.y0 - self.scale * v)
+        (
+            self.centre.0 + self.scale * (u - self.mid.0),
+            self.centre.1 - self.scale * (v - self.mid.1),
+        )
+    }
+
+    /// The pixel of the world origin, `(x0, y0)` of the module's documentation.
+    fn origin(&self) -> (f64, f64) {
+        (
+            self.centre.0 - self.scale * self.mid.0,
+            self.centre.1 + self.scale * self.mid.1,
+        )
     }
 }
 
@@ -219,8 +233,11 @@ fn shortest(x: f64) -> String {
 
 /// The four panels, each centred on the extent of `points` in its view: one scale for the three
 /// orthographic views (so that the scale bar holds for all), returned as well, and another for
-/// the isometric one; `points` in `unit` metres, a view's span at least 10⁻⁹ m.
+/// the isometric one; `points` in `unit` metres. A view's span is at least 1 nm, and at least
+/// `f64::EPSILON` units (below that, far from the origin, the coordinates differ by their rounding
+/// only, and pixels per unit would overflow).
 fn layout(points: &[Point3<f64>], unit: f64) -> (Vec<Panel>, f64) {
+    let least = (1e-9 / unit).max(f64::EPSILON);
     let extent = |v: View| {
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
         for p in points {
@@ -232,7 +249,7 @@ fn layout(points: &[Point3<f64>], unit: f64) -> (Vec<Panel>, f64) {
     };
     let span = |v: View| {
         let (lo, hi) = extent(v);
-        (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-9 / unit)
+        (hi.0 - lo.0).max(hi.1 - lo.1).max(least)
     };
     let ortho = (PANEL - 2.0 * MARGIN)
         / [View::Front, View::Side, View::Top]
@@ -250,8 +267,8 @@ fn layout(points: &[Point3<f64>], unit: f64) -> (Vec<Panel>, f64) {
             let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
             Panel {
                 view,
-                x0: px + PANEL / 2.0 - scale * cx,
-                y0: py + PANEL / 2.0 + scale * cy,
+                centre: (px + PANEL / 2.0, py + PANEL / 2.0),
+                mid: (cx, cy),
                 scale,
                 unit,
             }
@@ -276,8 +293,8 @@ fn write_panel(
         s,
         r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{}">"#,
         p.view.name(),
-        p.x0,
-        p.y0,
+        p.origin().0,
+        p.origin().1,
         shortest(p.scale / p.unit)
     );
     let _ = writeln!(

@@ -43,6 +43,19 @@ fn drawn_origins_are_the_fk_positions_under_the_stated_projection() {
             })
             .collect();
         assert_eq!(panels.len(), 4);
+        // Scales and the scale bar's length in plain decimals at a robot's size.
+        for n in doc.descendants() {
+            let scale = n.attribute("data-scale").unwrap_or("");
+            assert!(!scale.contains('e'), "{name}: data-scale {scale}");
+        }
+        let bar = doc
+            .descendants()
+            .find(|n| n.attribute("class") == Some("scale-bar"))
+            .and_then(|n| n.children().find(|c| c.has_tag_name("text")))
+            .and_then(|t| t.text())
+            .unwrap();
+        let metres = bar.split(' ').next().unwrap();
+        assert!(!metres.contains('e'), "{name}: {bar}");
         let groups: Vec<_> = doc
             .descendants()
             .filter(|n| {
@@ -193,10 +206,71 @@ fn poses_far_from_the_origin_are_drawn_like_the_others() {
             !text.contains("NaN") && !text.contains("inf"),
             "slide {slide:e}"
         );
+        // Scales far from 1 in exponent form (not hundreds of digits).
+        let doc = roxmltree::Document::parse(&text).unwrap();
+        for n in doc.descendants().filter(|n| n.has_attribute("data-scale")) {
+            let scale = n.attribute("data-scale").unwrap();
+            assert!(
+                scale.contains("e-") && scale.len() < 30,
+                "slide {slide:e}: {scale}"
+            );
+        }
         // (At 1.7·10³⁰⁸ m the checks' own projection in metres overflows: the isometric view adds
         // the coordinates. The drawing projects in scaled units.)
         if slide <= 1e308 {
             check_drawing(&format!("stanford, slide {slide:e}"), &chain, &poses);
+        }
+    }
+}
+
+/// A drawing whose points all coincide (a chain without moving joints, all in one place) spans
+/// 1 nm in every view: 3·10¹¹ pixels per metre, the point at each panel's centre. Far from the
+/// origin, where 1 nm is below the coordinates' rounding, it spans `f64::EPSILON` of the
+/// largest coordinate's power of two instead.
+#[test]
+fn a_chain_in_one_point_is_drawn_at_the_nanometre_scale() {
+    use kinechain::{ChainBuilder, JointKind, JointSpec, Transform};
+    for (x, span) in [
+        (0.0, 1e-9),
+        (0.7, 1e-9),
+        (3.0, 1e-9),
+        (1e3, 1e-9),
+        (1e300, f64::EPSILON * 2f64.powi(996)),
+    ] {
+        let mut b = ChainBuilder::new("point");
+        b.link("base").link("tip");
+        b.joint(JointSpec::new("weld", JointKind::Fixed, "base", "tip"));
+        b.world_from_root(Transform::from_xyz_rpy([x, 0.0, 0.0], [0.0; 3]));
+        let chain = b.build().unwrap();
+        let mut data = Data::new(&chain);
+        let poses = forward_kinematics(&chain, &mut data, &[]).unwrap();
+        let text = svg(&chain, &poses).unwrap();
+        let doc = roxmltree::Document::parse(&text).unwrap();
+        let panels: Vec<_> = doc
+            .descendants()
+            .filter(|n| n.attribute("class") == Some("panel"))
+            .collect();
+        for (i, panel) in panels.iter().enumerate() {
+            let scale = attr(panel, "data-scale");
+            assert!(
+                (scale * span / 300.0 - 1.0).abs() < 1e-12,
+                "x = {x}: {scale}"
+            );
+            let centre = (
+                (i % 2) as f64 * 360.0 + 180.0,
+                (i / 2) as f64 * 360.0 + 180.0,
+            );
+            let view = panel.attribute("data-view").unwrap();
+            for c in doc
+                .descendants()
+                .filter(|c| c.attribute("class") == Some("origin"))
+                .filter(|c| c.attribute("data-view") == Some(view))
+            {
+                assert!(
+                    near((attr(&c, "cx"), attr(&c, "cy")), centre),
+                    "x = {x}, {view}"
+                );
+            }
         }
     }
 }
