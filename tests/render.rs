@@ -302,230 +302,226 @@ fn a_pose_that_overflows_is_an_error_naming_its_link() {
 fn check_drawing(name: &str, chain: &Chain, poses: &kinechain::Poses<'_>) {
     const PANEL: f64 = 360.0;
     const INNER: f64 = 300.0;
-    {
-        let text = svg(chain, poses).unwrap();
-        let doc = roxmltree::Document::parse(&text).unwrap();
-        // (Scaled before the norm, which would overflow for the far poses.)
-        let reach = chain
-            .links()
-            .iter()
-            .map(|l| {
-                let t = poses
-                    .world_from_link(chain.link_id(l.name()).unwrap())
-                    .translation();
-                let m = t.amax();
-                if m == 0.0 { 0.0 } else { m * (t / m).norm() }
-            })
-            .fold(0.0, f64::max);
-        // Lengths in metres of the triads and arrows, read back from the drawing where a line is
-        // long enough (5 px) for its three written decimals to give it to 1e-3.
-        let (mut triads, mut arrow_lengths) = (Vec::new(), Vec::new());
-        let length = |(a, b): (Px, Px), d: Px| {
-            let pixels = (b.0 - a.0).hypot(b.1 - a.1);
-            (pixels >= 5.0).then(|| pixels / d.0.hypot(d.1))
+    let text = svg(chain, poses).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    // (Scaled before the norm, which would overflow for the far poses.)
+    let reach = chain
+        .links()
+        .iter()
+        .map(|l| {
+            let t = poses
+                .world_from_link(chain.link_id(l.name()).unwrap())
+                .translation();
+            let m = t.amax();
+            if m == 0.0 { 0.0 } else { m * (t / m).norm() }
+        })
+        .fold(0.0, f64::max);
+    // Lengths in metres of the triads and arrows, read back from the drawing where a line is
+    // long enough (5 px) for its three written decimals to give it to 1e-3.
+    let (mut triads, mut arrow_lengths) = (Vec::new(), Vec::new());
+    let length = |(a, b): (Px, Px), d: Px| {
+        let pixels = (b.0 - a.0).hypot(b.1 - a.1);
+        (pixels >= 5.0).then(|| pixels / d.0.hypot(d.1))
+    };
+    let panels: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("panel"))
+        .collect();
+    assert_eq!(panels.len(), 4, "{name}");
+    let origin = |id: kinechain::LinkId| {
+        kinechain::nalgebra::Point3::from(poses.world_from_link(id).translation())
+    };
+    let mut ortho_span: f64 = 0.0;
+    for (i, (panel, view)) in panels.iter().zip(View::ALL).enumerate() {
+        assert_eq!(panel.attribute("data-view"), Some(view.name()));
+        let (x0, y0, s) = (
+            attr(panel, "data-origin-x"),
+            attr(panel, "data-origin-y"),
+            attr(panel, "data-scale"),
+        );
+        let at = |p: &kinechain::nalgebra::Point3<f64>| {
+            let (u, v) = view.project(p);
+            (x0 + s * u, y0 - s * v)
         };
-        let panels: Vec<_> = doc
-            .descendants()
-            .filter(|n| n.attribute("class") == Some("panel"))
-            .collect();
-        assert_eq!(panels.len(), 4, "{name}");
-        let origin = |id: kinechain::LinkId| {
-            kinechain::nalgebra::Point3::from(poses.world_from_link(id).translation())
+        let dir = |d: &kinechain::nalgebra::Vector3<f64>| {
+            let (u, v) = view.project(&kinechain::nalgebra::Point3::from(*d));
+            (s * u, -s * v)
         };
-        let mut ortho_span: f64 = 0.0;
-        for (i, (panel, view)) in panels.iter().zip(View::ALL).enumerate() {
-            assert_eq!(panel.attribute("data-view"), Some(view.name()));
-            let (x0, y0, s) = (
-                attr(panel, "data-origin-x"),
-                attr(panel, "data-origin-y"),
-                attr(panel, "data-scale"),
-            );
-            let at = |p: &kinechain::nalgebra::Point3<f64>| {
-                let (u, v) = view.project(p);
-                (x0 + s * u, y0 - s * v)
-            };
-            let dir = |d: &kinechain::nalgebra::Vector3<f64>| {
-                let (u, v) = view.project(&kinechain::nalgebra::Point3::from(*d));
-                (s * u, -s * v)
-            };
-            let lines = |class: &str| -> Vec<(Px, Px)> {
-                panel
-                    .children()
-                    .filter(|c| c.attribute("class") == Some(class))
-                    .map(|c| line_ends(&c))
-                    .collect()
-            };
-            let segments = lines("segment");
-            assert_eq!(segments.len(), chain.joints().len(), "{name} {i}");
-            for (j, (a, b)) in chain.joints().iter().zip(&segments) {
-                assert!(near(*a, at(&origin(j.parent()))), "{name} {i} {}", j.name());
-                assert!(near(*b, at(&origin(j.child()))), "{name} {i} {}", j.name());
-            }
-            let mut drawn = Vec::new();
-            let moving = chain.joints().iter().filter_map(|j| {
-                let id = chain.joint_id(j.name()).unwrap();
-                poses.joint_axis(id)
-            });
-            let arrows = lines("axis");
-            assert_eq!(arrows.len(), moving.clone().count(), "{name} {i}");
-            for ((p, z), (a, b)) in moving.zip(arrows) {
-                assert!(near(a, at(&p)), "{name} {i}");
-                assert!(along(a, b, dir(&z)), "{name} {i}");
-                arrow_lengths.extend(length((a, b), dir(&z)));
-                drawn.extend([a, b]);
-            }
-            for (k, link) in chain.links().iter().enumerate() {
-                let id = chain.link_id(link.name()).unwrap();
-                let group = doc
-                    .descendants()
-                    .find(|n| n.attribute("data-link") == Some(link.name()))
-                    .unwrap();
-                let o = at(&origin(id));
-                // Per view: the triad's three lines, the base or tool marker if any, the origin.
-                let elements: Vec<_> = group
-                    .children()
-                    .filter(|c| c.is_element() && !c.has_tag_name("title"))
-                    .collect();
-                let chunks: Vec<_> = elements
-                    .split_inclusive(|c| c.attribute("class") == Some("origin"))
-                    .collect();
-                assert_eq!(chunks.len(), 4, "{name} {k}");
-                let (circle, rest) = chunks[i].split_last().unwrap();
-                assert_eq!(circle.attribute("data-view"), Some(view.name()));
-                assert!(
-                    near((attr(circle, "cx"), attr(circle, "cy")), o),
-                    "{name} {k}"
-                );
-                drawn.push(o);
-                let (triad, marker) = rest.split_at(3);
-                let rotation = poses.world_from_link(id).rotation();
-                for (axis, (line, color)) in triad.iter().zip(["#d00", "#080", "#00d"]).enumerate()
-                {
-                    assert!(line.has_tag_name("line"));
-                    assert_eq!(line.attribute("stroke"), Some(color));
-                    let (a, b) = line_ends(line);
-                    assert!(near(a, o), "{name} {k}");
-                    let column = rotation.column(axis).into_owned();
-                    assert!(along(a, b, dir(&column)), "{name} {k} axis {axis}");
-                    triads.extend(length((a, b), dir(&column)));
-                }
-                match (group.attribute("class").unwrap(), marker) {
-                    ("link base", [m]) => {
-                        assert!(m.has_tag_name("rect"));
-                        let c = (attr(m, "x") + 5.0, attr(m, "y") + 5.0);
-                        assert!(near(c, o), "{name}: base marker");
-                    }
-                    ("link tool", [m]) => {
-                        assert!(m.has_tag_name("circle"));
-                        assert!(near((attr(m, "cx"), attr(m, "cy")), o), "{name}: tool");
-                    }
-                    ("link", []) => {}
-                    (class, marker) => panic!("{name} {k}: {class} with {} markers", marker.len()),
-                }
-            }
-            // The panel's frame is its square of the 2 × 2 grid, and the origins and arrows span
-            // its inner square, centred on it.
-            let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
-            let frame = panel.children().find(|c| c.has_tag_name("rect")).unwrap();
-            let corners = ["x", "y", "width", "height"].map(|a| attr(&frame, a));
-            assert_eq!(corners, [px, py, PANEL, PANEL], "{name} {i}");
-            let (lo, hi) = drawn.iter().fold(
-                ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN)),
-                |(lo, hi), p| {
-                    (
-                        (lo.0.min(p.0), lo.1.min(p.1)),
-                        (hi.0.max(p.0), hi.1.max(p.1)),
-                    )
-                },
-            );
-            let centre = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+        let lines = |class: &str| -> Vec<(Px, Px)> {
+            panel
+                .children()
+                .filter(|c| c.attribute("class") == Some(class))
+                .map(|c| line_ends(&c))
+                .collect()
+        };
+        let segments = lines("segment");
+        assert_eq!(segments.len(), chain.joints().len(), "{name} {i}");
+        for (j, (a, b)) in chain.joints().iter().zip(&segments) {
+            assert!(near(*a, at(&origin(j.parent()))), "{name} {i} {}", j.name());
+            assert!(near(*b, at(&origin(j.child()))), "{name} {i} {}", j.name());
+        }
+        let mut drawn = Vec::new();
+        let moving = chain.joints().iter().filter_map(|j| {
+            let id = chain.joint_id(j.name()).unwrap();
+            poses.joint_axis(id)
+        });
+        let arrows = lines("axis");
+        assert_eq!(arrows.len(), moving.clone().count(), "{name} {i}");
+        for ((p, z), (a, b)) in moving.zip(arrows) {
+            assert!(near(a, at(&p)), "{name} {i}");
+            assert!(along(a, b, dir(&z)), "{name} {i}");
+            arrow_lengths.extend(length((a, b), dir(&z)));
+            drawn.extend([a, b]);
+        }
+        for (k, link) in chain.links().iter().enumerate() {
+            let id = chain.link_id(link.name()).unwrap();
+            let group = doc
+                .descendants()
+                .find(|n| n.attribute("data-link") == Some(link.name()))
+                .unwrap();
+            let o = at(&origin(id));
+            // Per view: the triad's three lines, the base or tool marker if any, the origin.
+            let elements: Vec<_> = group
+                .children()
+                .filter(|c| c.is_element() && !c.has_tag_name("title"))
+                .collect();
+            let chunks: Vec<_> = elements
+                .split_inclusive(|c| c.attribute("class") == Some("origin"))
+                .collect();
+            assert_eq!(chunks.len(), 4, "{name} {k}");
+            let (circle, rest) = chunks[i].split_last().unwrap();
+            assert_eq!(circle.attribute("data-view"), Some(view.name()));
             assert!(
-                (centre.0 - (px + PANEL / 2.0)).abs() < 2e-3
-                    && (centre.1 - (py + PANEL / 2.0)).abs() < 2e-3,
-                "{name} {i}: centred at {centre:?}"
+                near((attr(circle, "cx"), attr(circle, "cy")), o),
+                "{name} {k}"
             );
-            let span = (hi.0 - lo.0).max(hi.1 - lo.1);
-            assert!(span <= INNER + 2e-3, "{name} {i}: {span}");
-            if view == View::Isometric {
-                assert!(
-                    (span - INNER).abs() < 2e-3,
-                    "{name}: isometric spans {span}"
-                );
-            } else {
-                ortho_span = ortho_span.max(span);
-                assert_eq!(
-                    s,
-                    attr(&panels[0], "data-scale"),
-                    "{name}: one orthographic scale"
-                );
+            drawn.push(o);
+            let (triad, marker) = rest.split_at(3);
+            let rotation = poses.world_from_link(id).rotation();
+            for (axis, (line, color)) in triad.iter().zip(["#d00", "#080", "#00d"]).enumerate() {
+                assert!(line.has_tag_name("line"));
+                assert_eq!(line.attribute("stroke"), Some(color));
+                let (a, b) = line_ends(line);
+                assert!(near(a, o), "{name} {k}");
+                let column = rotation.column(axis).into_owned();
+                assert!(along(a, b, dir(&column)), "{name} {k} axis {axis}");
+                triads.extend(length((a, b), dir(&column)));
+            }
+            match (group.attribute("class").unwrap(), marker) {
+                ("link base", [m]) => {
+                    assert!(m.has_tag_name("rect"));
+                    let c = (attr(m, "x") + 5.0, attr(m, "y") + 5.0);
+                    assert!(near(c, o), "{name}: base marker");
+                }
+                ("link tool", [m]) => {
+                    assert!(m.has_tag_name("circle"));
+                    assert!(near((attr(m, "cx"), attr(m, "cy")), o), "{name}: tool");
+                }
+                ("link", []) => {}
+                (class, marker) => panic!("{name} {k}: {class} with {} markers", marker.len()),
             }
         }
-        assert!(
-            (ortho_span - INNER).abs() < 2e-3,
-            "{name}: orthographic spans {ortho_span}"
+        // The panel's frame is its square of the 2 × 2 grid, and the origins and arrows span
+        // its inner square, centred on it.
+        let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+        let frame = panel.children().find(|c| c.has_tag_name("rect")).unwrap();
+        let corners = ["x", "y", "width", "height"].map(|a| attr(&frame, a));
+        assert_eq!(corners, [px, py, PANEL, PANEL], "{name} {i}");
+        let (lo, hi) = drawn.iter().fold(
+            ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN)),
+            |(lo, hi), p| {
+                (
+                    (lo.0.min(p.0), lo.1.min(p.1)),
+                    (hi.0.max(p.0), hi.1.max(p.1)),
+                )
+            },
         );
-        for (what, lengths, fraction) in [("triad", &triads, 0.08), ("arrow", &arrow_lengths, 0.12)]
-        {
+        let centre = ((lo.0 + hi.0) / 2.0, (lo.1 + hi.1) / 2.0);
+        assert!(
+            (centre.0 - (px + PANEL / 2.0)).abs() < 2e-3
+                && (centre.1 - (py + PANEL / 2.0)).abs() < 2e-3,
+            "{name} {i}: centred at {centre:?}"
+        );
+        let span = (hi.0 - lo.0).max(hi.1 - lo.1);
+        assert!(span <= INNER + 2e-3, "{name} {i}: {span}");
+        if view == View::Isometric {
             assert!(
-                !lengths.is_empty(),
-                "{name}: no {what} long enough to measure"
+                (span - INNER).abs() < 2e-3,
+                "{name}: isometric spans {span}"
             );
-            for l in lengths {
-                assert!(
-                    (l / reach - fraction).abs() < 1e-3,
-                    "{name}: {what} of {l} m"
-                );
-            }
+        } else {
+            ortho_span = ortho_span.max(span);
+            assert_eq!(
+                s,
+                attr(&panels[0], "data-scale"),
+                "{name}: one orthographic scale"
+            );
         }
-        // The scale bar: 1, 2 or 5 × 10ⁿ m, drawn between a tenth and a quarter of the inner
-        // square at the orthographic scale.
-        let bar = doc
-            .descendants()
-            .find(|n| n.attribute("class") == Some("scale-bar"))
-            .unwrap();
-        let line = bar.children().find(|c| c.has_tag_name("line")).unwrap();
-        let ((x1, _), (x2, _)) = line_ends(&line);
-        let label = bar.children().find(|c| c.has_tag_name("text")).unwrap();
-        let metres: f64 = label
-            .text()
-            .unwrap()
-            .split(' ')
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap();
-        let mantissa = metres / 10f64.powf(metres.log10().floor());
-        assert!(
-            [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-9),
-            "{name}: {metres} m"
-        );
-        let ortho = attr(&panels[0], "data-scale");
-        assert!(
-            ((x2 - x1) - metres * ortho).abs() < 2e-3,
-            "{name}: bar of {metres} m"
-        );
-        assert!(
-            (0.1 * INNER..=0.25 * INNER).contains(&(x2 - x1)),
-            "{name}: {}",
-            x2 - x1
-        );
-        // Its label follows it, and the canvas ends just below the legend.
-        let label_x = attr(&label, "x");
-        assert!(
-            label_x > x2 && label_x < x2 + 20.0,
-            "{name}: label at {label_x}"
-        );
-        let svg = doc.root_element();
-        let (width, height) = (attr(&svg, "width"), attr(&svg, "height"));
-        let bottom = attr(&label, "y");
-        assert_eq!(width, 2.0 * PANEL, "{name}");
-        assert!(
-            bottom > 2.0 * PANEL && bottom < height && height <= bottom + 20.0,
-            "{name}"
-        );
-        assert_eq!(
-            svg.attribute("viewBox"),
-            Some(&*format!("0 0 {width} {height}"))
-        );
     }
+    assert!(
+        (ortho_span - INNER).abs() < 2e-3,
+        "{name}: orthographic spans {ortho_span}"
+    );
+    for (what, lengths, fraction) in [("triad", &triads, 0.08), ("arrow", &arrow_lengths, 0.12)] {
+        assert!(
+            !lengths.is_empty(),
+            "{name}: no {what} long enough to measure"
+        );
+        for l in lengths {
+            assert!(
+                (l / reach - fraction).abs() < 1e-3,
+                "{name}: {what} of {l} m"
+            );
+        }
+    }
+    // The scale bar: 1, 2 or 5 × 10ⁿ m, drawn between a tenth and a quarter of the inner
+    // square at the orthographic scale.
+    let bar = doc
+        .descendants()
+        .find(|n| n.attribute("class") == Some("scale-bar"))
+        .unwrap();
+    let line = bar.children().find(|c| c.has_tag_name("line")).unwrap();
+    let ((x1, _), (x2, _)) = line_ends(&line);
+    let label = bar.children().find(|c| c.has_tag_name("text")).unwrap();
+    let metres: f64 = label
+        .text()
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let mantissa = metres / 10f64.powf(metres.log10().floor());
+    assert!(
+        [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-9),
+        "{name}: {metres} m"
+    );
+    let ortho = attr(&panels[0], "data-scale");
+    assert!(
+        ((x2 - x1) - metres * ortho).abs() < 2e-3,
+        "{name}: bar of {metres} m"
+    );
+    assert!(
+        (0.1 * INNER..=0.25 * INNER).contains(&(x2 - x1)),
+        "{name}: {}",
+        x2 - x1
+    );
+    // Its label follows it, and the canvas ends just below the legend.
+    let label_x = attr(&label, "x");
+    assert!(
+        label_x > x2 && label_x < x2 + 20.0,
+        "{name}: label at {label_x}"
+    );
+    let svg = doc.root_element();
+    let (width, height) = (attr(&svg, "width"), attr(&svg, "height"));
+    let bottom = attr(&label, "y");
+    assert_eq!(width, 2.0 * PANEL, "{name}");
+    assert!(
+        bottom > 2.0 * PANEL && bottom < height && height <= bottom + 20.0,
+        "{name}"
+    );
+    assert_eq!(
+        svg.attribute("viewBox"),
+        Some(&*format!("0 0 {width} {height}"))
+    );
 }
