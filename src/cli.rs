@@ -359,8 +359,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
     }
 }
 
-fn limits_json(chain: &Chain, joint: &crate::chain::Joint) -> Value {
-    let _ = chain;
+fn limits_json(joint: &crate::chain::Joint) -> Value {
     let one = |l: &Option<crate::joint::Limits>| match l {
         Some(l) => json!([l.lower, l.upper]),
         None => Value::Null,
@@ -369,6 +368,20 @@ fn limits_json(chain: &Chain, joint: &crate::chain::Joint) -> Value {
         [l] => one(l),
         [theta, d] => json!({"theta": one(theta), "d": one(d)}),
         _ => Value::Null,
+    }
+}
+
+/// The limits column of `info --format table`: `[lower, upper]` or `none`, a cylindrical
+/// joint's as `theta [..], d [..]`.
+fn limits_text(joint: &crate::chain::Joint) -> String {
+    let one = |l: &Option<crate::joint::Limits>| match l {
+        Some(l) => format!("[{}, {}]", l.lower, l.upper),
+        None => "none".to_string(),
+    };
+    match joint.limits() {
+        [l] => one(l),
+        [theta, d] => format!("theta {}, d {}", one(theta), one(d)),
+        _ => String::new(),
     }
 }
 
@@ -383,7 +396,7 @@ fn info(chain: &Chain, format: OutputFormat, out: &mut dyn Write) -> Result<(), 
                         "name": j.name(),
                         "type": j.kind().as_str(),
                         "dof": j.dof(),
-                        "limits": limits_json(chain, j),
+                        "limits": limits_json(j),
                     })
                 })
                 .collect();
@@ -427,7 +440,7 @@ fn info(chain: &Chain, format: OutputFormat, out: &mut dyn Write) -> Result<(), 
                 "q", "joint", "type", "limits"
             ));
             for j in independent {
-                let limits = limits_json(chain, j);
+                let limits = limits_text(j);
                 text.push_str(&format!(
                     "{:>4}  {:<28} {:<12} {}\n",
                     j.q_index().unwrap_or(0),

@@ -111,6 +111,25 @@ fn info_lists_joints_in_q_order_and_links() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("puma560: 6 degrees of freedom"), "{text}");
+    // Limits as intervals, `none` where a joint has none (not JSON's `null`).
+    let text = ok_text(&["info", "robots/cylindrical.yaml", "--format", "table"]);
+    let row = text.lines().find(|l| l.contains(" cylindrical ")).unwrap();
+    assert!(
+        row.ends_with("theta [-3.141592653589793, 3.141592653589793], d [-5, 5]"),
+        "{text}"
+    );
+    let text = ok_text(&["info", "robots/stanford.yaml", "--format", "table"]);
+    assert!(text.contains(" [0.3048, 1.27]\n"), "{text}");
+    let continuous = "tests/data/reference/urdf/double_pendulum_continuous.urdf";
+    let text = ok_text(&["info", continuous, "--format", "table"]);
+    assert!(
+        text.lines()
+            .filter(|l| l.ends_with(" continuous   none"))
+            .count()
+            == 2
+            && !text.contains("null"),
+        "{text}"
+    );
 }
 
 #[test]
