@@ -289,12 +289,11 @@ fn write_panel(
     arrow: f64,
 ) {
     let (px, py) = ((i % 2) as f64 * PANEL, (i / 2) as f64 * PANEL);
+    let (x0, y0) = p.origin();
     let _ = writeln!(
         s,
-        r#"<g class="panel" data-view="{}" data-origin-x="{:.6}" data-origin-y="{:.6}" data-scale="{}">"#,
+        r#"<g class="panel" data-view="{}" data-origin-x="{x0:.6}" data-origin-y="{y0:.6}" data-scale="{}">"#,
         p.view.name(),
-        p.origin().0,
-        p.origin().1,
         shortest(p.scale / p.unit)
     );
     let _ = writeln!(
