@@ -2,8 +2,8 @@
 
 mod common;
 
+use common::Scratch;
 use serde_json::Value;
-use std::io::Write;
 use std::process::{Command, Output};
 
 fn kinechain(args: &[&str]) -> Output {
@@ -22,14 +22,6 @@ fn ok_json(args: &[&str]) -> Vec<Value> {
         String::from_utf8_lossy(&out.stderr)
     );
     json_lines(out.stdout)
-}
-
-/// A directory of this test process for the files a test writes (`tag` tells the tests
-/// apart, which run in parallel); the test removes it at the end.
-fn scratch_dir(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("kinechain-cli-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// Each line of a command's output, parsed as JSON.
@@ -202,20 +194,16 @@ fn fk_link_prints_only_the_named_links() {
 
 #[test]
 fn fk_batch_writes_one_line_per_configuration() {
-    let dir = scratch_dir("files");
-    let batch = dir.join("batch.jsonl");
-    let mut f = std::fs::File::create(&batch).unwrap();
-    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
-    writeln!(f).unwrap();
-    writeln!(
-        f,
-        r#"{{"q": {{"j1": 1.5707963267948966, "j2": 0, "j3": 0}}}}"#
-    )
-    .unwrap();
-    writeln!(f, r#"{{"q": [0, 0, 0], "qd": [1, 0, 0]}}"#).unwrap();
-    drop(f);
-    let batch_arg = batch.to_str().unwrap();
-    let lines = ok_json(&["fk", "robots/planar3.yaml", "--batch", batch_arg]);
+    let dir = Scratch::new("cli-files");
+    let batch = dir.write(
+        "batch.jsonl",
+        r#"{"q": [0, 0, 0]}
+
+{"q": {"j1": 1.5707963267948966, "j2": 0, "j3": 0}}
+{"q": [0, 0, 0], "qd": [1, 0, 0]}
+"#,
+    );
+    let lines = ok_json(&["fk", "robots/planar3.yaml", "--batch", &batch]);
     assert_eq!(lines.len(), 3, "the blank line is skipped");
     assert_eq!(position(&lines[0], "link3"), [9.0, 0.0, 0.0]);
     let p = position(&lines[1], "link3");
@@ -231,19 +219,17 @@ fn fk_batch_writes_one_line_per_configuration() {
     );
 
     // A bad line: earlier results are written, the error names the line.
-    let mut f = std::fs::File::create(&batch).unwrap();
-    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
-    writeln!(f, r#"{{"q": [0, 0]}}"#).unwrap();
-    writeln!(f, r#"{{"q": [0, 0, 0]}}"#).unwrap();
-    drop(f);
-    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", batch_arg]);
+    dir.write(
+        "batch.jsonl",
+        "{\"q\": [0, 0, 0]}\n{\"q\": [0, 0]}\n{\"q\": [0, 0, 0]}\n",
+    );
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", &batch]);
     assert!(!out.status.success());
     assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1);
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(stderr.starts_with("error: "), "{stderr}");
     assert!(stderr.contains("line 2"), "{stderr}");
     assert!(stderr.contains("2 values given"), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -401,23 +387,20 @@ fn fk_rates_appear_only_when_asked_for() {
 /// the reach exceeds, gets no error figure rather than `NaN`.
 #[test]
 fn bench_measures_a_robot_beyond_the_f32_range() {
-    let dir = scratch_dir("bench_far");
-    let path = dir.join("far.yaml");
-    std::fs::write(
-        &path,
+    let dir = Scratch::new("cli-bench-far");
+    let path = dir.write(
+        "far.yaml",
         "name: far\nconvention: standard\njoints:\n  \
          - {name: s1, link: l1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0, limits: [-1e308, 1e308]}\n  \
          - {name: r1, link: l2, type: revolute, a: 1, alpha: 0, d: 0, theta: 0}\n",
-    )
-    .unwrap();
-    let text = ok_text(&["bench", path.to_str().unwrap(), "--configurations", "4"]);
+    );
+    let text = ok_text(&["bench", &path, "--configurations", "4"]);
     assert!(text.contains("ulp of the 1.000e308 m reach)"), "{text}");
     assert!(
         text.contains("no error for the batch f32: the reach is beyond the range of f32"),
         "{text}"
     );
     assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -609,24 +592,25 @@ fn factor_after(text: &str, label: &str) -> f64 {
 
 #[test]
 fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
-    let dir = scratch_dir("batch");
-    let batch = dir.join("many.jsonl");
-    let mut f = std::fs::File::create(&batch).unwrap();
     // 1000 lines: poses in several kernel batches (of up to 256 lines), with rate lines (which
     // are evaluated one by one) and bad lines inside: one whose evaluation fails (a rate line
     // beyond a limit), one of the wrong length, one that is not JSON. The failures are counted
     // across the batches held and flushed after them.
-    for i in 0..1000 {
-        match i {
-            100 | 500 => writeln!(f, r#"{{"q": [0.1, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
-            200 => writeln!(f, r#"{{"q": [10.0, 0.0, 0.0], "qd": [1, 0, 0]}}"#).unwrap(),
-            300 => writeln!(f, r#"{{"q": [0.1, 0.0]}}"#).unwrap(),
-            450 => writeln!(f, "not json").unwrap(),
-            _ => writeln!(f, r#"{{"q": [{}, 0.0, 0.0]}}"#, 0.001 * i as f64).unwrap(),
-        }
-    }
-    drop(f);
-    let arg = batch.to_str().unwrap();
+    let lines: String = (0..1000)
+        .map(|i| {
+            let line = match i {
+                100 | 500 => r#"{"q": [0.1, 0.0, 0.0], "qd": [1, 0, 0]}"#.to_string(),
+                200 => r#"{"q": [10.0, 0.0, 0.0], "qd": [1, 0, 0]}"#.to_string(),
+                300 => r#"{"q": [0.1, 0.0]}"#.to_string(),
+                450 => "not json".to_string(),
+                _ => format!(r#"{{"q": [{}, 0.0, 0.0]}}"#, 0.001 * f64::from(i)),
+            };
+            line + "\n"
+        })
+        .collect();
+    let dir = Scratch::new("cli-batch");
+    let batch = dir.write("many.jsonl", lines);
+    let arg = batch.as_str();
 
     // Without --keep-going: the 200 lines before the first bad one are written.
     let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg]);
@@ -665,7 +649,6 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
             }
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Batch lines are read with a cap on their length (1 MiB plus 1 KiB per degree of freedom): a
@@ -673,16 +656,15 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
 /// usual. Also `\r\n` endings, a line that is not UTF-8, and a last line without an end.
 #[test]
 fn batch_lines_have_a_length_cap() {
-    let dir = scratch_dir("batch_cap");
-    let batch = dir.join("odd.jsonl");
+    let dir = Scratch::new("cli-batch-cap");
     let mut bytes = b"{\"q\": [0.1, 0, 0]}\r\n{\"q\": [0.2, 0, 0]".to_vec();
     // Valid JSON, but 2 MiB long.
     bytes.extend(std::iter::repeat_n(b' ', 2 << 20));
     bytes.extend_from_slice(
         b"}\n{\"q\": [0.3, 0, 0]}\n{\"q\": [0.4, \xff, 0]}\n{\"q\": [0.5, 0, 0]}",
     );
-    std::fs::write(&batch, bytes).unwrap();
-    let arg = batch.to_str().unwrap();
+    let batch = dir.write("odd.jsonl", bytes);
+    let arg = batch.as_str();
 
     let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", arg]);
     assert!(!out.status.success());
@@ -708,7 +690,6 @@ fn batch_lines_have_a_length_cap() {
             }
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A chain without moving joints: `--batch` writes one result per line (the lines go one by one,
@@ -716,20 +697,16 @@ fn batch_lines_have_a_length_cap() {
 /// there is nothing to time.
 #[test]
 fn a_chain_without_moving_joints_in_batch_and_bench() {
-    let dir = scratch_dir("fixed");
-    let robot = dir.join("fixed.urdf");
-    std::fs::write(&robot, common::FIXED_ONLY_URDF).unwrap();
-    let batch = dir.join("three.jsonl");
-    std::fs::write(&batch, "{\"q\": []}\n\n{\"q\": []}\n{\"q\": []}\n").unwrap();
-    let (robot, batch) = (robot.to_str().unwrap(), batch.to_str().unwrap());
-    let lines = ok_json(&["fk", robot, "--batch", batch]);
+    let dir = Scratch::new("cli-fixed");
+    let robot = dir.write("fixed.urdf", common::FIXED_ONLY_URDF);
+    let batch = dir.write("three.jsonl", "{\"q\": []}\n\n{\"q\": []}\n{\"q\": []}\n");
+    let lines = ok_json(&["fk", &robot, "--batch", &batch]);
     assert_eq!(lines.len(), 3);
     for v in &lines {
         assert_eq!(position(v, "tool"), [0.0, 0.0, 1.0]);
     }
-    let m = error(&["bench", robot]);
+    let m = error(&["bench", &robot]);
     assert!(m.contains("no moving joints"), "{m}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// In a table, each point is a line with its position, and its velocity and acceleration when
@@ -783,20 +760,14 @@ fn points_print_in_a_table() {
 fn a_closed_output_pipe_ends_the_run_quietly() {
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
-    let dir = scratch_dir("pipe");
-    let batch = dir.join("many.jsonl");
     // About 2 MB of output, far beyond a pipe's buffer.
     let lines: String = (0..5000)
         .map(|i| format!("{{\"q\": [{}, 0, 0]}}\n", 0.001 * f64::from(i)))
         .collect();
-    std::fs::write(&batch, lines).unwrap();
+    let dir = Scratch::new("cli-pipe");
+    let batch = dir.write("many.jsonl", lines);
     let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args([
-            "fk",
-            "robots/planar3.yaml",
-            "--batch",
-            batch.to_str().unwrap(),
-        ])
+        .args(["fk", "robots/planar3.yaml", "--batch", &batch])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -809,7 +780,6 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
     assert!(first.starts_with("{\"links\""), "{first}");
     // The reader is dropped here, closing the pipe.
     assert_quiet_success(&child.wait_with_output().unwrap());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Any other failure to write the output (here a full device) is an error, not a quiet exit.
@@ -837,16 +807,14 @@ fn an_output_that_cannot_be_written_is_an_error() {
 /// Large finite values print in a table in exponent form.
 #[test]
 fn results_that_overflow_are_errors() {
-    let dir = scratch_dir("overflow");
-    let robot = dir.join("slides.yaml");
-    std::fs::write(
-        &robot,
+    let dir = Scratch::new("cli-overflow");
+    let robot = dir.write(
+        "slides.yaml",
         "name: slides\nconvention: standard\njoints:\n\
          - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
          - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
-    )
-    .unwrap();
-    let robot = robot.to_str().unwrap();
+    );
+    let robot = robot.as_str();
     let m = error(&["fk", robot, "--q", "[1e308, 1e308]"]);
     assert!(m.contains("pose of link 'link2' overflows"), "{m}");
     // `render` refuses it the same way, and draws a pose that is only far out.
@@ -886,13 +854,11 @@ fn results_that_overflow_are_errors() {
     assert!(table.contains(" 1.000000e308 "), "{table}");
     assert!(table.lines().all(|l| l.len() < 200), "{table}");
 
-    let batch = dir.join("lines.jsonl");
-    std::fs::write(
-        &batch,
+    let batch = dir.write(
+        "lines.jsonl",
         "{\"q\": [1, 2]}\n{\"q\": [1e308, 1e308]}\n{\"q\": [3, 4]}\n",
-    )
-    .unwrap();
-    let batch = batch.to_str().unwrap();
+    );
+    let batch = batch.as_str();
     let out = kinechain(&["fk", robot, "--batch", batch, "--keep-going"]);
     assert!(!out.status.success());
     let lines: Vec<Value> = json_lines(out.stdout);
@@ -920,15 +886,8 @@ fn results_that_overflow_are_errors() {
     text.push_str(&format!("{overflow}\n"));
     text.push_str(&"{\"q\": [1, 2]}\n".repeat(255));
     text.push_str(&format!("{overflow}\n"));
-    let many = dir.join("many.jsonl");
-    std::fs::write(&many, text).unwrap();
-    let out = kinechain(&[
-        "fk",
-        robot,
-        "--batch",
-        many.to_str().unwrap(),
-        "--keep-going",
-    ]);
+    let many = dir.write("many.jsonl", text);
+    let out = kinechain(&["fk", robot, "--batch", &many, "--keep-going"]);
     assert!(!out.status.success());
     let failed: Vec<u64> = json_lines(out.stdout)
         .iter()
@@ -937,7 +896,6 @@ fn results_that_overflow_are_errors() {
     assert_eq!(failed, [2, 3, 4, 6, 262]);
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(stderr.contains("5 line(s) failed"), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `--format table` prints the coordinates `--orientation` names, the same values as the JSON
@@ -1060,7 +1018,7 @@ fn tables_print_the_orientation_asked_for() {
 fn orientation_kinds_recompose_on_the_reference_robots() {
     use kinechain::nalgebra::{Matrix3, Unit, Vector3};
     use kinechain::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
-    let dir = scratch_dir("orient");
+    let dir = Scratch::new("cli-orient");
     let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
     let v3 = |v: &Value| {
         Vector3::new(
@@ -1073,26 +1031,25 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
     for path in common::reference_files() {
         let reference = common::read_json(&path);
         let robot = if reference["model"]["kind"] == "urdf" {
-            path.with_file_name(reference["model"]["file"].as_str().unwrap())
+            let urdf = path.with_file_name(reference["model"]["file"].as_str().unwrap());
+            urdf.to_str().unwrap().to_string()
         } else {
-            let y = dir.join(format!("{}.yaml", reference["robot"].as_str().unwrap()));
-            std::fs::write(&y, common::model_yaml(&reference)).unwrap();
-            y
+            let name = format!("{}.yaml", reference["robot"].as_str().unwrap());
+            dir.write(&name, common::model_yaml(&reference))
         };
-        let batch = dir.join("samples.jsonl");
         let lines: Vec<String> = reference["samples"]
             .as_array()
             .unwrap()
             .iter()
             .map(|s| serde_json::json!({"q": s["q"]}).to_string())
             .collect();
-        std::fs::write(&batch, lines.join("\n")).unwrap();
+        let batch = dir.write("samples.jsonl", lines.join("\n"));
         let run = |kind: &str| {
             ok_json(&[
                 "fk",
-                robot.to_str().unwrap(),
+                &robot,
                 "--batch",
-                batch.to_str().unwrap(),
+                &batch,
                 "--ignore-limits",
                 "--orientation",
                 kind,
@@ -1173,19 +1130,13 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
         }
     }
     assert!(checked > 5000, "{checked}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn converting_a_urdf_says_what_is_not_written() {
-    let dir = scratch_dir("convert_urdf");
-    let written = dir.join("panda.urdf");
-    let out = kinechain(&[
-        "convert",
-        "robots/panda.urdf",
-        "-o",
-        written.to_str().unwrap(),
-    ]);
+    let dir = Scratch::new("cli-convert-urdf");
+    let written = dir.path("panda.urdf");
+    let out = kinechain(&["convert", "robots/panda.urdf", "-o", &written]);
     assert!(out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
@@ -1197,18 +1148,16 @@ fn converting_a_urdf_says_what_is_not_written() {
         assert!(stderr.contains(part), "{stderr}");
     }
     // The written file has nothing more to drop, and a DH table never had any of it.
-    for robot in [written.to_str().unwrap(), "robots/puma560.yaml"] {
+    for robot in [written.as_str(), "robots/puma560.yaml"] {
         assert_quiet_success(&kinechain(&["convert", robot]));
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Each joint that holds any of an effort limit, a velocity limit, `<dynamics>`,
 /// `<calibration>` or `<safety_controller>` is counted once, whichever of them it holds.
 #[test]
 fn converting_a_urdf_counts_each_dropped_joint_part() {
-    let dir = scratch_dir("convert_parts");
-    let source = dir.join("parts.urdf");
+    let dir = Scratch::new("cli-convert-parts");
     // (name, limit's effort and velocity, the elements after the limit)
     let joints = [
         ("effort_only", "10", "0", "<dynamics damping=\"0.1\"/>"),
@@ -1233,13 +1182,8 @@ fn converting_a_urdf_counts_each_dropped_joint_part() {
         );
     }
     urdf += "</robot>\n";
-    std::fs::write(&source, urdf).unwrap();
-    let out = kinechain(&[
-        "convert",
-        source.to_str().unwrap(),
-        "-o",
-        dir.join("written.urdf").to_str().unwrap(),
-    ]);
+    let source = dir.write("parts.urdf", urdf);
+    let out = kinechain(&["convert", &source, "-o", &dir.path("written.urdf")]);
     assert!(out.status.success(), "{out:?}");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -1249,41 +1193,31 @@ fn converting_a_urdf_counts_each_dropped_joint_part() {
         ),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A loader's warning (here |alpha| = 90 with `angle_unit: rad`, likely degrees) reaches stderr
 /// with the file's name, and the command still succeeds.
 #[test]
 fn a_load_warning_is_printed_with_the_file() {
-    let dir = scratch_dir("warn");
-    let path = dir.join("degrees.yaml");
-    std::fs::write(
-        &path,
+    let dir = Scratch::new("cli-warn");
+    let path = dir.write(
+        "degrees.yaml",
         "convention: standard\njoints:\n  - {name: j1, type: revolute, a: 0.1, alpha: 90, d: 0, theta: 0}\n",
-    )
-    .unwrap();
-    let path = path.to_str().unwrap();
-    let out = kinechain(&["info", path]);
+    );
+    let out = kinechain(&["info", &path]);
     assert!(out.status.success(), "{out:?}");
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(
         stderr.starts_with(&format!("warning: {path}: ")) && stderr.contains("degrees"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn convert_and_render_write_files() {
-    let dir = scratch_dir("convert");
-    let urdf = dir.join("puma.urdf");
-    let out = kinechain(&[
-        "convert",
-        "robots/puma560.yaml",
-        "-o",
-        urdf.to_str().unwrap(),
-    ]);
+    let dir = Scratch::new("cli-convert");
+    let urdf = dir.path("puma.urdf");
+    let out = kinechain(&["convert", "robots/puma560.yaml", "-o", &urdf]);
     assert!(
         out.status.success(),
         "{}",
@@ -1292,7 +1226,7 @@ fn convert_and_render_write_files() {
     // The converted file gives the same tool pose.
     let q = "[0.3, -0.6, 0.4, 0.2, -0.7, 0.5]";
     let a = &ok_json(&["fk", "robots/puma560.yaml", "--q", q, "--link", "tool"])[0];
-    let b = &ok_json(&["fk", urdf.to_str().unwrap(), "--q", q, "--link", "tool"])[0];
+    let b = &ok_json(&["fk", &urdf, "--q", q, "--link", "tool"])[0];
     for i in 0..3 {
         for j in 0..4 {
             let (x, y) = (
@@ -1302,15 +1236,8 @@ fn convert_and_render_write_files() {
             assert!((x - y).abs() < 1e-12);
         }
     }
-    let svg = dir.join("arm.svg");
-    let out = kinechain(&[
-        "render",
-        "robots/puma560.yaml",
-        "--q",
-        q,
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
+    let svg = dir.path("arm.svg");
+    let out = kinechain(&["render", "robots/puma560.yaml", "--q", q, "-o", &svg]);
     assert!(out.status.success());
     assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
     let m = error(&[
@@ -1320,7 +1247,6 @@ fn convert_and_render_write_files() {
         "[10, 0, 0, 0, 0, 0]",
     ]);
     assert!(m.contains("limits"), "{m}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `--jacobian LINK` prints the link's 6 × dof Jacobian; times `--qd` it is the printed
@@ -1421,25 +1347,16 @@ fn fk_jacobians_give_the_printed_velocity_and_acceleration() {
         "{table}"
     );
 
-    let dir = scratch_dir("jacobian");
-    let batch = dir.join("lines.jsonl");
-    std::fs::write(
-        &batch,
+    let dir = Scratch::new("cli-jacobian");
+    let batch = dir.write(
+        "lines.jsonl",
         format!(
             "{{\"q\": {}}}\n{{\"q\": {}}}\n",
             text(&q),
             text(&[0.5, -0.4, 0.3, -1.9, 0.2, 1.4, 0.6, 0.02])
         ),
-    )
-    .unwrap();
-    let lines = ok_json(&[
-        "fk",
-        robot,
-        "--batch",
-        batch.to_str().unwrap(),
-        "--jacobian",
-        "panda_hand",
-    ]);
+    );
+    let lines = ok_json(&["fk", robot, "--batch", &batch, "--jacobian", "panda_hand"]);
     assert_eq!(lines.len(), 2);
     assert!(
         lines
@@ -1447,7 +1364,6 @@ fn fk_jacobians_give_the_printed_velocity_and_acceleration() {
             .all(|l| l["jacobians"]["panda_hand"].as_array().unwrap().len() == 6)
     );
     assert_ne!(lines[0]["jacobians"], lines[1]["jacobians"]);
-    std::fs::remove_dir_all(&dir).unwrap();
     assert!(
         error(&["fk", robot, "--q", &text(&q), "--jacobian", "panda_hnd"])
             .contains("no link named 'panda_hnd' (did you mean 'panda_hand'?)")

@@ -7,13 +7,12 @@ mod common;
 use common::*;
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
-fn converted(name: &str) -> (Chain, Chain, std::path::PathBuf) {
+/// The robot `name` of `robots/`, and the URDF `convert` writes for it, loaded from a file in
+/// `dir` whose path it returns.
+fn converted(dir: &Scratch, name: &str) -> (Chain, Chain, String) {
     let original = Chain::from_file(robots_dir().join(name)).unwrap();
     let text = kinechain::convert::to_urdf(&original).unwrap();
-    let dir = std::env::temp_dir().join(format!("kinechain-convert-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name.replace(".yaml", ".urdf"));
-    std::fs::write(&path, &text).unwrap();
+    let path = dir.write(&name.replace(".yaml", ".urdf"), &text);
     let urdf = Chain::from_file(&path)
         .unwrap_or_else(|e| panic!("{name}: {}\n{text}", kinechain::error::error_chain(&e)));
     (original, urdf, path)
@@ -21,6 +20,7 @@ fn converted(name: &str) -> (Chain, Chain, std::path::PathBuf) {
 
 #[test]
 fn converted_robots_agree_with_the_original_in_kinechain_and_k() {
+    let dir = Scratch::new("convert");
     let mut rng = rng(71);
     let mut checked = 0;
     for name in [
@@ -36,7 +36,7 @@ fn converted_robots_agree_with_the_original_in_kinechain_and_k() {
         "planar3.yaml",
         "snake50.yaml",
     ] {
-        let (original, urdf, path) = converted(name);
+        let (original, urdf, path) = converted(&dir, name);
         assert_eq!(urdf.dof(), original.dof(), "{name}");
         // Origins are written without negative zeros (`rpy="0 -0 0"`).
         let text = std::fs::read_to_string(&path).unwrap();

@@ -1,6 +1,9 @@
 //! One bad file per failure mode (`tests/data/bad/`): each load fails with the expected error
 //! kind, naming the file, the joint or link, and the field.
 
+mod common;
+
+use common::Scratch;
 use kinechain::{
     Chain, Data, FieldProblem, LoadError, LoadErrorKind, ModelError, NotRigid, forward_kinematics,
 };
@@ -997,13 +1000,12 @@ fn resource_attacks_fail_fast() {
         message(&e)
     );
 
-    let big = std::env::temp_dir().join(format!("kinechain-big-{}.yaml", std::process::id()));
+    let dir = Scratch::new("big");
     let line = "# padding padding padding padding padding padding padding padding padding\n";
-    std::fs::write(
-        &big,
+    let big = dir.write(
+        "big.yaml",
         line.repeat((kinechain::io::MAX_FILE_BYTES as usize) / line.len() + 2),
-    )
-    .unwrap();
+    );
     let e = Chain::from_file(&big).unwrap_err();
     assert!(
         matches!(e.kind(), LoadErrorKind::TooLarge { limit, .. } if *limit == kinechain::io::MAX_FILE_BYTES)
@@ -1030,7 +1032,6 @@ fn resource_attacks_fail_fast() {
     );
     let chain = Chain::from_file(&big).map_err(|e| message(&e)).unwrap();
     assert_eq!(chain.dof(), 1);
-    std::fs::remove_file(&big).unwrap();
 }
 
 /// Angle units: a plain number is in `angle_unit`; `!degrees`/`!radians` tags and `deg(..)`

@@ -14,6 +14,40 @@ use std::path::{Path, PathBuf};
 
 pub use kinechain::measure::worse;
 
+/// A directory of this test process for the files a test writes, named by `tag` (tests run in
+/// parallel); removed with its files when dropped, so also when the test fails.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    pub fn new(tag: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("kinechain-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    /// The path of the file `name` in the directory, as the text a command line takes.
+    pub fn path(&self, name: &str) -> String {
+        let path = self.0.join(name);
+        path.to_str()
+            .unwrap_or_else(|| panic!("{} is not UTF-8", path.display()))
+            .to_string()
+    }
+
+    /// Writes `contents` to the file `name` in the directory; its path as [`Scratch::path`].
+    pub fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> String {
+        let path = self.path(name);
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        // Not `unwrap`: a panic while a failed test unwinds would abort the whole test binary.
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A robot without moving joints: a base and a tool 1 m above it on a fixed joint.
 pub const FIXED_ONLY_URDF: &str = r#"<robot name="fixed">
   <link name="base"/><link name="tool"/>
