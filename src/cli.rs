@@ -110,7 +110,8 @@ struct FkArgs {
     /// Joint accelerations (same forms as --q); adds "alpha" and "a". Needs --qd.
     #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
     qdd: Option<String>,
-    /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}.
+    /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}; `-`
+    /// reads standard input, writing each result before waiting for more input.
     #[arg(long)]
     batch: Option<PathBuf>,
     /// Only these links (repeatable); only the joints they depend on are evaluated.
@@ -255,12 +256,7 @@ pub fn main() -> ExitCode {
     };
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
-    let result = run(cli.command, &mut out).and_then(|()| {
-        out.flush().map_err(|source| CliError::Io {
-            context: "cannot write output".into(),
-            source,
-        })
-    });
+    let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(output_error));
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // The reader went away (`kinechain fk … | head`): stop quietly, as a shell tool does.
@@ -303,20 +299,20 @@ fn write_output(path: Option<&PathBuf>, text: &str, out: &mut dyn Write) -> Resu
             context: format!("cannot write {}", p.display()),
             source,
         }),
-        None => out
-            .write_all(text.as_bytes())
-            .map_err(|source| CliError::Io {
-                context: "cannot write output".into(),
-                source,
-            }),
+        None => out.write_all(text.as_bytes()).map_err(output_error),
     }
 }
 
 fn write_line(out: &mut dyn Write, text: &str) -> Result<(), CliError> {
-    writeln!(out, "{text}").map_err(|source| CliError::Io {
+    writeln!(out, "{text}").map_err(output_error)
+}
+
+/// A failure to write the output (standard output, or the writer `run` is given).
+fn output_error(source: std::io::Error) -> CliError {
+    CliError::Io {
         context: "cannot write output".into(),
         source,
-    })
+    }
 }
 
 fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
@@ -1192,10 +1188,11 @@ impl PendingPoses {
     }
 }
 
-/// `fk --batch`: one result per line of the file at `path`, in line order. Pose-only lines (the
-/// common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with rates,
-/// or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before a bad
-/// line is written before its error.
+/// How errors name standard input, the batch file `-`.
+const STANDARD_INPUT: &str = "standard input";
+
+/// `fk --batch`: the lines of the file at `path`, or of standard input for `-`, through
+/// [`fk_batch`].
 fn fk_batch_file(
     chain: &Chain,
     args: &FkArgs,
@@ -1204,10 +1201,37 @@ fn fk_batch_file(
     path: &Path,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
+    if path == Path::new("-") {
+        // Read in large blocks: each refill that finds nothing waiting writes what is held.
+        let mut reader = std::io::BufReader::with_capacity(1 << 16, std::io::stdin());
+        let name = Path::new(STANDARD_INPUT);
+        return fk_batch(chain, args, data, request, name, &mut reader, true, out);
+    }
     let file = std::fs::File::open(path).map_err(|source| CliError::Io {
         context: format!("cannot open batch file {}", path.display()),
         source,
     })?;
+    let mut reader = std::io::BufReader::new(file);
+    fk_batch(chain, args, data, request, path, &mut reader, false, out)
+}
+
+/// One result per line of `reader` (`path` names it in errors), in line order. Pose-only lines
+/// (the common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with
+/// rates, or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before
+/// a bad line is written before its error. When `interactive`, the results held are written and
+/// the output flushed whenever the input read so far is used up, so that a program writing a
+/// line at a time and waiting for its result gets it.
+#[allow(clippy::too_many_arguments)]
+fn fk_batch<R: std::io::Read>(
+    chain: &Chain,
+    args: &FkArgs,
+    data: &mut Data,
+    request: &mut Request,
+    path: &Path,
+    reader: &mut std::io::BufReader<R>,
+    interactive: bool,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     let batchable = request.poses_only(chain);
     let mut pending = PendingPoses {
         qs: Vec::new(),
@@ -1215,11 +1239,15 @@ fn fk_batch_file(
         batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
     };
     let mut failed_lines = 0usize;
-    let mut reader = std::io::BufReader::new(file);
     let limit = batch_line_limit(chain.dof());
     let mut bytes = Vec::new();
     for i in 0.. {
-        let result = match read_capped_line(&mut reader, &mut bytes, limit) {
+        if interactive && reader.buffer().is_empty() {
+            // The next read may wait for the writer, which may be waiting for these results.
+            failed_lines += pending.flush(chain, args, path, out)?;
+            out.flush().map_err(output_error)?;
+        }
+        let result = match read_capped_line(reader, &mut bytes, limit) {
             Ok(CappedLine::End) => break,
             Ok(CappedLine::Line) => std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
                 byte: e.valid_up_to() + 1,

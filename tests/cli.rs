@@ -692,6 +692,99 @@ fn batch_lines_have_a_length_cap() {
     }
 }
 
+/// A command run with `input` written to its standard input (from another thread, so that a
+/// large output cannot block the writing).
+fn kinechain_with_input(args: &[&str], input: Vec<u8>) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || std::io::Write::write_all(&mut stdin, &input));
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap().unwrap();
+    out
+}
+
+/// `--batch -` reads standard input: the same lines of output as from a file (lines of poses in
+/// batches, lines with rates, a bad line under `--keep-going`), errors that name standard input,
+/// and each result written before the next line is waited for, so that a program can send a
+/// line and wait for its answer.
+#[test]
+fn batch_reads_standard_input() {
+    let lines: String = (0..700)
+        .map(|i| match i {
+            300 => "{\"q\": [0.1, 0, 0], \"qd\": [1, 0, 0]}\n".to_string(),
+            500 => "{\"q\": [0.1, 0]}\n".to_string(),
+            _ => format!("{{\"q\": [{}, 0.2, 0]}}\n", 0.001 * f64::from(i)),
+        })
+        .collect();
+    let dir = Scratch::new("cli-stdin");
+    let file = dir.write("lines.jsonl", &lines);
+    let args = ["fk", "robots/planar3.yaml", "--keep-going", "--batch"];
+    let from_file = kinechain(&[&args[..], &[file.as_str()]].concat());
+    let from_stdin = kinechain_with_input(&[&args[..], &["-"]].concat(), lines.into_bytes());
+    assert!(!from_stdin.status.success());
+    assert_eq!(json_lines(from_stdin.stdout.clone()).len(), 700);
+    assert_eq!(from_stdin.stdout, from_file.stdout);
+    let stderr = String::from_utf8(from_stdin.stderr).unwrap();
+    assert_eq!(
+        stderr,
+        "error: standard input: 1 line(s) failed (see the error objects in the output)\n"
+    );
+    let out = kinechain_with_input(
+        &["fk", "robots/planar3.yaml", "--batch", "-"],
+        b"{\"q\": [0, 0, 0]}\n{\"q\": [0, 0]}\n".to_vec(),
+    );
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: standard input: line 2: q: 2 values given"),
+        "{stderr}"
+    );
+    assert_eq!(json_lines(out.stdout).len(), 1);
+
+    // One line at a time, each answered before the next is sent: lines of poses (which the
+    // batch kernel holds) and a line with rates (evaluated alone).
+    use std::io::{BufRead, BufReader, Write};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
+        .args(["fk", "robots/planar3.yaml", "--batch", "-"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let (answers, answered) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut line = String::new();
+        while stdout.read_line(&mut line).unwrap() > 0 {
+            answers.send(std::mem::take(&mut line)).unwrap();
+        }
+    });
+    for (q, rates) in [(0.0_f64, false), (0.5, true), (1.0, false)] {
+        let qd = if rates { ", \"qd\": [1, 0, 0]" } else { "" };
+        writeln!(stdin, "{{\"q\": [{q}, 0, 0]{qd}}}").unwrap();
+        stdin.flush().unwrap();
+        // (A result held until more input came would never come: the timeout fails the test.)
+        let answer = answered
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("no answer to q1 = {q}"));
+        let v: Value = serde_json::from_str(&answer).unwrap();
+        let x = position(&v, "link3")[0];
+        assert!((x - 9.0 * q.cos()).abs() < 1e-14, "q1 = {q}: {x}");
+        assert_eq!(v["links"]["link3"].get("omega").is_some(), rates);
+    }
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+    reader.join().unwrap();
+}
+
 /// A chain without moving joints: `--batch` writes one result per line (the lines go one by one,
 /// not through the batch kernel, which cannot count empty configurations), and `bench` says
 /// there is nothing to time.
