@@ -1201,27 +1201,28 @@ fn fk_batch_file(
     path: &Path,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
+    // Blocks of 64 KiB hold an arm's 256 lines of poses (about 100 bytes each) a few times
+    // over: the results go out when the lines held fill a batch, not at every block's end.
+    const BLOCK: usize = 1 << 16;
     if path == Path::new("-") {
-        // Read in large blocks: each refill that finds nothing waiting writes what is held.
-        let mut reader = std::io::BufReader::with_capacity(1 << 16, std::io::stdin());
+        let mut reader = std::io::BufReader::with_capacity(BLOCK, std::io::stdin());
         let name = Path::new(STANDARD_INPUT);
-        return fk_batch(chain, args, data, request, name, &mut reader, true, out);
+        return fk_batch(chain, args, data, request, name, &mut reader, out);
     }
     let file = std::fs::File::open(path).map_err(|source| CliError::Io {
         context: format!("cannot open batch file {}", path.display()),
         source,
     })?;
-    let mut reader = std::io::BufReader::new(file);
-    fk_batch(chain, args, data, request, path, &mut reader, false, out)
+    let mut reader = std::io::BufReader::with_capacity(BLOCK, file);
+    fk_batch(chain, args, data, request, path, &mut reader, out)
 }
 
 /// One result per line of `reader` (`path` names it in errors), in line order. Pose-only lines
 /// (the common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with
 /// rates, or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before
-/// a bad line is written before its error. When `interactive`, the results held are written and
-/// the output flushed whenever the input read so far is used up, so that a program writing a
-/// line at a time and waiting for its result gets it.
-#[allow(clippy::too_many_arguments)]
+/// a bad line is written before its error. Whenever the input read is used up, the results held
+/// are written and the output flushed: reading more may wait for a program that writes a line
+/// at a time and waits for its result.
 fn fk_batch<R: std::io::Read>(
     chain: &Chain,
     args: &FkArgs,
@@ -1229,7 +1230,6 @@ fn fk_batch<R: std::io::Read>(
     request: &mut Request,
     path: &Path,
     reader: &mut std::io::BufReader<R>,
-    interactive: bool,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let batchable = request.poses_only(chain);
@@ -1242,8 +1242,7 @@ fn fk_batch<R: std::io::Read>(
     let limit = batch_line_limit(chain.dof());
     let mut bytes = Vec::new();
     for i in 0.. {
-        if interactive && reader.buffer().is_empty() {
-            // The next read may wait for the writer, which may be waiting for these results.
+        if reader.buffer().is_empty() {
             failed_lines += pending.flush(chain, args, path, out)?;
             out.flush().map_err(output_error)?;
         }

@@ -749,13 +749,21 @@ fn batch_reads_standard_input() {
     assert_eq!(json_lines(out.stdout).len(), 1);
 
     // One line at a time, each answered before the next is sent: lines of poses (which the
-    // batch kernel holds) and a line with rates (evaluated alone).
+    // batch kernel holds), one whose pose overflows (found when the lines held are written) and
+    // a line with rates (evaluated alone). Two slides along z: link2 is at z = q1 + q2.
+    let robot = dir.write(
+        "slides.yaml",
+        "name: slides\nconvention: standard\njoints:\n\
+         - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
+         - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
+    );
     use std::io::{BufRead, BufReader, Write};
     let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(["fk", "robots/planar3.yaml", "--batch", "-"])
+        .args(["fk", &robot, "--batch", "-", "--keep-going"])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let mut stdin = child.stdin.take().unwrap();
@@ -767,21 +775,36 @@ fn batch_reads_standard_input() {
             answers.send(std::mem::take(&mut line)).unwrap();
         }
     });
-    for (q, rates) in [(0.0_f64, false), (0.5, true), (1.0, false)] {
-        let qd = if rates { ", \"qd\": [1, 0, 0]" } else { "" };
-        writeln!(stdin, "{{\"q\": [{q}, 0, 0]{qd}}}").unwrap();
+    for (line, q, rates) in [
+        (1, "[1, 2]", None),
+        (2, "[1e308, 1e308]", None),
+        (3, "[3, 4]", Some("[1, 1]")),
+        (4, "[0.5, 0.25]", None),
+    ] {
+        let qd = rates.map_or(String::new(), |qd| format!(", \"qd\": {qd}"));
+        writeln!(stdin, "{{\"q\": {q}{qd}}}").unwrap();
         stdin.flush().unwrap();
         // (A result held until more input came would never come: the timeout fails the test.)
         let answer = answered
             .recv_timeout(std::time::Duration::from_secs(30))
-            .unwrap_or_else(|_| panic!("no answer to q1 = {q}"));
+            .unwrap_or_else(|_| panic!("no answer to line {line}"));
         let v: Value = serde_json::from_str(&answer).unwrap();
-        let x = position(&v, "link3")[0];
-        assert!((x - 9.0 * q.cos()).abs() < 1e-14, "q1 = {q}: {x}");
-        assert_eq!(v["links"]["link3"].get("omega").is_some(), rates);
+        match line {
+            2 => assert_eq!(v["line"], 2, "{v}"),
+            _ => {
+                let q: Vec<f64> = serde_json::from_str(q).unwrap();
+                assert_eq!(position(&v, "link2")[2], q[0] + q[1], "{v}");
+                assert_eq!(v["links"]["link2"].get("v").is_some(), rates.is_some());
+            }
+        }
     }
     drop(stdin);
-    assert!(child.wait().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    assert!(!out.status.success());
+    assert_eq!(
+        String::from_utf8(out.stderr).unwrap(),
+        "error: standard input: 1 line(s) failed (see the error objects in the output)\n"
+    );
     reader.join().unwrap();
 }
 
