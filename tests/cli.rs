@@ -6,13 +6,21 @@ use common::Scratch;
 use serde_json::Value;
 use std::process::{Command, Output};
 
-fn kinechain(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
+/// The built binary with `args`, run from the repository (where `robots/` is).
+fn command<'a>(args: impl IntoIterator<Item = &'a str>) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_kinechain"));
+    command.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
+    command
 }
+
+fn kinechain(args: &[&str]) -> Output {
+    command(args.iter().copied()).output().unwrap()
+}
+
+/// Two slides along z without limits (link2 at z = q1 + q2), for results that overflow.
+const TWO_SLIDES: &str = "name: slides\nconvention: standard\njoints:\n\
+    - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
+    - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n";
 
 fn ok_json(args: &[&str]) -> Vec<Value> {
     let out = kinechain(args);
@@ -696,9 +704,7 @@ fn batch_lines_have_a_length_cap() {
 /// large output cannot block the writing).
 fn kinechain_with_input(args: &[&str], input: Vec<u8>) -> Output {
     use std::process::Stdio;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let mut child = command(args.iter().copied())
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -750,17 +756,10 @@ fn batch_reads_standard_input() {
 
     // One line at a time, each answered before the next is sent: lines of poses (which the
     // batch kernel holds), one whose pose overflows (found when the lines held are written) and
-    // a line with rates (evaluated alone). Two slides along z: link2 is at z = q1 + q2.
-    let robot = dir.write(
-        "slides.yaml",
-        "name: slides\nconvention: standard\njoints:\n\
-         - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
-         - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
-    );
+    // a line with rates (evaluated alone).
+    let robot = dir.write("slides.yaml", TWO_SLIDES);
     use std::io::{BufRead, BufReader, Write};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(["fk", &robot, "--batch", "-", "--keep-going"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let mut child = command(["fk", &robot, "--batch", "-", "--keep-going"])
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -882,9 +881,7 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
         .collect();
     let dir = Scratch::new("cli-pipe");
     let batch = dir.write("many.jsonl", lines);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(["fk", "robots/planar3.yaml", "--batch", &batch])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let mut child = command(["fk", "robots/planar3.yaml", "--batch", &batch])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -906,9 +903,7 @@ fn an_output_that_cannot_be_written_is_an_error() {
         .write(true)
         .open("/dev/full")
         .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_kinechain"))
-        .args(["fk", "robots/planar3.yaml", "--q", "[0.1, 0.2, 0.3]"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let out = command(["fk", "robots/planar3.yaml", "--q", "[0.1, 0.2, 0.3]"])
         .stdout(full)
         .output()
         .unwrap();
@@ -924,12 +919,7 @@ fn an_output_that_cannot_be_written_is_an_error() {
 #[test]
 fn results_that_overflow_are_errors() {
     let dir = Scratch::new("cli-overflow");
-    let robot = dir.write(
-        "slides.yaml",
-        "name: slides\nconvention: standard\njoints:\n\
-         - {name: j1, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n\
-         - {name: j2, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0}\n",
-    );
+    let robot = dir.write("slides.yaml", TWO_SLIDES);
     let robot = robot.as_str();
     let m = error(&["fk", robot, "--q", "[1e308, 1e308]"]);
     assert!(m.contains("pose of link 'link2' overflows"), "{m}");
