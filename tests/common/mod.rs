@@ -14,13 +14,16 @@ use std::path::{Path, PathBuf};
 
 pub use kinechain::measure::worse;
 
-/// A directory of this test process for the files a test writes, named by `tag` (tests run in
-/// parallel); removed with its files when dropped, so also when the test fails.
+/// A directory of its own for the files a test writes, named by `tag`, the process and a count
+/// (tests run in parallel); removed with its files when dropped, so also when the test fails.
 pub struct Scratch(PathBuf);
 
 impl Scratch {
     pub fn new(tag: &str) -> Self {
-        let dir = std::env::temp_dir().join(format!("kinechain-{tag}-{}", std::process::id()));
+        static MADE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let name = format!("kinechain-{tag}-{}-{n}", std::process::id());
+        let dir = std::env::temp_dir().join(name);
         std::fs::create_dir_all(&dir).unwrap();
         Scratch(dir)
     }
