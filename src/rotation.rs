@@ -321,8 +321,9 @@ impl RodriguezParameters {
     /// [`Singular`] when `e₀ = 0` (θ = π), or so small that `eᵢ/e₀` overflows `f64` (θ within
     /// about 10⁻³⁰⁸ of π).
     pub fn from_euler_parameters(e: &EulerParameters) -> Result<Self, Singular> {
+        // (`e₀ = 0` gives an infinite or NaN quotient too.)
         let g = Vector3::new(e.e1, e.e2, e.e3) / e.e0;
-        if e.e0 == 0.0 || g.iter().any(|x| !x.is_finite()) {
+        if g.iter().any(|x| !x.is_finite()) {
             return Err(Singular {
                 representation: "Rodriguez parameters",
                 reason: "θ = π, or too close to π for f64 (tan(θ/2) is infinite)",
