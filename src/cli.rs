@@ -129,8 +129,8 @@ struct FkArgs {
     /// Evaluate joint values outside the joints' limits instead of refusing them.
     #[arg(long)]
     ignore_limits: bool,
-    /// With --batch: on a bad line, write {"line": N, "error": ".."} in its place and go on;
-    /// exit non-zero at the end if any line failed.
+    /// With --batch: on a bad line, write {"line": N, "error": ".."} (in a table, `line N:
+    /// error: ..`) in its place and go on; exit non-zero at the end if any line failed.
     #[arg(long, requires = "batch")]
     keep_going: bool,
     /// Output format.
@@ -212,7 +212,7 @@ pub enum CliError {
         byte: usize,
     },
     /// Some batch lines failed under `--keep-going`.
-    #[error("{}: {count} line(s) failed (see the error objects in the output)", path.display())]
+    #[error("{}: {count} line(s) failed (their errors are in the output, each in its line's place)", path.display())]
     BatchFailures {
         /// The batch file.
         path: PathBuf,
@@ -1140,7 +1140,7 @@ impl PendingPoses {
     const MAX: usize = 256;
 
     /// Writes the pending configurations' results and forgets them; returns how many failed
-    /// (written as error objects under `--keep-going`; without it, the first failure is the
+    /// (written as error lines under `--keep-going`; without it, the first failure is the
     /// error).
     fn flush(
         &mut self,
@@ -1176,7 +1176,7 @@ impl PendingPoses {
                 },
                 Err(e) if args.keep_going => {
                     failed += 1;
-                    error_json(line, &e)
+                    failed_line(args.format, line, &e)
                 }
                 Err(e) => return Err(at_line(path, line, e)),
             };
@@ -1283,7 +1283,7 @@ fn fk_batch<R: std::io::Read>(
                     Err(e @ CliError::Io { .. }) => return Err(e),
                     Err(e) if args.keep_going => {
                         failed_lines += 1;
-                        write_line(out, &error_json(i + 1, &e))?;
+                        write_line(out, &failed_line(args.format, i + 1, &e))?;
                     }
                     Err(e) => return Err(at_line(path, i + 1, e)),
                 }
@@ -1294,7 +1294,7 @@ fn fk_batch<R: std::io::Read>(
                     return Err(at_line(path, i + 1, e));
                 }
                 failed_lines += 1;
-                write_line(out, &error_json(i + 1, &e))?;
+                write_line(out, &failed_line(args.format, i + 1, &e))?;
             }
         }
     }
@@ -1376,9 +1376,13 @@ fn read_capped_line(
     Ok(CappedLine::Line)
 }
 
-/// The output line standing in for a failed batch line under `--keep-going`.
-fn error_json(line: usize, e: &CliError) -> String {
-    json!({ "line": line, "error": error_chain(e) }).to_string()
+/// The output line standing in for a failed batch line under `--keep-going`: an object
+/// `{"line": N, "error": ".."}` in JSON output, `line N: error: ..` in a table.
+fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
+    match format {
+        OutputFormat::Json => json!({ "line": line, "error": error_chain(e) }).to_string(),
+        OutputFormat::Table => format!("line {line}: error: {}", error_chain(e)),
+    }
 }
 
 /// One batch line through [`crate::input::parse_batch_line`].

@@ -657,6 +657,26 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
             }
         }
     }
+
+    // In a table, each failed line is a line of text in its place: after the tables of the
+    // lines before it, before those of the lines after it.
+    let args = ["fk", "robots/planar3.yaml", "--batch", arg, "--keep-going"];
+    let out = kinechain(&[&args[..], &["--format", "table"]].concat());
+    assert!(!out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut tables = 0;
+    let mut failed = Vec::new();
+    for line in text.lines() {
+        if line.starts_with("link ") {
+            tables += 1;
+        } else if let Some(rest) = line.strip_prefix("line ") {
+            let (number, error) = rest.split_once(": error: ").unwrap();
+            assert!(error.len() > 5, "{line}");
+            failed.push((number.parse::<usize>().unwrap(), tables));
+        }
+    }
+    assert_eq!(tables, 997);
+    assert_eq!(failed, [(201, 200), (301, 299), (451, 448)]);
 }
 
 /// Batch lines are read with a cap on their length (1 MiB plus 1 KiB per degree of freedom): a
@@ -741,7 +761,7 @@ fn batch_reads_standard_input() {
     let stderr = String::from_utf8(from_stdin.stderr).unwrap();
     assert_eq!(
         stderr,
-        "error: standard input: 1 line(s) failed (see the error objects in the output)\n"
+        "error: standard input: 1 line(s) failed (their errors are in the output, each in its line's place)\n"
     );
     let out = kinechain_with_input(
         &["fk", "robots/planar3.yaml", "--batch", "-"],
@@ -802,7 +822,7 @@ fn batch_reads_standard_input() {
     assert!(!out.status.success());
     assert_eq!(
         String::from_utf8(out.stderr).unwrap(),
-        "error: standard input: 1 line(s) failed (see the error objects in the output)\n"
+        "error: standard input: 1 line(s) failed (their errors are in the output, each in its line's place)\n"
     );
     reader.join().unwrap();
 }
