@@ -14,6 +14,7 @@ use crate::measure::worse;
 use crate::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
+use serde::{Serialize, Serializer, ser::SerializeMap};
 use serde_json::{Map, Value, json};
 use std::hint::black_box;
 use std::io::{BufRead, BufWriter, Write};
@@ -697,21 +698,28 @@ fn vec_json(v: &Vector3<f64>) -> Value {
     json!([v.x, v.y, v.z])
 }
 
-/// Adds `"jacobians": {"LINK": [[row], … six rows]}` to `value`, rows `v_x, v_y, v_z, ω_x, ω_y,
-/// ω_z`, columns in `q` order; with rates, `"jacobian_dots"` the same way for `J̇`.
-fn jacobians_json(chain: &Chain, jacobians: &[JacobianResult], value: &mut Value) {
+/// Adds `"jacobians": {"LINK": [[row], … six rows]}` to `members` (nothing without Jacobians),
+/// rows `v_x, v_y, v_z, ω_x, ω_y, ω_z`, columns in `q` order; with rates, `"jacobian_dots"` the
+/// same way for `J̇`.
+fn jacobians_json(
+    chain: &Chain,
+    jacobians: &[JacobianResult],
+    members: &mut Vec<(&'static str, Value)>,
+) {
+    if jacobians.is_empty() {
+        return;
+    }
     let rows = |m: &nalgebra::Matrix6xX<f64>| -> Value {
         m.row_iter()
             .map(|r| json!(r.iter().collect::<Vec<_>>()))
             .collect()
     };
     let name = |r: &JacobianResult| chain.link(r.link).name().to_string();
-    value["jacobians"] = jacobians.iter().map(|r| (name(r), rows(&r.j))).collect();
+    let jacobian = jacobians.iter().map(|r| (name(r), rows(&r.j))).collect();
+    members.push(("jacobians", jacobian));
     if jacobians.iter().any(|r| r.with_rate) {
-        value["jacobian_dots"] = jacobians
-            .iter()
-            .map(|r| (name(r), rows(&r.j_dot)))
-            .collect();
+        let rate = jacobians.iter().map(|r| (name(r), rows(&r.j_dot)));
+        members.push(("jacobian_dots", rate.collect()));
     }
 }
 
@@ -817,22 +825,107 @@ fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<V
     }
 }
 
-/// The `"position"` and orientation members of a link for a non-matrix `--orientation`; the
-/// orientation is `null` where the representation is undefined (a singularity).
-fn orientation_json(m: &mut Map<String, Value>, pose: &Transform, kind: Orientation) {
-    if kind == Orientation::Matrix {
-        m.insert("pose".into(), json!(pose.to_rows()));
-        return;
+/// `{"links": {"NAME": {..}, ..}, ..}` for one configuration's `results`, then the members of
+/// `extra` (points, Jacobians) in their order: serialised straight into the output, since a
+/// `Value` tree allocates a node per number (which took most of a batch run's time).
+struct ResultsJson<'a> {
+    chain: &'a Chain,
+    results: &'a [LinkResult],
+    orientation: Orientation,
+    extra: &'a [(&'static str, Value)],
+}
+
+impl Serialize for ResultsJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        /// The links, keyed by name.
+        struct Links<'b>(&'b ResultsJson<'b>);
+        impl Serialize for Links<'_> {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                let r = self.0;
+                let mut m = s.serialize_map(Some(r.results.len()))?;
+                for result in r.results {
+                    let link = LinkJson {
+                        result,
+                        orientation: r.orientation,
+                    };
+                    m.serialize_entry(r.chain.link(result.0).name(), &link)?;
+                }
+                m.end()
+            }
+        }
+        let mut m = s.serialize_map(Some(1 + self.extra.len()))?;
+        m.serialize_entry("links", &Links(self))?;
+        for (key, value) in self.extra {
+            m.serialize_entry(key, value)?;
+        }
+        m.end()
     }
-    let value = orientation_values(&pose.rotation(), kind).map_or(Value::Null, |v| match kind {
-        Orientation::Quat => json!({"w": v[0], "x": v[1], "y": v[2], "z": v[3]}),
-        Orientation::Rpy => json!({"roll": v[0], "pitch": v[1], "yaw": v[2]}),
-        Orientation::Zxz => json!({"phi": v[0], "theta": v[1], "psi": v[2]}),
-        Orientation::AxisAngle => json!({"axis": [v[0], v[1], v[2]], "angle": v[3]}),
-        Orientation::Matrix | Orientation::Rodrigues => json!(v),
-    });
-    m.insert("position".into(), vec_json(&pose.translation()));
-    m.insert(orientation_labels(kind).0.into(), value);
+}
+
+/// One link's members: `"pose"`, or `"position"` and the orientation coordinates (`null` where
+/// the representation is undefined, at a singularity); then the rates there are.
+struct LinkJson<'a> {
+    result: &'a LinkResult,
+    orientation: Orientation,
+}
+
+impl Serialize for LinkJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let (_, pose, vel, acc) = self.result;
+        let mut m = s.serialize_map(None)?;
+        let kind = self.orientation;
+        if kind == Orientation::Matrix {
+            m.serialize_entry("pose", &pose.to_rows())?;
+        } else {
+            m.serialize_entry("position", &xyz(&pose.translation()))?;
+            let key = orientation_labels(kind).0;
+            match orientation_values(&pose.rotation(), kind).as_deref() {
+                None => m.serialize_entry(key, &())?,
+                Some(&[w, x, y, z]) if kind == Orientation::Quat => {
+                    m.serialize_entry(key, &Named([("w", w), ("x", x), ("y", y), ("z", z)]))?;
+                }
+                Some(&[roll, pitch, yaw]) if kind == Orientation::Rpy => {
+                    let angles = [("roll", roll), ("pitch", pitch), ("yaw", yaw)];
+                    m.serialize_entry(key, &Named(angles))?;
+                }
+                Some(&[phi, theta, psi]) if kind == Orientation::Zxz => {
+                    let angles = [("phi", phi), ("theta", theta), ("psi", psi)];
+                    m.serialize_entry(key, &Named(angles))?;
+                }
+                Some(&[x, y, z, angle]) if kind == Orientation::AxisAngle => {
+                    m.serialize_entry(key, &json!({"axis": [x, y, z], "angle": angle}))?;
+                }
+                Some(v) => m.serialize_entry(key, v)?,
+            }
+        }
+        if let Some(v) = vel {
+            m.serialize_entry("omega", &xyz(&v.omega))?;
+            m.serialize_entry("v", &xyz(&v.v))?;
+        }
+        if let Some(a) = acc {
+            m.serialize_entry("alpha", &xyz(&a.alpha))?;
+            m.serialize_entry("a", &xyz(&a.a))?;
+        }
+        m.end()
+    }
+}
+
+/// An object of numbers with the given member names, in their order.
+struct Named<const N: usize>([(&'static str, f64); N]);
+
+impl<const N: usize> Serialize for Named<N> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(N))?;
+        for (key, value) in &self.0 {
+            m.serialize_entry(key, value)?;
+        }
+        m.end()
+    }
+}
+
+/// The entries of `v`, for serialising as `[x, y, z]`.
+fn xyz(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
 }
 
 /// The name of an `--orientation`'s coordinates (the JSON member; for the matrix, the table's
@@ -848,22 +941,19 @@ fn orientation_labels(kind: Orientation) -> (&'static str, &'static str) {
     }
 }
 
-fn results_json(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> Value {
-    let mut links = Map::new();
-    for (l, pose, vel, acc) in results {
-        let mut m = Map::new();
-        orientation_json(&mut m, pose, orientation);
-        if let Some(v) = vel {
-            m.insert("omega".into(), vec_json(&v.omega));
-            m.insert("v".into(), vec_json(&v.v));
-        }
-        if let Some(a) = acc {
-            m.insert("alpha".into(), vec_json(&a.alpha));
-            m.insert("a".into(), vec_json(&a.a));
-        }
-        links.insert(chain.link(*l).name().to_string(), Value::Object(m));
-    }
-    json!({ "links": links })
+/// Writes `value` as one line of JSON, serialised into `buf` (reused from line to line) and
+/// written with one call.
+fn write_json_line(
+    out: &mut dyn Write,
+    buf: &mut Vec<u8>,
+    value: &impl Serialize,
+) -> Result<(), CliError> {
+    buf.clear();
+    // (Serialising into memory fails only for a map key that is not a string, which the
+    // values written here do not have.)
+    serde_json::to_writer(&mut *buf, value).map_err(|e| output_error(e.into()))?;
+    buf.push(b'\n');
+    out.write_all(buf).map_err(output_error)
 }
 
 /// The error for the first result that is not finite (a value too large for `f64`, which JSON
@@ -1095,25 +1185,28 @@ impl Request {
         } = &self.outputs;
         let points = &self.points;
         check_finite(chain, results, points, point_results)?;
-        let text = match args.format {
+        match args.format {
             OutputFormat::Json => {
-                let mut value = results_json(chain, results, args.orientation);
+                let mut extra = Vec::new();
                 if !points.is_empty() {
-                    value["points"] = points_json(chain, points, point_results);
+                    extra.push(("points", points_json(chain, points, point_results)));
                 }
-                if !jacobians.is_empty() {
-                    jacobians_json(chain, jacobians, &mut value);
-                }
-                value.to_string()
+                jacobians_json(chain, jacobians, &mut extra);
+                let value = ResultsJson {
+                    chain,
+                    results,
+                    orientation: args.orientation,
+                    extra: &extra,
+                };
+                write_json_line(out, &mut Vec::new(), &value)
             }
             OutputFormat::Table => {
                 let mut text = results_table(chain, results, args.orientation);
                 text.push_str(&points_table(chain, points, point_results));
                 text.push_str(&jacobians_table(chain, jacobians));
-                text
+                write_line(out, &text)
             }
-        };
-        write_line(out, &text)
+        }
     }
 }
 
@@ -1133,6 +1226,8 @@ struct PendingPoses {
     /// The 1-based line number of each.
     lines: Vec<usize>,
     batch: BatchData,
+    /// One line of JSON output, reused.
+    text: Vec<u8>,
 }
 
 impl PendingPoses {
@@ -1167,20 +1262,27 @@ impl PendingPoses {
                 (0..chain.links().len())
                     .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None)),
             );
-            let text = match check_finite(chain, &results, &[], &[]) {
+            match check_finite(chain, &results, &[], &[]) {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
-                        results_json(chain, &results, args.orientation).to_string()
+                        let value = ResultsJson {
+                            chain,
+                            results: &results,
+                            orientation: args.orientation,
+                            extra: &[],
+                        };
+                        write_json_line(out, &mut self.text, &value)?;
                     }
-                    OutputFormat::Table => results_table(chain, &results, args.orientation),
+                    OutputFormat::Table => {
+                        write_line(out, &results_table(chain, &results, args.orientation))?;
+                    }
                 },
                 Err(e) if args.keep_going => {
                     failed += 1;
-                    failed_line(args.format, line, &e)
+                    write_line(out, &failed_line(args.format, line, &e))?;
                 }
                 Err(e) => return Err(at_line(path, line, e)),
-            };
-            write_line(out, &text)?;
+            }
         }
         self.qs.clear();
         self.lines.clear();
@@ -1237,6 +1339,7 @@ fn fk_batch<R: std::io::Read>(
         qs: Vec::new(),
         lines: Vec::new(),
         batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
+        text: Vec::new(),
     };
     let mut failed_lines = 0usize;
     let limit = batch_line_limit(chain.dof());

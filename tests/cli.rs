@@ -1495,3 +1495,85 @@ fn fk_jacobians_give_the_printed_velocity_and_acceleration() {
             .contains("no link named 'panda_hnd' (did you mean 'panda_hand'?)")
     );
 }
+
+/// The JSON output's text, member by member and in order, where the numbers are exact (the planar
+/// arm stretched out along x): links, then points, then Jacobians; each link's pose or position
+/// and orientation, then its rates; `null` where the orientation is undefined. Both the single
+/// evaluation and a batch line (written by the batch kernel's path).
+#[test]
+fn json_output_text() {
+    let text = |args: &[&str]| {
+        let out = kinechain(&[&["fk", "robots/planar3.yaml"], args].concat());
+        assert!(out.status.success(), "{args:?}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let z3 = "[0.0,0.0,0.0]";
+    let identity = "[[1.0,0.0,0.0,0.0],[0.0,1.0,0.0,0.0],[0.0,0.0,1.0,0.0],[0.0,0.0,0.0,1.0]]";
+    let rates = ["--qd", "[1,0,0]", "--qdd", "[0,0,0]"];
+    let only = ["--link", "link0", "--link", "link3"];
+    let extra = ["--point", "link3:1,0,0", "--jacobian", "link3"];
+    let q0 = ["--q", "[0,0,0]"];
+    assert_eq!(
+        text(&[&q0[..], &rates, &only, &extra].concat()),
+        format!(
+            concat!(
+                r#"{{"links":{{"link0":{{"pose":{i},"omega":{z},"v":{z},"alpha":{z},"a":{z}}},"#,
+                r#""link3":{{"pose":[[1.0,0.0,0.0,9.0],[0.0,1.0,0.0,0.0],[0.0,0.0,1.0,0.0],"#,
+                r#"[0.0,0.0,0.0,1.0]],"omega":[0.0,0.0,1.0],"v":[0.0,9.0,0.0],"alpha":{z},"#,
+                r#""a":[-9.0,0.0,0.0]}}}},"points":[{{"link":"link3","u":[1.0,0.0,0.0],"#,
+                r#""position":[10.0,0.0,0.0],"velocity":[0.0,10.0,0.0],"#,
+                r#""acceleration":[-10.0,0.0,0.0],"acceleration_parts":{{"origin":[-9.0,0.0,0.0],"#,
+                r#""tangential":{z},"normal":[-1.0,0.0,0.0]}}}}],"jacobians":{{"link3":[{z},"#,
+                r#"[9.0,5.0,2.0],{z},{z},{z},[1.0,1.0,1.0]]}},"jacobian_dots":{{"link3":"#,
+                r#"[[-9.0,-5.0,-2.0],{z},{z},{z},{z},{z}]}}}}"#,
+                "\n"
+            ),
+            i = identity,
+            z = z3
+        )
+    );
+    assert_eq!(
+        text(&[&q0[..], &only, &["--orientation", "axis-angle"]].concat()),
+        concat!(
+            r#"{"links":{"link0":{"position":[0.0,0.0,0.0],"axis_angle":null},"#,
+            r#""link3":{"position":[9.0,0.0,0.0],"axis_angle":null}}}"#,
+            "\n"
+        )
+    );
+    assert_eq!(
+        text(&["--q", "[0,0,0]", "--link", "link3", "--orientation", "quat"]),
+        concat!(
+            r#"{"links":{"link3":{"position":[9.0,0.0,0.0],"#,
+            r#""quaternion":{"w":1.0,"x":0.0,"y":0.0,"z":0.0}}}}"#,
+            "\n"
+        )
+    );
+    let turned = ["--q", "[0.5,0,0]", "--link", "link1", "--orientation"];
+    let axis_angle = text(&[&turned[..], &["axis-angle"]].concat());
+    assert!(
+        axis_angle.contains(r#","axis_angle":{"axis":[0.0,0.0,1.0],"angle":0.49999999999999"#),
+        "{axis_angle}"
+    );
+    let rodrigues = text(&[&turned[..], &["rodrigues"]].concat());
+    assert!(
+        rodrigues.contains(r#","rodrigues":[0.0,0.0,0.255"#),
+        "{rodrigues}"
+    );
+
+    let dir = Scratch::new("cli-json-text");
+    let batch = dir.write("one.jsonl", "{\"q\": [0, 0, 0]}\n");
+    let zero = r#"{"roll":0.0,"pitch":-0.0,"yaw":0.0}"#;
+    let links: Vec<String> = [
+        ("link0", 0.0),
+        ("link1", 4.0),
+        ("link2", 7.0),
+        ("link3", 9.0),
+    ]
+    .iter()
+    .map(|(name, x)| format!(r#""{name}":{{"position":[{x:?},0.0,0.0],"rpy":{zero}}}"#))
+    .collect();
+    assert_eq!(
+        text(&["--batch", &batch, "--orientation", "rpy"]),
+        format!("{{\"links\":{{{}}}}}\n", links.join(","))
+    );
+}
