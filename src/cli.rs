@@ -111,8 +111,9 @@ struct FkArgs {
     /// Joint accelerations (same forms as --q); adds "alpha" and "a". Needs --qd.
     #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
     qdd: Option<String>,
-    /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}; `-`
-    /// reads standard input, writing each result before waiting for more input.
+    /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}, or q
+    /// alone as a JSON array or numbers separated by commas or spaces (a CSV row); `-` reads standard input,
+    /// writing each result before waiting for more input.
     #[arg(long)]
     batch: Option<PathBuf>,
     /// Only these links (repeatable); only the joints they depend on are evaluated.

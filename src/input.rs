@@ -275,7 +275,8 @@ pub fn joint_vector_from_str(
 }
 
 /// One line of a batch file: `{"q": .., "qd": .., "qdd": ..}`, with `qd` and `qdd` optional and
-/// each vector an array in `q` order or an object keyed by joint name.
+/// each vector an array in `q` order or an object keyed by joint name; or `q` alone (see
+/// [`parse_batch_line`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BatchLine {
     /// Joint positions.
@@ -286,12 +287,22 @@ pub struct BatchLine {
     pub q_ddot: Option<Vec<f64>>,
 }
 
-/// Reads one batch line.
+/// Reads one batch line: an object `{"q": .., "qd": .., "qdd": ..}` (`qd` and `qdd` optional),
+/// or `q` alone in a form [`joint_vector_from_str`] reads (a JSON array, or numbers separated
+/// by commas or spaces, as in a CSV file of joint values).
 ///
 /// # Errors
 /// [`InputError`]: not JSON, not an object, an unknown or missing member, or a vector that
-/// [`joint_vector_from_json`] refuses.
+/// [`joint_vector_from_json`] refuses; for a line that is not an object, what
+/// [`joint_vector_from_str`] refuses.
 pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputError> {
+    if !line.trim_start().starts_with('{') {
+        return Ok(BatchLine {
+            q: joint_vector_from_str(chain, line, "q")?,
+            q_dot: None,
+            q_ddot: None,
+        });
+    }
     let value = parse_json(line, "line")?;
     let Value::Object(map) = value else {
         return Err(InputError::BatchLine(

@@ -238,6 +238,29 @@ fn fk_batch_writes_one_line_per_configuration() {
     assert!(stderr.starts_with("error: "), "{stderr}");
     assert!(stderr.contains("line 2"), "{stderr}");
     assert!(stderr.contains("2 values given"), "{stderr}");
+
+    // Lines of joint values alone (a CSV file, an array): the same output as the objects.
+    let objects = dir.write(
+        "objects.jsonl",
+        "{\"q\": [0.25, -0.5, 1]}\n{\"q\": [0.125, 0, -1]}\n{\"q\": [1, 2, 0.5]}\n",
+    );
+    let rows = dir.write("rows.csv", "0.25,-0.5,1\r\n0.125 0 -1\n[1, 2, 0.5]\n");
+    let from_objects = kinechain(&["fk", "robots/planar3.yaml", "--batch", &objects]);
+    let from_rows = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
+    assert!(from_rows.status.success());
+    assert_eq!(from_rows.stdout, from_objects.stdout);
+    assert_eq!(
+        String::from_utf8(from_rows.stdout).unwrap().lines().count(),
+        3
+    );
+    // A header row is an error naming the line and its first entry.
+    dir.write("rows.csv", "q1,q2,q3\n0.25,-0.5,1\n");
+    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("rows.csv: line 1: ") && stderr.contains("'q1' is not a number"),
+        "{stderr}"
+    );
 }
 
 #[test]

@@ -550,6 +550,37 @@ fn batch_lines() {
         line(r#"{"q": [0, 0, 0]} {"q": [0, 0, 0]}"#).unwrap_err(),
         InputError::Json { what: "line", .. }
     ));
+    // A line that is not an object is `q` alone: a JSON array, or numbers separated by commas
+    // or by spaces and tabs (a row of a CSV file).
+    let q_alone = BatchLine {
+        q: vec![0.1, -2.0, 0.30000000000000004],
+        q_dot: None,
+        q_ddot: None,
+    };
+    for text in [
+        "[0.1, -2, 0.30000000000000004]",
+        "0.1,-2,0.30000000000000004",
+        " 0.1, -2.0 ,0.30000000000000004 ",
+        "0.1 -2\t0.30000000000000004",
+    ] {
+        assert_eq!(line(text).unwrap(), q_alone, "{text}");
+    }
+    assert_eq!(
+        line("0.1, 0.2").unwrap_err(),
+        InputError::WrongLength {
+            what: "q",
+            expected: 3,
+            got: 2
+        }
+    );
+    assert_eq!(
+        line("j1,j2,j3").unwrap_err(),
+        InputError::ListEntry {
+            what: "q",
+            index: 0,
+            entry: "j1".into()
+        }
+    );
 }
 
 #[test]
