@@ -112,8 +112,8 @@ struct FkArgs {
     #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
     qdd: Option<String>,
     /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}, or q
-    /// alone as a JSON array or numbers separated by commas or spaces (a CSV row); `-` reads standard input,
-    /// writing each result before waiting for more input.
+    /// alone as a JSON array or numbers separated by commas or spaces (a CSV row); `-` reads
+    /// standard input, writing each result before waiting for more input.
     #[arg(long)]
     batch: Option<PathBuf>,
     /// Only these links (repeatable); only the joints they depend on are evaluated.
@@ -696,7 +696,7 @@ fn points_table(chain: &Chain, points: &[Point], results: &[PointResult]) -> Str
 }
 
 fn vec_json(v: &Vector3<f64>) -> Value {
-    json!([v.x, v.y, v.z])
+    json!(xyz(v))
 }
 
 /// Adds `"jacobians": {"LINK": [[row], … six rows]}` to `members` (nothing without Jacobians),
@@ -880,23 +880,24 @@ impl Serialize for LinkJson<'_> {
         } else {
             m.serialize_entry("position", &xyz(&pose.translation()))?;
             let key = orientation_labels(kind).0;
-            match orientation_values(&pose.rotation(), kind).as_deref() {
-                None => m.serialize_entry(key, &())?,
-                Some(&[w, x, y, z]) if kind == Orientation::Quat => {
+            match (kind, orientation_values(&pose.rotation(), kind).as_deref()) {
+                (_, None) => m.serialize_entry(key, &())?,
+                (Orientation::Quat, Some(&[w, x, y, z])) => {
                     m.serialize_entry(key, &Named([("w", w), ("x", x), ("y", y), ("z", z)]))?;
                 }
-                Some(&[roll, pitch, yaw]) if kind == Orientation::Rpy => {
+                (Orientation::Rpy, Some(&[roll, pitch, yaw])) => {
                     let angles = [("roll", roll), ("pitch", pitch), ("yaw", yaw)];
                     m.serialize_entry(key, &Named(angles))?;
                 }
-                Some(&[phi, theta, psi]) if kind == Orientation::Zxz => {
+                (Orientation::Zxz, Some(&[phi, theta, psi])) => {
                     let angles = [("phi", phi), ("theta", theta), ("psi", psi)];
                     m.serialize_entry(key, &Named(angles))?;
                 }
-                Some(&[x, y, z, angle]) if kind == Orientation::AxisAngle => {
+                (Orientation::AxisAngle, Some(&[x, y, z, angle])) => {
                     m.serialize_entry(key, &json!({"axis": [x, y, z], "angle": angle}))?;
                 }
-                Some(v) => m.serialize_entry(key, v)?,
+                // Rodriguez parameters, an array.
+                (_, Some(v)) => m.serialize_entry(key, v)?,
             }
         }
         if let Some(v) = vel {
