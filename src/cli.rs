@@ -1363,6 +1363,12 @@ fn fk_batch<R: std::io::Read>(
             }),
         };
         let result = result.and_then(|line| {
+            // A byte order mark, which spreadsheet programs put at the start of the CSV files
+            // they write, is not part of the first line.
+            let line = match i {
+                0 => line.strip_prefix('\u{feff}').unwrap_or(line),
+                _ => line,
+            };
             if line.trim().is_empty() {
                 return Ok(None);
             }

@@ -244,7 +244,11 @@ fn fk_batch_writes_one_line_per_configuration() {
         "objects.jsonl",
         "{\"q\": [0.25, -0.5, 1]}\n{\"q\": [0.125, 0, -1]}\n{\"q\": [1, 2, 0.5]}\n",
     );
-    let rows = dir.write("rows.csv", "0.25,-0.5,1\r\n0.125 0 -1\n[1, 2, 0.5]\n");
+    // (With the byte order mark that spreadsheet programs write first.)
+    let rows = dir.write(
+        "rows.csv",
+        "\u{feff}0.25,-0.5,1\r\n0.125 0 -1\n[1, 2, 0.5]\n",
+    );
     let from_objects = kinechain(&["fk", "robots/planar3.yaml", "--batch", &objects]);
     let from_rows = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
     assert!(from_rows.status.success());
