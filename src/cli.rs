@@ -1123,6 +1123,8 @@ struct Request {
     links: Vec<LinkId>,
     points: Vec<Point>,
     outputs: Outputs,
+    /// One line of JSON output, reused.
+    text: Vec<u8>,
 }
 
 impl Request {
@@ -1157,6 +1159,7 @@ impl Request {
             links,
             points,
             outputs,
+            text: Vec::new(),
         })
     }
 
@@ -1200,7 +1203,7 @@ impl Request {
                     orientation: args.orientation,
                     extra: &extra,
                 };
-                write_json_line(out, &mut Vec::new(), &value)
+                write_json_line(out, &mut self.text, &value)
             }
             OutputFormat::Table => {
                 let mut text = results_table(chain, results, args.orientation);
