@@ -112,8 +112,9 @@ struct FkArgs {
     #[arg(long, allow_hyphen_values = true, conflicts_with = "batch")]
     qdd: Option<String>,
     /// A JSON-lines file with one configuration per line: {"q": .., "qd": .., "qdd": ..}, or q
-    /// alone as a JSON array or numbers separated by commas or spaces (a CSV row); `-` reads
-    /// standard input, writing each result before waiting for more input.
+    /// alone as a JSON array or numbers separated by commas or spaces (a CSV row, in the order
+    /// of a first row of joint names if there is one); `-` reads standard input, writing each
+    /// result before waiting for more input.
     #[arg(long)]
     batch: Option<PathBuf>,
     /// Only these links (repeatable); only the joints they depend on are evaluated.
@@ -1349,6 +1350,10 @@ fn fk_batch<R: std::io::Read>(
     let mut failed_lines = 0usize;
     let limit = batch_line_limit(chain.dof());
     let mut bytes = Vec::new();
+    // The first line that is not blank may be a header row of joint names (`csv_header`).
+    let mut first = true;
+    let mut header: Option<Vec<usize>> = None;
+    let mut bad_header = false;
     for i in 0.. {
         if reader.buffer().is_empty() {
             failed_lines += pending.flush(chain, args, path, out)?;
@@ -1375,7 +1380,16 @@ fn fk_batch<R: std::io::Read>(
             if line.trim().is_empty() {
                 return Ok(None);
             }
-            let c = batch_configuration(chain, line)?;
+            if std::mem::take(&mut first)
+                && let Some(order) = crate::input::csv_header(chain, line)
+            {
+                // (A header that cannot be read stops the run even under `--keep-going`: the
+                // rows below it would be read in another order than the file's.)
+                bad_header = order.is_err();
+                header = Some(order?);
+                return Ok(None);
+            }
+            let c = batch_configuration(chain, line, header.as_deref())?;
             if batchable && c.qd.is_none() && c.qdd.is_none() {
                 check_q(chain, &c.q, data.limit_policy())?;
                 pending.qs.extend_from_slice(&c.q);
@@ -1404,7 +1418,7 @@ fn fk_batch<R: std::io::Read>(
             }
             Err(e) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
-                if !args.keep_going {
+                if !args.keep_going || bad_header {
                     return Err(at_line(path, i + 1, e));
                 }
                 failed_lines += 1;
@@ -1500,8 +1514,22 @@ fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
 }
 
 /// One batch line through [`crate::input::parse_batch_line`].
-fn batch_configuration(chain: &Chain, line: &str) -> Result<Configuration, CliError> {
-    let l = crate::input::parse_batch_line(chain, line)?;
+fn batch_configuration(
+    chain: &Chain,
+    line: &str,
+    header: Option<&[usize]>,
+) -> Result<Configuration, CliError> {
+    let mut l = crate::input::parse_batch_line(chain, line)?;
+    // A row below a header of joint names has its values in the header's order.
+    if let Some(order) = header
+        && !line.trim_start().starts_with(['{', '['])
+    {
+        let mut q = vec![0.0; l.q.len()];
+        for (&index, &value) in order.iter().zip(&l.q) {
+            q[index] = value;
+        }
+        l.q = q;
+    }
     Ok(Configuration {
         q: l.q,
         qd: l.q_dot,

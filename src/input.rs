@@ -176,23 +176,7 @@ pub fn joint_vector_from_json(
         Value::Object(map) => {
             let mut out = vec![0.0; chain.dof()];
             for (name, v) in map {
-                let id = chain.joint_id(name).map_err(|e| InputError::UnknownJoint {
-                    what,
-                    name: name.clone(),
-                    suggestion: e.suggestion().map(str::to_string),
-                })?;
-                let joint = chain.joint(id);
-                let Some(index) = joint.q_index() else {
-                    let reason = match joint.mimic() {
-                        Some(m) => format!("a mimic of '{}'", chain.joint(m.primary).name()),
-                        None => "fixed".to_string(),
-                    };
-                    return Err(InputError::NotIndependent {
-                        what,
-                        name: name.clone(),
-                        reason,
-                    });
-                };
+                let (joint, index) = independent_joint(chain, name, what)?;
                 let shape = |expected| InputError::Shape {
                     what,
                     name: name.clone(),
@@ -231,6 +215,102 @@ pub fn joint_vector_from_json(
     }
 }
 
+/// The joint named `name` and its first entry of `q`; an error naming the joint unless it is one
+/// that takes values (not fixed, not a mimic).
+fn independent_joint<'c>(
+    chain: &'c Chain,
+    name: &str,
+    what: &'static str,
+) -> Result<(&'c crate::chain::Joint, usize), InputError> {
+    let id = chain.joint_id(name).map_err(|e| InputError::UnknownJoint {
+        what,
+        name: name.to_string(),
+        suggestion: e.suggestion().map(str::to_string),
+    })?;
+    let joint = chain.joint(id);
+    match joint.q_index() {
+        Some(index) => Ok((joint, index)),
+        None => Err(InputError::NotIndependent {
+            what,
+            name: name.to_string(),
+            reason: match joint.mimic() {
+                Some(m) => format!("a mimic of '{}'", chain.joint(m.primary).name()),
+                None => "fixed".to_string(),
+            },
+        }),
+    }
+}
+
+/// The entries of a list of numbers or names: separated by commas (each entry trimmed), or by
+/// spaces alone.
+fn list_entries(trimmed: &str) -> Vec<&str> {
+    if trimmed.contains(',') {
+        trimmed.split(',').map(str::trim).collect()
+    } else {
+        trimmed.split_whitespace().collect()
+    }
+}
+
+/// Reads the header row of a file of joint values (CSV): a line of joint names, none of its
+/// entries a number, separated as [`joint_vector_from_str`] separates numbers. Returns `None`
+/// for a line that is not a header (empty, JSON, or with an entry that is a number), otherwise
+/// the order of its columns: entry `k` of each row below it is `q[order[k]]`. The header names
+/// every joint that takes values once; a cylindrical joint's name stands for two columns, θ then
+/// d.
+///
+/// # Errors
+/// [`InputError`] (its `what` is `header`): a name that is not a joint's, or a fixed or mimic
+/// joint's, a joint named twice, or one left out.
+///
+/// ```
+/// # use kinechain::{Chain, input::csv_header};
+/// let chain = Chain::from_file("robots/planar3.yaml")?;
+/// assert_eq!(csv_header(&chain, "j3,j1,j2"), Some(Ok(vec![2, 0, 1])));
+/// assert_eq!(csv_header(&chain, "0.1,0.2,0.3"), None);
+/// assert!(csv_header(&chain, "j1,j2").is_some_and(|h| h.is_err()));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[must_use]
+pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<Vec<usize>, InputError>> {
+    const WHAT: &str = "header";
+    let trimmed = line.trim();
+    if trimmed.is_empty() || trimmed.starts_with('[') || trimmed.starts_with('{') {
+        return None;
+    }
+    let names = list_entries(trimmed);
+    if names.iter().any(|n| n.parse::<f64>().is_ok()) {
+        return None;
+    }
+    let read = || {
+        let mut order = Vec::with_capacity(chain.dof());
+        let mut named = vec![false; chain.dof()];
+        for name in &names {
+            let (joint, index) = independent_joint(chain, name, WHAT)?;
+            if named[index] {
+                return Err(InputError::DuplicateMember {
+                    what: WHAT,
+                    name: (*name).to_string(),
+                });
+            }
+            let columns = index..index + joint.dof();
+            named[columns.clone()].fill(true);
+            order.extend(columns);
+        }
+        if let Some(joint) = chain
+            .joints()
+            .iter()
+            .find(|j| j.q_index().is_some_and(|i| !named[i]))
+        {
+            return Err(InputError::MissingJoint {
+                what: WHAT,
+                name: joint.name().to_string(),
+            });
+        }
+        Ok(order)
+    };
+    Some(read())
+}
+
 /// Reads a joint-space vector from text: JSON (array or object), or numbers separated by commas
 /// and/or spaces (`0.1,0.2,-0.3`).
 ///
@@ -248,11 +328,7 @@ pub fn joint_vector_from_str(
     }
     // Entries separated by commas (each one number, spaces around it allowed), or by spaces
     // alone; an empty entry (`1,,2`, a trailing comma) is an error, not skipped.
-    let tokens: Vec<&str> = if trimmed.contains(',') {
-        trimmed.split(',').map(str::trim).collect()
-    } else {
-        trimmed.split_whitespace().collect()
-    };
+    let tokens = list_entries(trimmed);
     let values = tokens
         .iter()
         .enumerate()

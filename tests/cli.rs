@@ -257,14 +257,29 @@ fn fk_batch_writes_one_line_per_configuration() {
         String::from_utf8(from_rows.stdout).unwrap().lines().count(),
         3
     );
-    // A header row is an error naming the line and its first entry.
-    dir.write("rows.csv", "q1,q2,q3\n0.25,-0.5,1\n");
-    let out = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert!(
-        stderr.contains("rows.csv: line 1: ") && stderr.contains("'q1' is not a number"),
-        "{stderr}"
+    // A header row of joint names gives the order of the columns of the rows below it (not of
+    // arrays or objects, which are in q order).
+    dir.write(
+        "rows.csv",
+        "\n j3, j1 ,j2\n1,0.25,-0.5\n-1 0.125 0\n[1, 2, 0.5]\n",
     );
+    let from_rows = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
+    assert!(from_rows.status.success());
+    assert_eq!(from_rows.stdout, from_objects.stdout);
+    // A header that names what is not a joint stops the run, even with --keep-going: the rows
+    // cannot be read in the file's order.
+    dir.write("rows.csv", "q1,q2,q3\n0.25,-0.5,1\n");
+    for keep_going in [&[][..], &["--keep-going"]] {
+        let args = ["fk", "robots/planar3.yaml", "--batch", &rows];
+        let out = kinechain(&[&args[..], keep_going].concat());
+        assert!(!out.status.success());
+        assert!(out.stdout.is_empty());
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            stderr.contains("rows.csv: line 1: header: no joint named 'q1'"),
+            "{stderr}"
+        );
+    }
 }
 
 #[test]

@@ -5,7 +5,8 @@ mod common;
 
 use common::limit_probes;
 use kinechain::input::{
-    BatchLine, InputError, joint_vector_from_json, joint_vector_from_str, parse_batch_line,
+    BatchLine, InputError, csv_header, joint_vector_from_json, joint_vector_from_str,
+    parse_batch_line,
 };
 use kinechain::{
     Chain, Data, LimitPolicy, NameError, StateError, forward_accelerations, forward_kinematics,
@@ -581,6 +582,61 @@ fn batch_lines() {
             entry: "j1".into()
         }
     );
+}
+
+/// The header row of a CSV file: joint names in any order (a cylindrical joint's name for its two
+/// columns), every joint that takes values named once; a line with a number in it, or JSON, is
+/// not a header.
+#[test]
+fn csv_headers() {
+    let ur5 = robot("ur5.yaml");
+    let header = |text: &str| csv_header(&ur5, text);
+    let names = "wrist_3, shoulder_pan, elbow, shoulder_lift, wrist_2, wrist_1";
+    assert_eq!(header(names), Some(Ok(vec![5, 0, 2, 1, 4, 3])));
+    assert_eq!(
+        header(&names.replace(',', " ")),
+        Some(Ok(vec![5, 0, 2, 1, 4, 3]))
+    );
+    for not_a_header in [
+        "",
+        "  ",
+        "0.1,0.2,0.3,0.4,0.5,0.6",
+        "wrist_3,1e-3,elbow",
+        "[0, 0, 0, 0, 0, 0]",
+        r#"{"q": [0, 0, 0, 0, 0, 0]}"#,
+    ] {
+        assert_eq!(header(not_a_header), None, "{not_a_header}");
+    }
+    let unknown = header("time,shoulder_pan,shoulder_lift,elbow,wrist_1,wrist_2,wrist_3");
+    assert!(
+        matches!(unknown, Some(Err(InputError::UnknownJoint { what: "header", ref name, .. })) if name == "time"),
+        "{unknown:?}"
+    );
+    assert_eq!(
+        header("shoulder_pan,shoulder_lift,elbow,wrist_1,wrist_2,wrist_2"),
+        Some(Err(InputError::DuplicateMember {
+            what: "header",
+            name: "wrist_2".into()
+        }))
+    );
+    assert_eq!(
+        header("shoulder_pan,shoulder_lift,elbow,wrist_1,wrist_2"),
+        Some(Err(InputError::MissingJoint {
+            what: "header",
+            name: "wrist_3".into()
+        }))
+    );
+    assert!(matches!(
+        header("shoulder_pan,shoulder_lift,elbow,wrist_1,wrist_2,wrist_3,tool0"),
+        Some(Err(InputError::NotIndependent { what: "header", .. }))
+    ));
+
+    let cylindrical = robot("cylindrical.yaml");
+    assert_eq!(csv_header(&cylindrical, "joint"), Some(Ok(vec![0, 1])));
+    assert!(matches!(
+        csv_header(&cylindrical, "joint,joint"),
+        Some(Err(InputError::DuplicateMember { .. }))
+    ));
 }
 
 #[test]
