@@ -895,7 +895,13 @@ impl Serialize for LinkJson<'_> {
                     m.serialize_entry(key, &Named(angles))?;
                 }
                 (Orientation::AxisAngle, Some(&[x, y, z, angle])) => {
-                    m.serialize_entry(key, &json!({"axis": [x, y, z], "angle": angle}))?;
+                    m.serialize_entry(
+                        key,
+                        &AxisAngleJson {
+                            axis: [x, y, z],
+                            angle,
+                        },
+                    )?;
                 }
                 // Rodriguez parameters, an array.
                 (_, Some(v)) => m.serialize_entry(key, v)?,
@@ -911,6 +917,13 @@ impl Serialize for LinkJson<'_> {
         }
         m.end()
     }
+}
+
+/// `{"axis": [x, y, z], "angle": θ}`.
+#[derive(Serialize)]
+struct AxisAngleJson {
+    axis: [f64; 3],
+    angle: f64,
 }
 
 /// An object of numbers with the given member names, in their order.
