@@ -1526,23 +1526,14 @@ fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
     }
 }
 
-/// One batch line through [`crate::input::parse_batch_line`].
+/// One batch line through [`crate::input::parse_batch_row`] (rows of numbers in the order of
+/// `header`).
 fn batch_configuration(
     chain: &Chain,
     line: &str,
     header: Option<&[usize]>,
 ) -> Result<Configuration, CliError> {
-    let mut l = crate::input::parse_batch_line(chain, line)?;
-    // A row below a header of joint names has its values in the header's order.
-    if let Some(order) = header
-        && !line.trim_start().starts_with(['{', '['])
-    {
-        let mut q = vec![0.0; l.q.len()];
-        for (&index, &value) in order.iter().zip(&l.q) {
-            q[index] = value;
-        }
-        l.q = q;
-    }
+    let l = crate::input::parse_batch_row(chain, line, header)?;
     Ok(Configuration {
         q: l.q,
         qd: l.q_dot,

@@ -372,9 +372,29 @@ pub struct BatchLine {
 /// [`joint_vector_from_json`] refuses; for a line that is not an object, what
 /// [`joint_vector_from_str`] refuses.
 pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputError> {
-    if !line.trim_start().starts_with('{') {
+    parse_batch_row(chain, line, None)
+}
+
+/// As [`parse_batch_line`], with the entries of a row of plain numbers (not JSON) in the order
+/// of `columns`, a [`csv_header`] of the same chain: entry `k` is `q[columns[k]]`.
+pub(crate) fn parse_batch_row(
+    chain: &Chain,
+    line: &str,
+    columns: Option<&[usize]>,
+) -> Result<BatchLine, InputError> {
+    let trimmed = line.trim_start();
+    if !trimmed.starts_with('{') {
+        let mut q = joint_vector_from_str(chain, line, "q")?;
+        if let Some(order) = columns.filter(|_| !trimmed.starts_with('[')) {
+            let row = std::mem::replace(&mut q, vec![0.0; order.len()]);
+            for (&index, value) in order.iter().zip(row) {
+                if let Some(entry) = q.get_mut(index) {
+                    *entry = value;
+                }
+            }
+        }
         return Ok(BatchLine {
-            q: joint_vector_from_str(chain, line, "q")?,
+            q,
             q_dot: None,
             q_ddot: None,
         });
