@@ -677,23 +677,24 @@ fn evaluate(
     Ok(())
 }
 
-fn points_table(chain: &Chain, points: &[Point], results: &[PointResult]) -> String {
-    let mut text = String::new();
-    let v3 = |v: &Vector3<f64>| format!("({}, {}, {})", fixed(v.x), fixed(v.y), fixed(v.z));
+/// `fk --format table`: appends a line per point (each starting with a newline): its position,
+/// then its rates.
+fn points_table(chain: &Chain, points: &[Point], results: &[PointResult], buf: &mut Vec<u8>) {
+    let v3 = |buf: &mut Vec<u8>, label: &str, v: &Vector3<f64>| {
+        let _ = write!(buf, "{label}(");
+        push_cells(buf, [v.x, v.y, v.z], b", ", 0);
+        buf.push(b')');
+    };
     for (p, r) in points.iter().zip(results) {
-        text.push_str(&format!(
-            "\n{}: position {}",
-            p.label(chain),
-            v3(&r.position)
-        ));
+        let _ = write!(buf, "\n{}: ", p.label(chain));
+        v3(buf, "position ", &r.position);
         if let Some(v) = &r.velocity {
-            text.push_str(&format!(", velocity {}", v3(v)));
+            v3(buf, ", velocity ", v);
         }
         if let Some((a, _)) = &r.acceleration {
-            text.push_str(&format!(", acceleration {}", v3(a)));
+            v3(buf, ", acceleration ", a);
         }
     }
-    text
 }
 
 fn vec_json(v: &Vector3<f64>) -> Value {
@@ -725,34 +726,33 @@ fn jacobians_json(
     }
 }
 
-/// `fk --format table`: each Jacobian (and `J̇`, with rates) under a heading naming its link,
-/// one row per twist component.
-fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult]) -> String {
-    let mut text = String::new();
-    let mut block = |heading: String, m: &nalgebra::Matrix6xX<f64>| {
-        text.push_str(&heading);
+/// `fk --format table`: appends each Jacobian (and `J̇`, with rates) under a heading naming its
+/// link, one row per twist component (each line starting with a newline).
+fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult], buf: &mut Vec<u8>) {
+    let block = |buf: &mut Vec<u8>, m: &nalgebra::Matrix6xX<f64>| {
         for (name, row) in ["v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z"]
             .iter()
             .zip(m.row_iter())
         {
-            let cells: Vec<String> = row.iter().map(|&x| format!("{:>12}", fixed(x))).collect();
-            text.push_str(&format!("\n{name:<8}{}", cells.join(" ")));
+            let _ = write!(buf, "\n{name:<8}");
+            push_cells(buf, row.iter().copied(), b" ", 12);
         }
     };
     for r in jacobians {
         let link = chain.link(r.link).name();
-        block(
-            format!("\njacobian of {link} ([v; omega] = J qd, columns in q order)"),
-            &r.j,
+        let _ = write!(
+            buf,
+            "\njacobian of {link} ([v; omega] = J qd, columns in q order)"
         );
+        block(buf, &r.j);
         if r.with_rate {
-            block(
-                format!("\njacobian rate of {link} ([a; alpha] = J qdd + Jdot qd)"),
-                &r.j_dot,
+            let _ = write!(
+                buf,
+                "\njacobian rate of {link} ([a; alpha] = J qdd + Jdot qd)"
             );
+            block(buf, &r.j_dot);
         }
     }
-    text
 }
 
 fn points_json(chain: &Chain, points: &[Point], results: &[PointResult]) -> Value {
@@ -804,26 +804,53 @@ enum Orientation {
 /// The coordinates of `a` that `--orientation` names, in the order the README gives (the matrix
 /// row by row, quaternion `w x y z`, `roll pitch yaw`, `phi theta psi`, the axis then the angle,
 /// `γ1 γ2 γ3`); `None` where the representation is undefined (a singularity).
-fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<Vec<f64>> {
+fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<Coordinates> {
     use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
     match kind {
-        Orientation::Matrix => Some(a.transpose().iter().copied().collect()),
+        Orientation::Matrix => Some(Coordinates::new([
+            a.m11, a.m12, a.m13, a.m21, a.m22, a.m23, a.m31, a.m32, a.m33,
+        ])),
         Orientation::Quat => {
             let e = EulerParameters::from_matrix(a);
-            Some(vec![e.e0, e.e1, e.e2, e.e3])
+            Some(Coordinates::new([e.e0, e.e1, e.e2, e.e3]))
         }
         Orientation::Rpy => Rpy::from_matrix(a)
             .ok()
-            .map(|r| vec![r.roll, r.pitch, r.yaw]),
+            .map(|r| Coordinates::new([r.roll, r.pitch, r.yaw])),
         Orientation::Zxz => EulerZxz::from_matrix(a)
             .ok()
-            .map(|e| vec![e.phi, e.theta, e.psi]),
+            .map(|e| Coordinates::new([e.phi, e.theta, e.psi])),
         Orientation::AxisAngle => AxisAngle::from_matrix(a)
             .ok()
-            .map(|x| vec![x.axis.x, x.axis.y, x.axis.z, x.angle]),
+            .map(|x| Coordinates::new([x.axis.x, x.axis.y, x.axis.z, x.angle])),
         Orientation::Rodrigues => RodriguezParameters::from_matrix(a)
             .ok()
-            .map(|g| g.0.iter().copied().collect()),
+            .map(|g| Coordinates::new([g.0.x, g.0.y, g.0.z])),
+    }
+}
+
+/// The orientation coordinates of one link (at most a matrix's nine), held without an
+/// allocation: the output of a batch makes one per link and line.
+struct Coordinates {
+    values: [f64; 9],
+    len: usize,
+}
+
+impl Coordinates {
+    fn new<const N: usize>(values: [f64; N]) -> Self {
+        const { assert!(N <= 9) };
+        let mut all = [0.0; 9];
+        for (slot, x) in all.iter_mut().zip(values) {
+            *slot = x;
+        }
+        Coordinates {
+            values: all,
+            len: N,
+        }
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
     }
 }
 
@@ -881,7 +908,8 @@ impl Serialize for LinkJson<'_> {
         } else {
             m.serialize_entry("position", &xyz(&pose.translation()))?;
             let key = orientation_labels(kind).0;
-            match (kind, orientation_values(&pose.rotation(), kind).as_deref()) {
+            let values = orientation_values(&pose.rotation(), kind);
+            match (kind, values.as_ref().map(Coordinates::as_slice)) {
                 (_, None) => m.serialize_entry(key, &())?,
                 (Orientation::Quat, Some(&[w, x, y, z])) => {
                     m.serialize_entry(key, &Named([("w", w), ("x", x), ("y", y), ("z", z)]))?;
@@ -972,6 +1000,19 @@ fn write_json_line(
     out.write_all(buf).map_err(output_error)
 }
 
+/// Writes the table text `fill` appends to `buf` (emptied first, and reused from line to line),
+/// and a newline.
+fn write_table_line(
+    out: &mut dyn Write,
+    buf: &mut Vec<u8>,
+    fill: impl FnOnce(&mut Vec<u8>),
+) -> Result<(), CliError> {
+    buf.clear();
+    fill(buf);
+    buf.push(b'\n');
+    out.write_all(buf).map_err(output_error)
+}
+
 /// The error for the first result that is not finite (a value too large for `f64`, which JSON
 /// cannot print): every pose, rate and point result of one configuration.
 fn check_finite(
@@ -1030,24 +1071,61 @@ fn check_finite(
     Ok(())
 }
 
-/// A number for a table: six decimals, or six significant digits after the first in exponent
-/// form from 10⁹ on (where six decimals would print hundreds of digits for a large value). A
-/// value that shows as zero has no sign: the `-` of `-0.000000` would come from a rounding
-/// residue such as −6·10⁻¹⁷ or from −0, not from the robot.
-fn fixed(x: f64) -> String {
+/// Appends `x` as a number for a table, right-aligned in `width` columns (0: as wide as it is):
+/// six decimals, or six significant digits after the first in exponent form from 10⁹ on (where
+/// six decimals would print hundreds of digits for a large value). A value that shows as zero
+/// has no sign: the `-` of `-0.000000` would come from a rounding residue such as −6·10⁻¹⁷ or
+/// from −0, not from the robot.
+fn push_fixed(buf: &mut Vec<u8>, x: f64, width: usize) {
+    let start = buf.len();
     if x.abs() >= 1e9 {
-        return format!("{x:.6e}");
+        let _ = write!(buf, "{x:>width$.6e}");
+        return;
     }
-    let text = format!("{x:.6}");
-    match text.strip_prefix('-') {
-        Some(digits) if digits.bytes().all(|b| b == b'0' || b == b'.') => digits.to_string(),
-        _ => text,
+    let _ = write!(buf, "{x:>width$.6}");
+    let cell = &buf[start..];
+    let Some(sign) = cell.iter().position(|&b| b != b' ') else {
+        return;
+    };
+    let zero = |rest: &[u8]| rest.iter().all(|&b| b == b'0' || b == b'.');
+    if cell[sign] == b'-' && zero(&cell[sign + 1..]) {
+        if sign > 0 {
+            // The sign's column becomes padding.
+            buf[start + sign] = b' ';
+        } else {
+            buf.remove(start);
+            if buf.len() - start < width {
+                buf.insert(start, b' ');
+            }
+        }
     }
 }
 
-/// `fk --format table`: one row per link, its position and its orientation in the coordinates
-/// `--orientation` names (`undefined` at a singularity of the representation), then its rates.
-fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation) -> String {
+/// Appends the numbers of `cells` ([`push_fixed`], each `width` wide) with `separator` between
+/// them.
+fn push_cells(
+    buf: &mut Vec<u8>,
+    cells: impl IntoIterator<Item = f64>,
+    separator: &[u8],
+    width: usize,
+) {
+    for (i, x) in cells.into_iter().enumerate() {
+        if i > 0 {
+            buf.extend_from_slice(separator);
+        }
+        push_fixed(buf, x, width);
+    }
+}
+
+/// `fk --format table`: appends one row per link, its position and its orientation in the
+/// coordinates `--orientation` names (`undefined` at a singularity of the representation), then
+/// its rates; no newline after the last row.
+fn results_table(
+    chain: &Chain,
+    results: &[LinkResult],
+    orientation: Orientation,
+    buf: &mut Vec<u8>,
+) {
     let width = results
         .iter()
         .map(|(l, ..)| chain.link(*l).name().len())
@@ -1055,8 +1133,9 @@ fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation
         .unwrap_or(4)
         .max(4);
     let (name, coordinates) = orientation_labels(orientation);
-    let mut text = format!(
-        "{:<width$} {:>12} {:>12} {:>12}   {name} ({coordinates})\n",
+    let _ = write!(
+        buf,
+        "{:<width$} {:>12} {:>12} {:>12}   {name} ({coordinates})",
         "link", "x", "y", "z"
     );
     // A matrix's rows, and the axis before its angle, are separated by `;`.
@@ -1064,44 +1143,37 @@ fn results_table(chain: &Chain, results: &[LinkResult], orientation: Orientation
         Orientation::Matrix | Orientation::AxisAngle => 3,
         _ => 4,
     };
-    let values = |v: Vec<f64>| {
-        let parts: Vec<String> = v
-            .chunks(group)
-            .map(|c| c.iter().map(|&x| fixed(x)).collect::<Vec<_>>().join(" "))
-            .collect();
-        format!("[{}]", parts.join("; "))
+    let row = |buf: &mut Vec<u8>, label: &str, v: &Vector3<f64>| {
+        let _ = write!(buf, "\n{label:>width$} ");
+        push_cells(buf, [v.x, v.y, v.z], b" ", 12);
     };
     for (l, pose, vel, acc) in results {
         let p = pose.translation();
-        let r = orientation_values(&pose.rotation(), orientation)
-            .map_or_else(|| "undefined".to_string(), values);
-        text.push_str(&format!(
-            "{:<width$} {:>12} {:>12} {:>12}   {r}\n",
-            chain.link(*l).name(),
-            fixed(p.x),
-            fixed(p.y),
-            fixed(p.z),
-        ));
-        let row = |label: &str, v: &nalgebra::Vector3<f64>| {
-            format!(
-                "{:>width$} {:>12} {:>12} {:>12}\n",
-                label,
-                fixed(v.x),
-                fixed(v.y),
-                fixed(v.z)
-            )
-        };
+        let _ = write!(buf, "\n{:<width$} ", chain.link(*l).name());
+        push_cells(buf, [p.x, p.y, p.z], b" ", 12);
+        buf.extend_from_slice(b"   ");
+        match orientation_values(&pose.rotation(), orientation) {
+            None => buf.extend_from_slice(b"undefined"),
+            Some(values) => {
+                buf.push(b'[');
+                for (i, chunk) in values.as_slice().chunks(group).enumerate() {
+                    if i > 0 {
+                        buf.extend_from_slice(b"; ");
+                    }
+                    push_cells(buf, chunk.iter().copied(), b" ", 0);
+                }
+                buf.push(b']');
+            }
+        }
         if let Some(v) = vel {
-            text.push_str(&row("omega", &v.omega));
-            text.push_str(&row("v", &v.v));
+            row(buf, "omega", &v.omega);
+            row(buf, "v", &v.v);
         }
         if let Some(a) = acc {
-            text.push_str(&row("alpha", &a.alpha));
-            text.push_str(&row("a", &a.a));
+            row(buf, "alpha", &a.alpha);
+            row(buf, "a", &a.a);
         }
     }
-    text.pop();
-    text
 }
 
 fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
@@ -1137,7 +1209,7 @@ struct Request {
     links: Vec<LinkId>,
     points: Vec<Point>,
     outputs: Outputs,
-    /// One line of JSON output, reused.
+    /// One line of output (JSON or a table), reused.
     text: Vec<u8>,
 }
 
@@ -1219,12 +1291,11 @@ impl Request {
                 };
                 write_json_line(out, &mut self.text, &value)
             }
-            OutputFormat::Table => {
-                let mut text = results_table(chain, results, args.orientation);
-                text.push_str(&points_table(chain, points, point_results));
-                text.push_str(&jacobians_table(chain, jacobians));
-                write_line(out, &text)
-            }
+            OutputFormat::Table => write_table_line(out, &mut self.text, |buf| {
+                results_table(chain, results, args.orientation, buf);
+                points_table(chain, points, point_results, buf);
+                jacobians_table(chain, jacobians, buf);
+            }),
         }
     }
 }
@@ -1245,7 +1316,7 @@ struct PendingPoses {
     /// The 1-based line number of each.
     lines: Vec<usize>,
     batch: BatchData,
-    /// One line of JSON output, reused.
+    /// One line of output (JSON or a table), reused.
     text: Vec<u8>,
 }
 
@@ -1292,9 +1363,9 @@ impl PendingPoses {
                         };
                         write_json_line(out, &mut self.text, &value)?;
                     }
-                    OutputFormat::Table => {
-                        write_line(out, &results_table(chain, &results, args.orientation))?;
-                    }
+                    OutputFormat::Table => write_table_line(out, &mut self.text, |buf| {
+                        results_table(chain, &results, args.orientation, buf);
+                    })?,
                 },
                 Err(e) if args.keep_going => {
                     failed += 1;
@@ -2128,6 +2199,28 @@ fn k_method<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A table's numbers: six decimals right-aligned, exponent form from 10⁹ on, and no sign on
+    /// a value that shows as zero, whether it is padded, fills its width or has none.
+    #[test]
+    fn table_numbers() {
+        let cell = |x: f64, width: usize| {
+            let mut buf = b"|".to_vec();
+            push_fixed(&mut buf, x, width);
+            String::from_utf8(buf).unwrap()
+        };
+        assert_eq!(cell(-2.5, 12), "|   -2.500000");
+        assert_eq!(cell(0.25, 0), "|0.250000");
+        assert_eq!(cell(-0.0, 12), "|    0.000000");
+        assert_eq!(cell(-6e-17, 0), "|0.000000");
+        assert_eq!(cell(-4e-7, 9), "| 0.000000");
+        assert_eq!(cell(-6e-7, 9), "|-0.000001");
+        assert_eq!(cell(-2e9, 12), "| -2.000000e9");
+        assert_eq!(cell(123_456_789.0, 0), "|123456789.000000");
+        let mut buf = Vec::new();
+        push_cells(&mut buf, [1.0, -0.0, 2.0], b"; ", 0);
+        assert_eq!(buf, b"1.000000; 0.000000; 2.000000");
+    }
 
     /// Reads every line of `input` through a reader that returns at most `chunk` bytes at a
     /// time, with lines capped at `limit` bytes: `Some(text)` per line kept, `None` per line
