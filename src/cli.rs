@@ -697,35 +697,6 @@ fn points_table(chain: &Chain, points: &[Point], results: &[PointResult], buf: &
     }
 }
 
-fn vec_json(v: &Vector3<f64>) -> Value {
-    json!(xyz(v))
-}
-
-/// Adds `"jacobians": {"LINK": [[row], … six rows]}` to `members` (nothing without Jacobians),
-/// rows `v_x, v_y, v_z, ω_x, ω_y, ω_z`, columns in `q` order; with rates, `"jacobian_dots"` the
-/// same way for `J̇`.
-fn jacobians_json(
-    chain: &Chain,
-    jacobians: &[JacobianResult],
-    members: &mut Vec<(&'static str, Value)>,
-) {
-    if jacobians.is_empty() {
-        return;
-    }
-    let rows = |m: &nalgebra::Matrix6xX<f64>| -> Value {
-        m.row_iter()
-            .map(|r| json!(r.iter().collect::<Vec<_>>()))
-            .collect()
-    };
-    let name = |r: &JacobianResult| chain.link(r.link).name().to_string();
-    let jacobian = jacobians.iter().map(|r| (name(r), rows(&r.j))).collect();
-    members.push(("jacobians", jacobian));
-    if jacobians.iter().any(|r| r.with_rate) {
-        let rate = jacobians.iter().map(|r| (name(r), rows(&r.j_dot)));
-        members.push(("jacobian_dots", rate.collect()));
-    }
-}
-
 /// `fk --format table`: appends each Jacobian (and `J̇`, with rates) under a heading naming its
 /// link, one row per twist component (each line starting with a newline).
 fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult], buf: &mut Vec<u8>) {
@@ -753,35 +724,6 @@ fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult], buf: &mut Vec<u8
             block(buf, &r.j_dot);
         }
     }
-}
-
-fn points_json(chain: &Chain, points: &[Point], results: &[PointResult]) -> Value {
-    let list: Vec<Value> = points
-        .iter()
-        .zip(results)
-        .map(|(p, r)| {
-            let mut m = Map::new();
-            m.insert("link".into(), json!(chain.link(p.link).name()));
-            m.insert("u".into(), vec_json(&p.u));
-            m.insert("position".into(), vec_json(&r.position));
-            if let Some(v) = &r.velocity {
-                m.insert("velocity".into(), vec_json(v));
-            }
-            if let Some((a, parts)) = &r.acceleration {
-                m.insert("acceleration".into(), vec_json(a));
-                m.insert(
-                    "acceleration_parts".into(),
-                    json!({
-                        "origin": vec_json(&parts.origin),
-                        "tangential": vec_json(&parts.tangential),
-                        "normal": vec_json(&parts.normal),
-                    }),
-                );
-            }
-            Value::Object(m)
-        })
-        .collect();
-    Value::Array(list)
 }
 
 /// How `fk` prints each link's orientation.
@@ -854,14 +796,17 @@ impl Coordinates {
     }
 }
 
-/// `{"links": {"NAME": {..}, ..}, ..}` for one configuration's `results`, then the members of
-/// `extra` (points, Jacobians) in their order: serialised straight into the output, since a
-/// `Value` tree allocates a node per number (which took most of a batch run's time).
+/// `{"links": {"NAME": {..}, ..}, ..}` for one configuration's `results`, then `"points"`,
+/// `"jacobians"` and `"jacobian_dots"` where there are any: serialised straight into the
+/// output, since a `Value` tree allocates a node per number (which took most of a batch run's
+/// time).
 struct ResultsJson<'a> {
     chain: &'a Chain,
     results: &'a [LinkResult],
     orientation: Orientation,
-    extra: &'a [(&'static str, Value)],
+    points: &'a [Point],
+    point_results: &'a [PointResult],
+    jacobians: &'a [JacobianResult],
 }
 
 impl Serialize for ResultsJson<'_> {
@@ -882,12 +827,96 @@ impl Serialize for ResultsJson<'_> {
                 m.end()
             }
         }
-        let mut m = s.serialize_map(Some(1 + self.extra.len()))?;
+        let mut m = s.serialize_map(None)?;
         m.serialize_entry("links", &Links(self))?;
-        for (key, value) in self.extra {
-            m.serialize_entry(key, value)?;
+        if !self.points.is_empty() {
+            let names = self.points.iter().map(|p| self.chain.link(p.link).name());
+            let points = names.zip(self.points).zip(self.point_results);
+            let list = points.map(|((link, p), r)| PointJson {
+                link,
+                u: xyz(&p.u),
+                position: xyz(&r.position),
+                velocity: r.velocity.as_ref().map(xyz),
+                acceleration: r.acceleration.as_ref().map(|(a, _)| xyz(a)),
+                acceleration_parts: r.acceleration.as_ref().map(|(_, parts)| PartsJson {
+                    origin: xyz(&parts.origin),
+                    tangential: xyz(&parts.tangential),
+                    normal: xyz(&parts.normal),
+                }),
+            });
+            m.serialize_entry("points", &Listed(list))?;
+        }
+        if !self.jacobians.is_empty() {
+            let jacobians = |rate| JacobiansJson {
+                chain: self.chain,
+                jacobians: self.jacobians,
+                rate,
+            };
+            m.serialize_entry("jacobians", &jacobians(false))?;
+            if self.jacobians.iter().any(|r| r.with_rate) {
+                m.serialize_entry("jacobian_dots", &jacobians(true))?;
+            }
         }
         m.end()
+    }
+}
+
+/// One `--point`: `{"link", "u", "position"}`, then with rates `"velocity"`, and with
+/// accelerations `"acceleration"` and `"acceleration_parts"`.
+#[derive(Serialize)]
+struct PointJson<'a> {
+    link: &'a str,
+    u: [f64; 3],
+    position: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    velocity: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    acceleration: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    acceleration_parts: Option<PartsJson>,
+}
+
+/// The parts of a point's acceleration (eq. 2.75) that do not vanish for a point fixed on its
+/// link.
+#[derive(Serialize)]
+struct PartsJson {
+    origin: [f64; 3],
+    tangential: [f64; 3],
+    normal: [f64; 3],
+}
+
+/// `{"LINK": [[row], … six rows], …}` per `--jacobian` link, rows `v_x, v_y, v_z, ω_x, ω_y,
+/// ω_z`, columns in `q` order: `J`, or `J̇` when `rate`.
+struct JacobiansJson<'a> {
+    chain: &'a Chain,
+    jacobians: &'a [JacobianResult],
+    rate: bool,
+}
+
+impl Serialize for JacobiansJson<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.jacobians.len()))?;
+        for r in self.jacobians {
+            let matrix = if self.rate { &r.j_dot } else { &r.j };
+            // Column-major storage: row `i` is every sixth entry from the `i`-th.
+            let entries = matrix.as_slice();
+            let rows = (0..6).map(|i| Listed(entries.iter().skip(i).step_by(6)));
+            m.serialize_entry(self.chain.link(r.link).name(), &Listed(rows))?;
+        }
+        m.end()
+    }
+}
+
+/// The items of an iterator, serialised as a JSON array without collecting them.
+struct Listed<I>(I);
+
+impl<I> Serialize for Listed<I>
+where
+    I: Iterator + Clone,
+    I::Item: Serialize,
+{
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.clone())
     }
 }
 
@@ -1215,11 +1244,19 @@ struct Request {
 
 impl Request {
     fn new(chain: &Chain, args: &FkArgs) -> Result<Request, CliError> {
-        let links = args
-            .links
-            .iter()
-            .map(|n| chain.link_id(n))
-            .collect::<Result<Vec<_>, _>>()?;
+        // A link named twice in `--link` or `--jacobian` is printed once (a JSON object cannot
+        // hold its name twice), where it was first named.
+        let unique = |names: &[String]| -> Result<Vec<LinkId>, CliError> {
+            let mut ids = Vec::with_capacity(names.len());
+            for name in names {
+                let id = chain.link_id(name)?;
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+            Ok(ids)
+        };
+        let links = unique(&args.links)?;
         let points = args
             .points
             .iter()
@@ -1228,18 +1265,15 @@ impl Request {
         let outputs = Outputs {
             links: Vec::with_capacity(chain.links().len()),
             points: Vec::with_capacity(points.len()),
-            jacobians: args
-                .jacobians
-                .iter()
-                .map(|n| {
-                    Ok(JacobianResult {
-                        link: chain.link_id(n)?,
-                        j: nalgebra::Matrix6xX::zeros(chain.dof()),
-                        j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
-                        with_rate: false,
-                    })
+            jacobians: unique(&args.jacobians)?
+                .into_iter()
+                .map(|link| JacobianResult {
+                    link,
+                    j: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    with_rate: false,
                 })
-                .collect::<Result<Vec<_>, CliError>>()?,
+                .collect(),
         };
         Ok(Request {
             links,
@@ -1278,16 +1312,13 @@ impl Request {
         check_finite(chain, results, points, point_results)?;
         match args.format {
             OutputFormat::Json => {
-                let mut extra = Vec::new();
-                if !points.is_empty() {
-                    extra.push(("points", points_json(chain, points, point_results)));
-                }
-                jacobians_json(chain, jacobians, &mut extra);
                 let value = ResultsJson {
                     chain,
                     results,
                     orientation: args.orientation,
-                    extra: &extra,
+                    points,
+                    point_results,
+                    jacobians,
                 };
                 write_json_line(out, &mut self.text, &value)
             }
@@ -1359,7 +1390,9 @@ impl PendingPoses {
                             chain,
                             results: &results,
                             orientation: args.orientation,
-                            extra: &[],
+                            points: &[],
+                            point_results: &[],
+                            jacobians: &[],
                         };
                         write_json_line(out, &mut self.text, &value)?;
                     }

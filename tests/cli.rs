@@ -1619,3 +1619,50 @@ fn json_output_text() {
         format!("{{\"links\":{{{}}}}}\n", links.join(","))
     );
 }
+
+/// A link named twice in `--link` or `--jacobian` is printed once, where it was first named (a
+/// JSON object cannot hold a name twice, and a table prints what the JSON does).
+#[test]
+fn repeated_link_names_print_once() {
+    let fk = |names: &[&str], format: &str| {
+        let q = "[0.1, -0.5, 0.3, 0.2, 0.4, -0.6]";
+        let args = [
+            &["fk", "robots/ur5.yaml", "--q", q, "--format", format],
+            names,
+        ]
+        .concat();
+        ok_text(&args)
+    };
+    for format in ["json", "table"] {
+        let once = fk(
+            &[
+                "--link",
+                "tool0",
+                "--link",
+                "forearm",
+                "--jacobian",
+                "tool0",
+            ],
+            format,
+        );
+        let twice = fk(
+            &[
+                "--link",
+                "tool0",
+                "--link",
+                "forearm",
+                "--link",
+                "tool0",
+                "--jacobian",
+                "tool0",
+                "--jacobian",
+                "tool0",
+            ],
+            format,
+        );
+        assert_eq!(twice, once, "{format}");
+        assert_eq!(once.matches("tool0").count(), 2, "{once}");
+        let (tool, forearm) = (once.find("tool0"), once.find("forearm"));
+        assert!(tool.is_some() && tool < forearm, "{once}");
+    }
+}
