@@ -830,10 +830,9 @@ impl Serialize for ResultsJson<'_> {
         let mut m = s.serialize_map(None)?;
         m.serialize_entry("links", &Links(self))?;
         if !self.points.is_empty() {
-            let names = self.points.iter().map(|p| self.chain.link(p.link).name());
-            let points = names.zip(self.points).zip(self.point_results);
-            let list = points.map(|((link, p), r)| PointJson {
-                link,
+            let points = self.points.iter().zip(self.point_results);
+            let list = points.map(|(p, r)| PointJson {
+                link: self.chain.link(p.link).name(),
                 u: xyz(&p.u),
                 position: xyz(&r.position),
                 velocity: r.velocity.as_ref().map(xyz),
