@@ -2246,6 +2246,7 @@ mod tests {
         assert_eq!(cell(-0.0, 12), "|    0.000000");
         assert_eq!(cell(-6e-17, 0), "|0.000000");
         assert_eq!(cell(-4e-7, 9), "| 0.000000");
+        assert_eq!(cell(-4e-7, 8), "|0.000000");
         assert_eq!(cell(-6e-7, 9), "|-0.000001");
         assert_eq!(cell(-2e9, 12), "| -2.000000e9");
         assert_eq!(cell(123_456_789.0, 0), "|123456789.000000");
