@@ -1156,7 +1156,7 @@ fn results_table(
 ) {
     let width = results
         .iter()
-        .map(|(l, ..)| chain.link(*l).name().len())
+        .map(|(l, ..)| chain.link(*l).name().chars().count())
         .max()
         .unwrap_or(4)
         .max(4);

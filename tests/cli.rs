@@ -1666,3 +1666,28 @@ fn repeated_link_names_print_once() {
         assert!(tool.is_some() && tool < forearm, "{once}");
     }
 }
+
+/// A table's name column is as wide as the longest link name in characters, not in bytes, and
+/// the columns line up under names that are not ASCII.
+#[test]
+fn table_columns_line_up_under_names_that_are_not_ascii() {
+    let dir = Scratch::new("cli-names");
+    let robot = dir.write(
+        "names.yaml",
+        "name: names\nconvention: standard\nbase: {name: Basis}\njoints:\n  \
+         - {name: j1, link: Glied_ä, type: revolute, a: 1, alpha: 0, d: 0, theta: 0}\n  \
+         - {name: j2, link: Greifer, type: revolute, a: 1, alpha: 0, d: 0, theta: 0}\n",
+    );
+    let table = ok_text(&["fk", &robot, "--q", "[0.1, 0.2]", "--format", "table"]);
+    let rows: Vec<&str> = table.lines().collect();
+    assert_eq!(rows.len(), 4, "{table}");
+    // Every row's first number ends in the same column: the name column, then 13 characters.
+    let ends: Vec<usize> = rows[1..]
+        .iter()
+        .map(|row| row.chars().take_while(|&c| c != '[').count())
+        .collect();
+    assert!(ends.iter().all(|&e| e == ends[0]), "{table}");
+    // The longest name has seven characters (eight bytes): the header's `x` ends the first
+    // 12-wide number column after those seven and a space.
+    assert_eq!(rows[0].find('x'), Some(7 + 1 + 11), "{table}");
+}
