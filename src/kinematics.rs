@@ -724,6 +724,7 @@ pub fn forward_kinematics<'a>(
 ///
 /// # Panics
 /// If `data` was created for another chain.
+#[inline]
 pub fn forward_kinematics_incremental<'a>(
     chain: &'a Chain,
     data: &'a mut Data,
