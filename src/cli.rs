@@ -505,16 +505,26 @@ struct PointResult {
 }
 
 impl Point {
-    /// `point LINK (x, y, z)`, the coordinates as given.
-    fn label(&self, chain: &Chain) -> String {
-        let u = &self.u;
-        format!(
-            "point {} ({:?}, {:?}, {:?})",
-            chain.link(self.link).name(),
-            u.x,
-            u.y,
-            u.z
-        )
+    /// `point LINK (x, y, z)`, the coordinates as given: for errors, and written straight into
+    /// each table line.
+    fn label<'a>(&'a self, chain: &'a Chain) -> PointLabel<'a> {
+        PointLabel {
+            link: chain.link(self.link).name(),
+            u: &self.u,
+        }
+    }
+}
+
+/// [`Point::label`].
+struct PointLabel<'a> {
+    link: &'a str,
+    u: &'a Vector3<f64>,
+}
+
+impl std::fmt::Display for PointLabel<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let u = self.u;
+        write!(f, "point {} ({:?}, {:?}, {:?})", self.link, u.x, u.y, u.z)
     }
 }
 
@@ -1020,23 +1030,22 @@ fn write_json_line(
     buf: &mut Vec<u8>,
     value: &impl Serialize,
 ) -> Result<(), CliError> {
-    buf.clear();
     // (Serialising into memory fails only for a map key that is not a string, which the
     // values written here do not have.)
-    serde_json::to_writer(&mut *buf, value).map_err(|e| output_error(e.into()))?;
-    buf.push(b'\n');
-    out.write_all(buf).map_err(output_error)
+    write_buffered_line(out, buf, |buf| {
+        serde_json::to_writer(buf, value).map_err(|e| output_error(e.into()))
+    })
 }
 
-/// Writes the table text `fill` appends to `buf` (emptied first, and reused from line to line),
-/// and a newline.
-fn write_table_line(
+/// Writes the text `fill` appends to `buf` (emptied first, and reused from line to line) and a
+/// newline, with one call.
+fn write_buffered_line(
     out: &mut dyn Write,
     buf: &mut Vec<u8>,
-    fill: impl FnOnce(&mut Vec<u8>),
+    fill: impl FnOnce(&mut Vec<u8>) -> Result<(), CliError>,
 ) -> Result<(), CliError> {
     buf.clear();
-    fill(buf);
+    fill(buf)?;
     buf.push(b'\n');
     out.write_all(buf).map_err(output_error)
 }
@@ -1092,7 +1101,7 @@ fn check_finite(
         if let Some(&(what, _)) = parts.iter().find(|(_, ok)| !ok) {
             return Err(CliError::NotFinite {
                 what,
-                place: p.label(chain),
+                place: p.label(chain).to_string(),
             });
         }
     }
@@ -1321,10 +1330,11 @@ impl Request {
                 };
                 write_json_line(out, &mut self.text, &value)
             }
-            OutputFormat::Table => write_table_line(out, &mut self.text, |buf| {
+            OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
                 results_table(chain, results, args.orientation, buf);
                 points_table(chain, points, point_results, buf);
                 jacobians_table(chain, jacobians, buf);
+                Ok(())
             }),
         }
     }
@@ -1395,8 +1405,9 @@ impl PendingPoses {
                         };
                         write_json_line(out, &mut self.text, &value)?;
                     }
-                    OutputFormat::Table => write_table_line(out, &mut self.text, |buf| {
+                    OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
                         results_table(chain, &results, args.orientation, buf);
+                        Ok(())
                     })?,
                 },
                 Err(e) if args.keep_going => {
