@@ -241,14 +241,46 @@ fn independent_joint<'c>(
     }
 }
 
-/// The entries of a list of numbers or names: separated by commas (each entry trimmed), or by
-/// spaces alone.
-fn list_entries(trimmed: &str) -> Vec<&str> {
-    if trimmed.contains(',') {
-        trimmed.split(',').map(str::trim).collect()
-    } else {
-        trimmed.split_whitespace().collect()
+/// The entries of a list of numbers or names: separated by commas (each entry trimmed, an empty
+/// one kept), or by spaces alone.
+fn list_entries(trimmed: &str) -> impl Iterator<Item = &str> + Clone {
+    let commas = trimmed.contains(',');
+    trimmed
+        .split(move |c: char| if commas { c == ',' } else { c.is_whitespace() })
+        .map(str::trim)
+        .filter(move |entry| commas || !entry.is_empty())
+}
+
+/// The numbers of a list ([`list_entries`]) as a vector of the chain's length, entry `k` at
+/// `q[order[k]]` when an `order` ([`csv_header`]) is given.
+fn list_values(
+    chain: &Chain,
+    trimmed: &str,
+    what: &'static str,
+    order: Option<&[usize]>,
+) -> Result<Vec<f64>, InputError> {
+    let mut q = vec![0.0; chain.dof()];
+    let mut count = 0;
+    for (index, entry) in list_entries(trimmed).enumerate() {
+        let x = entry.parse::<f64>().map_err(|_| InputError::ListEntry {
+            what,
+            index,
+            entry: entry.to_string(),
+        })?;
+        let slot = order.map_or(Some(index), |order| order.get(index).copied());
+        if let Some(value) = slot.and_then(|i| q.get_mut(i)) {
+            *value = x;
+        }
+        count += 1;
     }
+    if count != chain.dof() {
+        return Err(InputError::WrongLength {
+            what,
+            expected: chain.dof(),
+            got: count,
+        });
+    }
+    Ok(q)
 }
 
 /// Reads the header row of a file of joint values (CSV): a line of joint names, none of its
@@ -278,18 +310,18 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<Vec<usize>, InputE
         return None;
     }
     let names = list_entries(trimmed);
-    if names.iter().any(|n| n.parse::<f64>().is_ok()) {
+    if names.clone().any(|n| n.parse::<f64>().is_ok()) {
         return None;
     }
     let read = || {
         let mut order = Vec::with_capacity(chain.dof());
         let mut named = vec![false; chain.dof()];
-        for name in &names {
+        for name in names {
             let (joint, index) = independent_joint(chain, name, WHAT)?;
             if named[index] {
                 return Err(InputError::DuplicateMember {
                     what: WHAT,
-                    name: (*name).to_string(),
+                    name: name.to_string(),
                 });
             }
             let columns = index..index + joint.dof();
@@ -328,26 +360,7 @@ pub fn joint_vector_from_str(
     }
     // Entries separated by commas (each one number, spaces around it allowed), or by spaces
     // alone; an empty entry (`1,,2`, a trailing comma) is an error, not skipped.
-    let tokens = list_entries(trimmed);
-    let values = tokens
-        .iter()
-        .enumerate()
-        .map(|(index, t)| {
-            t.parse::<f64>().map_err(|_| InputError::ListEntry {
-                what,
-                index,
-                entry: (*t).to_string(),
-            })
-        })
-        .collect::<Result<Vec<f64>, _>>()?;
-    if values.len() != chain.dof() {
-        return Err(InputError::WrongLength {
-            what,
-            expected: chain.dof(),
-            got: values.len(),
-        });
-    }
-    Ok(values)
+    list_values(chain, trimmed, what, None)
 }
 
 /// One line of a batch file: `{"q": .., "qd": .., "qdd": ..}`, with `qd` and `qdd` optional and
@@ -382,17 +395,14 @@ pub(crate) fn parse_batch_row(
     line: &str,
     columns: Option<&[usize]>,
 ) -> Result<BatchLine, InputError> {
-    let trimmed = line.trim_start();
+    let trimmed = line.trim();
     if !trimmed.starts_with('{') {
-        let mut q = joint_vector_from_str(chain, line, "q")?;
-        if let Some(order) = columns.filter(|_| !trimmed.starts_with('[')) {
-            let row = std::mem::replace(&mut q, vec![0.0; order.len()]);
-            for (&index, value) in order.iter().zip(row) {
-                if let Some(entry) = q.get_mut(index) {
-                    *entry = value;
-                }
-            }
-        }
+        // A JSON array is in `q` order; a row of numbers in the header's.
+        let q = if trimmed.starts_with('[') {
+            joint_vector_from_str(chain, trimmed, "q")?
+        } else {
+            list_values(chain, trimmed, "q", columns)?
+        };
         return Ok(BatchLine {
             q,
             q_dot: None,
