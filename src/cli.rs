@@ -1479,7 +1479,7 @@ fn fk_batch<R: std::io::Read>(
     let mut bytes = Vec::new();
     // The first line that is not blank may be a header row of joint names (`csv_header`).
     let mut first = true;
-    let mut header: Option<Vec<usize>> = None;
+    let mut header = None;
     let mut bad_header = false;
     for i in 0.. {
         if reader.buffer().is_empty() {
@@ -1516,7 +1516,7 @@ fn fk_batch<R: std::io::Read>(
                 header = Some(order?);
                 return Ok(None);
             }
-            let c = batch_configuration(chain, line, header.as_deref())?;
+            let c = batch_configuration(chain, line, header.as_ref())?;
             if batchable && c.qd.is_none() && c.qdd.is_none() {
                 check_q(chain, &c.q, data.limit_policy())?;
                 pending.qs.extend_from_slice(&c.q);
@@ -1645,7 +1645,7 @@ fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
 fn batch_configuration(
     chain: &Chain,
     line: &str,
-    header: Option<&[usize]>,
+    header: Option<&crate::input::CsvHeader>,
 ) -> Result<Configuration, CliError> {
     let l = crate::input::parse_batch_row(chain, line, header)?;
     Ok(Configuration {

@@ -41,7 +41,7 @@ pub enum InputError {
     /// An array with the wrong number of entries.
     #[error("{what}: {got} values given, the chain has {expected} degrees of freedom")]
     WrongLength {
-        /// `q`, `qd` or `qdd`.
+        /// `q`, `qd`, `qdd`, or `header` ([`parse_batch_row`]).
         what: &'static str,
         /// The chain's dof.
         expected: usize,
@@ -252,7 +252,7 @@ fn list_entries(trimmed: &str) -> impl Iterator<Item = &str> + Clone {
 }
 
 /// The numbers of a list ([`list_entries`]) as a vector of the chain's length, entry `k` at
-/// `q[order[k]]` when an `order` ([`csv_header`]) is given.
+/// `q[order[k]]` when an `order` ([`CsvHeader::columns`]) is given.
 fn list_values(
     chain: &Chain,
     trimmed: &str,
@@ -283,27 +283,45 @@ fn list_values(
     Ok(q)
 }
 
+/// The order of the columns of a file of joint values, read from its header row by
+/// [`csv_header`]: entry `k` of each row below the header is `q[columns()[k]]`. Every entry of
+/// the chain's `q` is one column.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CsvHeader {
+    columns: Vec<usize>,
+}
+
+impl CsvHeader {
+    /// The entry of `q` that each column holds, in the header's order.
+    #[must_use]
+    pub fn columns(&self) -> &[usize] {
+        &self.columns
+    }
+}
+
 /// Reads the header row of a file of joint values (CSV): a line of joint names, none of its
 /// entries a number, separated as [`joint_vector_from_str`] separates numbers. Returns `None`
 /// for a line that is not a header (empty, JSON, or with an entry that is a number), otherwise
-/// the order of its columns: entry `k` of each row below it is `q[order[k]]`. The header names
-/// every joint that takes values once; a cylindrical joint's name stands for two columns, θ then
-/// d.
+/// the order of its columns, which [`parse_batch_row`] applies to the rows below it. The header
+/// names every joint that takes values once; a cylindrical joint's name stands for two columns,
+/// θ then d.
 ///
 /// # Errors
 /// [`InputError`] (its `what` is `header`): a name that is not a joint's, or a fixed or mimic
 /// joint's, a joint named twice, or one left out.
 ///
 /// ```
-/// # use kinechain::{Chain, input::csv_header};
+/// # use kinechain::{Chain, input::{csv_header, parse_batch_row}};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
-/// assert_eq!(csv_header(&chain, "j3,j1,j2"), Some(Ok(vec![2, 0, 1])));
+/// let header = csv_header(&chain, "j3,j1,j2").expect("a row of names")?;
+/// assert_eq!(header.columns(), [2, 0, 1]);
+/// assert_eq!(parse_batch_row(&chain, "0.3,0.1,0.2", Some(&header))?.q, [0.1, 0.2, 0.3]);
 /// assert_eq!(csv_header(&chain, "0.1,0.2,0.3"), None);
 /// assert!(csv_header(&chain, "j1,j2").is_some_and(|h| h.is_err()));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[must_use]
-pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<Vec<usize>, InputError>> {
+pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<CsvHeader, InputError>> {
     const WHAT: &str = "header";
     let trimmed = line.trim();
     if trimmed.is_empty() || trimmed.starts_with('[') || trimmed.starts_with('{') {
@@ -338,7 +356,7 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<Vec<usize>, InputE
                 name: joint.name().to_string(),
             });
         }
-        Ok(order)
+        Ok(CsvHeader { columns: order })
     };
     Some(read())
 }
@@ -389,12 +407,26 @@ pub fn parse_batch_line(chain: &Chain, line: &str) -> Result<BatchLine, InputErr
 }
 
 /// As [`parse_batch_line`], with the entries of a row of plain numbers (not JSON) in the order
-/// of `columns`, a [`csv_header`] of the same chain: entry `k` is `q[columns[k]]`.
-pub(crate) fn parse_batch_row(
+/// of `header`, the [`csv_header`] of the file's first row (`None` for a file without one).
+///
+/// # Errors
+/// As [`parse_batch_line`]; also [`InputError::WrongLength`] (its `what` is `header`) for a
+/// header read for a chain with another number of degrees of freedom.
+pub fn parse_batch_row(
     chain: &Chain,
     line: &str,
-    columns: Option<&[usize]>,
+    header: Option<&CsvHeader>,
 ) -> Result<BatchLine, InputError> {
+    let columns = match header {
+        Some(h) if h.columns.len() != chain.dof() => {
+            return Err(InputError::WrongLength {
+                what: "header",
+                expected: chain.dof(),
+                got: h.columns.len(),
+            });
+        }
+        h => h.map(CsvHeader::columns),
+    };
     let trimmed = line.trim();
     if !trimmed.starts_with('{') {
         // A JSON array is in `q` order; a row of numbers in the header's.

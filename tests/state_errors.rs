@@ -6,7 +6,7 @@ mod common;
 use common::limit_probes;
 use kinechain::input::{
     BatchLine, InputError, csv_header, joint_vector_from_json, joint_vector_from_str,
-    parse_batch_line,
+    parse_batch_line, parse_batch_row,
 };
 use kinechain::{
     Chain, Data, LimitPolicy, NameError, StateError, forward_accelerations, forward_kinematics,
@@ -590,7 +590,10 @@ fn batch_lines() {
 #[test]
 fn csv_headers() {
     let ur5 = robot("ur5.yaml");
-    let header = |text: &str| csv_header(&ur5, text);
+    let columns = |chain: &Chain, text: &str| {
+        csv_header(chain, text).map(|h| h.map(|h| h.columns().to_vec()))
+    };
+    let header = |text: &str| columns(&ur5, text);
     let names = "wrist_3, shoulder_pan, elbow, shoulder_lift, wrist_2, wrist_1";
     assert_eq!(header(names), Some(Ok(vec![5, 0, 2, 1, 4, 3])));
     assert_eq!(
@@ -632,11 +635,63 @@ fn csv_headers() {
     ));
 
     let cylindrical = robot("cylindrical.yaml");
-    assert_eq!(csv_header(&cylindrical, "joint"), Some(Ok(vec![0, 1])));
+    assert_eq!(columns(&cylindrical, "joint"), Some(Ok(vec![0, 1])));
     assert!(matches!(
         csv_header(&cylindrical, "joint,joint"),
         Some(Err(InputError::DuplicateMember { .. }))
     ));
+}
+
+/// Rows of numbers below a header are read in the header's order; JSON rows keep `q` order, and
+/// a row's errors name its entries as they stand in the row. A header read for a chain of
+/// another length is refused.
+#[test]
+fn rows_under_a_csv_header() {
+    let ur5 = robot("ur5.yaml");
+    let header = csv_header(
+        &ur5,
+        "wrist_3,shoulder_pan,elbow,shoulder_lift,wrist_2,wrist_1",
+    )
+    .expect("a row of names")
+    .expect("every joint once");
+    let row = |line: &str| parse_batch_row(&ur5, line, Some(&header)).map(|l| l.q);
+    assert_eq!(
+        row("6, 1, 3, 2, 5, 4"),
+        Ok(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0])
+    );
+    assert_eq!(row("6 1 3 2 5 4"), Ok(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]));
+    assert_eq!(
+        row("[6, 1, 3, 2, 5, 4]"),
+        Ok(vec![6.0, 1.0, 3.0, 2.0, 5.0, 4.0])
+    );
+    assert_eq!(
+        row("6,1,x,2,5,4"),
+        Err(InputError::ListEntry {
+            what: "q",
+            index: 2,
+            entry: "x".into()
+        })
+    );
+    for (line, got) in [("6,1,3,2,5", 5), ("6,1,3,2,5,4,7", 7)] {
+        assert_eq!(
+            row(line),
+            Err(InputError::WrongLength {
+                what: "q",
+                expected: 6,
+                got
+            }),
+            "{line}"
+        );
+    }
+    let planar = robot("planar3.yaml");
+    assert_eq!(
+        parse_batch_row(&planar, "1,2,3", Some(&header)),
+        Err(InputError::WrongLength {
+            what: "header",
+            expected: 3,
+            got: 6
+        })
+    );
 }
 
 #[test]

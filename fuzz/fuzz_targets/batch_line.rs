@@ -9,10 +9,7 @@ fn main() {
                 if let Ok(line) = kinechain::input::parse_batch_line(chain, text) {
                     common::evaluate(chain, &line.q);
                 }
-                if let Some(Ok(mut order)) = kinechain::input::csv_header(chain, text) {
-                    order.sort_unstable();
-                    assert!(order.iter().copied().eq(0..chain.dof()));
-                }
+                common::header_and_row(chain, text);
             }
         }
     });

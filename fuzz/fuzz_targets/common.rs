@@ -1,10 +1,13 @@
 //! What every target checks once an input has been accepted: the chain evaluates at a
 //! configuration without panicking, every pose is finite or infinite but never NaN, and every
-//! way of reading a pose (full, one link, incremental, batch, with rates) gives the same bits.
+//! way of reading a pose (full, one link, incremental, batch, with rates) gives the same bits;
+//! and, for the batch-line target, a row read under a CSV header is the row read without one,
+//! its entries moved to the header's columns.
 // Each target uses part of this module.
 #![allow(dead_code)]
 
 use kinechain::batch::{BatchData, forward_kinematics_batch};
+use kinechain::input::{csv_header, parse_batch_line, parse_batch_row};
 use kinechain::{
     Chain, Data, LimitPolicy, LinkId, Transform, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to,
@@ -130,4 +133,43 @@ pub fn input_chains() -> [Chain; 2] {
         Chain::from_file(dir.join("robots/cylindrical.yaml")).expect("bundled robot"),
         Chain::from_file(dir.join("robots/panda.urdf")).expect("bundled robot"),
     ]
+}
+
+/// What the batch-line target checks of a CSV header: `text` read as a header, when it is one,
+/// names every entry of `q` once; and when its first line is a header, the line after it read
+/// under that header gives what the same line read without one gives (the same error, or the
+/// same values with a row of numbers' entries moved to the header's columns).
+pub fn header_and_row(chain: &Chain, text: &str) {
+    if let Some(Ok(header)) = csv_header(chain, text) {
+        let mut columns = header.columns().to_vec();
+        columns.sort_unstable();
+        assert!(columns.into_iter().eq(0..chain.dof()), "{text:?}");
+    }
+    let Some((first, rest)) = text.split_once('\n') else {
+        return;
+    };
+    let Some(Ok(header)) = csv_header(chain, first) else {
+        return;
+    };
+    let row = rest.split('\n').next().unwrap_or_default();
+    let json = row.trim_start().starts_with(['[', '{']);
+    match (
+        parse_batch_line(chain, row),
+        parse_batch_row(chain, row, Some(&header)),
+    ) {
+        (Ok(plain), Ok(ordered)) => {
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let mut moved = plain.q.clone();
+            if !json {
+                for (&x, &column) in plain.q.iter().zip(header.columns()) {
+                    moved[column] = x;
+                }
+            }
+            assert_eq!(bits(&moved), bits(&ordered.q), "{text:?}");
+            assert_eq!(plain.q_dot, ordered.q_dot, "{text:?}");
+            assert_eq!(plain.q_ddot, ordered.q_ddot, "{text:?}");
+        }
+        (Err(plain), Err(ordered)) => assert_eq!(plain, ordered, "{text:?}"),
+        (plain, ordered) => panic!("{text:?}: without a header {plain:?}, under it {ordered:?}"),
+    }
 }
