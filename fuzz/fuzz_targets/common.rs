@@ -151,7 +151,7 @@ pub fn header_and_row(chain: &Chain, text: &str) {
     let Some(Ok(header)) = csv_header(chain, first) else {
         return;
     };
-    let row = rest.split('\n').next().unwrap_or_default();
+    let row = rest.split_once('\n').map_or(rest, |(row, _)| row);
     let json = row.trim_start().starts_with(['[', '{']);
     match (
         parse_batch_line(chain, row),
