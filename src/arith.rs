@@ -441,6 +441,48 @@ fn detect_trig() -> u8 {
     if is_intel() { 2 } else { 1 }
 }
 
+/// Size in bytes of the CPU's largest cache (the last level, shared by its cores), as CPUID
+/// describes it (leaf 4 on Intel, 0x8000_001D on AMD and others with topology extensions);
+/// 32 MiB when it does not, or on other architectures. Read once.
+pub(crate) fn last_level_cache_bytes() -> usize {
+    static BYTES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *BYTES.get_or_init(|| detect_last_level_cache().unwrap_or(32 << 20))
+}
+
+fn detect_last_level_cache() -> Option<usize> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__cpuid, __cpuid_count};
+        let leaf = if is_intel() {
+            (__cpuid(0).eax >= 4).then_some(4)
+        } else {
+            let topology_extensions = __cpuid(0x8000_0001).ecx & (1 << 22) != 0;
+            (__cpuid(0x8000_0000).eax >= 0x8000_001D && topology_extensions).then_some(0x8000_001D)
+        }?;
+        let mut largest = None;
+        // Each sub-leaf describes one cache, until one of type 0; a bound against bad firmware.
+        for sub in 0..16 {
+            let r = __cpuid_count(leaf, sub);
+            if r.eax & 0x1f == 0 {
+                break;
+            }
+            let field =
+                |x: u32, shift: u32, bits: u32| ((x >> shift) & ((1 << bits) - 1)) as usize + 1;
+            let bytes = field(r.ebx, 22, 10)
+                * field(r.ebx, 12, 10)
+                * field(r.ebx, 0, 12)
+                * (r.ecx as usize + 1);
+            let level = (r.eax >> 5) & 7;
+            if largest.is_none_or(|(l, _)| level > l) {
+                largest = Some((level, bytes));
+            }
+        }
+        largest.map(|(_, bytes)| bytes)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    None
+}
+
 /// Whether the CPU's vendor string is Intel's.
 fn is_intel() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -518,3 +560,34 @@ macro_rules! fma_dispatch {
     };
 }
 pub(crate) use fma_dispatch;
+
+#[cfg(test)]
+mod tests {
+    /// The last-level cache read from CPUID is the one Linux reports for the first CPU (from the
+    /// same source, decoded independently), where it reports one.
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    #[test]
+    fn last_level_cache_matches_linux() {
+        let dir = std::path::Path::new("/sys/devices/system/cpu/cpu0/cache");
+        let read = |index: &std::path::Path, name: &str| {
+            std::fs::read_to_string(index.join(name)).map(|s| s.trim().to_string())
+        };
+        let mut largest: Option<(u32, usize)> = None;
+        for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+            let (Ok(level), Ok(size)) = (read(&entry.path(), "level"), read(&entry.path(), "size"))
+            else {
+                continue;
+            };
+            let level: u32 = level.parse().unwrap();
+            let kib: usize = size.trim_end_matches('K').parse().unwrap();
+            if largest.is_none_or(|(l, _)| level > l) {
+                largest = Some((level, kib << 10));
+            }
+        }
+        let bytes = super::last_level_cache_bytes();
+        assert!(bytes >= 256 << 10, "{bytes}");
+        if let Some((_, linux)) = largest {
+            assert_eq!(bytes, linux);
+        }
+    }
+}

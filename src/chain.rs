@@ -513,6 +513,9 @@ pub(crate) struct Body {
     /// The parent is the body just before this one in the chain's order (set when the chain is
     /// built): the kernels then take its frame from registers, testing one flag.
     pub(crate) follows_previous: bool,
+    /// A later body hangs from this one without following it ([`Body::follows_previous`]), so
+    /// kernels that do not read their frames back from memory keep this one aside.
+    pub(crate) branches: bool,
     /// Parent body frame (or world) to joint frame, fixed joints folded in.
     pub(crate) pre: Placement,
     pub(crate) motion: Motion,
@@ -713,6 +716,7 @@ impl Body {
         Body {
             parent,
             follows_previous: false,
+            branches: false,
             pre,
             motion,
             post,
@@ -1633,6 +1637,11 @@ fn assemble(
             q_index,
         ));
     }
+    for k in 0..bodies.len() {
+        if let (false, Some(p)) = (bodies[k].follows_previous, bodies[k].parent) {
+            bodies[p].branches = true;
+        }
+    }
     Assembled {
         bodies,
         link_carrier,
@@ -1932,6 +1941,16 @@ mod tests {
             }
         }
         assert!(!panda.bodies[8].follows_previous && panda.bodies[7].follows_previous);
+        // The frames read again by the finger that does not follow: the hand's only.
+        for chain in [&panda, &ur5, &tiago] {
+            for (k, body) in chain.bodies.iter().enumerate() {
+                let read_again = chain.bodies[k + 1..]
+                    .iter()
+                    .any(|b| !b.follows_previous && b.parent == Some(k));
+                assert_eq!(body.branches, read_again, "{} body {k}", chain.name());
+            }
+        }
+        assert!(panda.bodies[6].branches && !panda.bodies[7].branches);
         assert!(
             tiago
                 .bodies

@@ -178,6 +178,17 @@ pub(crate) trait LaneNum: Num {
     fn get(x: &Lanes, part: usize) -> Self;
     /// Writes `self` as part `part` of `x`.
     fn put(self, x: &mut Lanes, part: usize);
+    /// Whether [`LaneNum::stream`] writes around the caches (a type of one part only: a whole
+    /// [`Lanes`] is one cache line).
+    const STREAMS: bool = false;
+    /// Writes `self` as the whole of `x`, around the caches when [`LaneNum::STREAMS`]
+    /// (a non-temporal store: the line is not read first and does not evict other data); the
+    /// writing thread must call [`fence_streams`] before the memory is read or written again.
+    /// Otherwise as [`LaneNum::put`] of part 0.
+    #[inline(always)]
+    fn stream(self, x: &mut Lanes) {
+        self.put(x, 0);
+    }
     /// Whether every lane `x` is [`crate::chain::within`] `(scale, offset, lower, upper)`.
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
     /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: entry `j` of
@@ -190,6 +201,8 @@ pub(crate) trait LaneNum: Num {
 
 impl LaneNum for Lanes {
     const PARTS: usize = 1;
+    #[cfg(target_arch = "x86_64")]
+    const STREAMS: bool = true;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         q
@@ -201,6 +214,17 @@ impl LaneNum for Lanes {
     #[inline(always)]
     fn put(self, x: &mut Lanes, _: usize) {
         *x = self;
+    }
+    /// Four SSE2 non-temporal stores (part of baseline x86-64), which fill one line.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn stream(self, x: &mut Lanes) {
+        use std::arch::x86_64::{_mm_loadu_pd, _mm_stream_pd};
+        for (pair, out) in self.0.chunks_exact(2).zip(x.0.chunks_exact_mut(2)) {
+            // SAFETY: SSE2 is part of x86-64; `out` is two `f64` of a `Lanes` (aligned to 64
+            // bytes), so 16-byte aligned as the store requires, and `pair` two readable `f64`.
+            unsafe { _mm_stream_pd(out.as_mut_ptr(), _mm_loadu_pd(pair.as_ptr())) }
+        }
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
@@ -254,6 +278,30 @@ impl<N: LaneNum> Frame<N> {
             }
             self.p[i].put(&mut f.p[i], part);
         }
+    }
+    /// Writes `self` as the whole of `f` with [`LaneNum::stream`] (a type of one part), in
+    /// memory order: twelve whole lines.
+    #[inline(always)]
+    pub(crate) fn stream(&self, f: &mut Frame<Lanes>) {
+        for i in 0..3 {
+            for j in 0..3 {
+                self.r[i][j].stream(&mut f.r[i][j]);
+            }
+        }
+        for j in 0..3 {
+            self.p[j].stream(&mut f.p[j]);
+        }
+    }
+}
+
+/// Orders the calling thread's [`LaneNum::stream`] stores before its later memory accesses (and
+/// so before anything it then synchronises with): required before streamed memory is used.
+#[inline(always)]
+pub(crate) fn fence_streams() {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE is part of x86-64; a fence has no other effect.
+    unsafe {
+        std::arch::x86_64::_mm_sfence();
     }
 }
 
@@ -392,6 +440,7 @@ const _: () =
 #[cfg(target_arch = "x86_64")]
 impl LaneNum for Z8 {
     const PARTS: usize = 1;
+    const STREAMS: bool = true;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), q.len()) }
@@ -403,6 +452,11 @@ impl LaneNum for Z8 {
     #[inline(always)]
     fn put(self, x: &mut Lanes, _: usize) {
         *x = self.lanes();
+    }
+    #[inline(always)]
+    fn stream(self, x: &mut Lanes) {
+        // SAFETY: see the `Z8` impls; a `Lanes` is 64-byte aligned, as the store requires.
+        unsafe { std::arch::x86_64::_mm512_stream_pd(x.0.as_mut_ptr(), self.0) }
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
