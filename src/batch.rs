@@ -165,10 +165,12 @@ impl BatchData {
         Ok(n.div_ceil(LANES))
     }
 
-    /// Room for every body of `chunks` chunks.
-    fn size_frames(&mut self, chunks: usize) {
+    /// Room for every body of `chunks` chunks; returns the number of frames that is.
+    fn size_frames(&mut self, chunks: usize) -> usize {
         let zero = Frame::splat(&Transform::IDENTITY);
-        self.frames.resize(chunks * self.bodies, zero);
+        let frames = chunks * self.bodies;
+        self.frames.resize(frames, zero);
+        frames
     }
 
     /// The error for the first configuration of `qs` that [`check_q`] rejects (`Ok` if none).
@@ -177,8 +179,8 @@ impl BatchData {
     }
 }
 
-/// Whether the single-threaded all-links kernel writes `chunks` chunks' frames (of one body
-/// each) around the caches: when they exceed the last-level cache, where they could not stay
+/// Whether the single-threaded all-links kernel writes `frames` frames (of one chunk and one
+/// body each) around the caches: when they exceed the last-level cache, where they could not stay
 /// for the caller anyway. A store to a line that is not cached first reads it from memory,
 /// which a streaming store does not. On a 2-core Zen 5 virtual machine, a plain loop writing
 /// 64 MiB took 1.83 ms with ordinary stores and 1.16 ms streamed; for 16 MiB, which stays in
@@ -191,8 +193,8 @@ impl BatchData {
 /// plain loop that streams twelve lines between a few arithmetic instructions; with ordinary
 /// stores, two threads took 0.73 ms and 0.41 ms in the same runs. When both scaled, streaming
 /// gained at most 13% (Panda 0.73 → 0.63 ms).
-fn streams(chunks: usize) -> bool {
-    chunks.saturating_mul(size_of::<Frame<Lanes>>()) > crate::arith::last_level_cache_bytes()
+fn streams(frames: usize) -> bool {
+    frames.saturating_mul(size_of::<Frame<Lanes>>()) > crate::arith::last_level_cache_bytes()
 }
 
 /// The number of configurations in `qs` (rows of the chain's dof), or the error for a length
@@ -286,9 +288,8 @@ pub fn forward_kinematics_batch<'a>(
 ) -> Result<BatchPoses<'a>, BatchError> {
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, check.is_none())?;
-    data.size_frames(chunks);
+    let stream = streams(data.size_frames(chunks));
     let bodies = chain.bodies.len().max(1);
-    let stream = streams(chunks * bodies);
     if stream {
         data.kept.resize(bodies, Frame::splat(&Transform::IDENTITY));
     }
@@ -1061,6 +1062,9 @@ mod tests {
             // Just past the cache, and not a whole number of chunks.
             let n = crate::arith::last_level_cache_bytes() / (frame_bytes * bodies) + 13;
             assert!(streams(n.div_ceil(LANES) * bodies), "{file}");
+            // Frames that fill the cache exactly are written through it.
+            let fill = crate::arith::last_level_cache_bytes() / size_of::<Frame<Lanes>>();
+            assert!(!streams(fill) && streams(fill + 1));
             assert!(chain.bodies.iter().any(|b| b.branches) == (file != "robots/ur5.yaml"));
             let qs: Vec<f64> = (0..n * dof)
                 .map(|i| ((i as f64) * 0.618_033_988_749_895).fract() * 4.0 - 2.0)
