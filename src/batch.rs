@@ -996,23 +996,42 @@ mod tests {
     use crate::data::Data;
     use crate::kinematics::forward_kinematics;
 
+    /// A serial arm, and two chains whose branches read a frame again (the Panda's second finger
+    /// hangs from the hand; TIAGo's tree branches too), each with its file and `q` in `n`
+    /// configurations (`None`: just past the last-level cache, and not a whole number of chunks)
+    /// spread over a few radians (deterministic, every entry different).
+    fn chains_and_qs(n: Option<usize>) -> Vec<(&'static str, Chain, Vec<f64>)> {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let files = [
+            "robots/ur5.yaml",
+            "robots/panda.urdf",
+            "tests/data/reference/urdf/tiago_no_hand.urdf",
+        ];
+        files
+            .into_iter()
+            .map(|file| {
+                let chain = Chain::from_file(root.join(file)).unwrap();
+                let frame_bytes = size_of::<Frame<Lanes>>() / LANES;
+                let past_cache = || {
+                    crate::arith::last_level_cache_bytes() / (frame_bytes * chain.bodies.len()) + 13
+                };
+                let n = n.unwrap_or_else(past_cache);
+                let qs = (0..n * chain.dof())
+                    .map(|i| ((i as f64) * 0.754_877_666_246_692_7).fract() * 5.0 - 2.5)
+                    .collect();
+                (file, chain, qs)
+            })
+            .collect()
+    }
+
     /// The all-links kernel writes the same frames streamed as cached: on baseline x86-64
     /// (four 16-byte streaming stores per line), with the ISA this machine selects (AVX-512
     /// streams whole lines, AVX2 does not stream), and with bodies whose frames are read again by
     /// a branch from the copies kept aside.
     #[test]
     fn streamed_chunks_equal_cached_chunks() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        for file in [
-            "robots/ur5.yaml",
-            "robots/panda.urdf",
-            "tests/data/reference/urdf/tiago_no_hand.urdf",
-        ] {
-            let chain = Chain::from_file(root.join(file)).unwrap();
+        for (file, chain, qs) in chains_and_qs(Some(37)) {
             let (bodies, dof) = (chain.bodies.len(), chain.dof());
-            let qs: Vec<f64> = (0..37 * dof)
-                .map(|i| ((i as f64) * 0.754_877_666_246_692_7).fract() * 5.0 - 2.5)
-                .collect();
             let zero = Frame::splat(&Transform::IDENTITY);
             let evaluate = |stream: bool, baseline: bool| {
                 let mut frames = vec![zero; 5 * bodies];
@@ -1045,30 +1064,17 @@ mod tests {
 
     /// Batches whose frames exceed the last-level cache are written around it on one thread
     /// ([`streams`]); they give, on one thread and on the pool, what single evaluations give, bit
-    /// for bit: on a
-    /// serial arm, and on chains whose branches read a frame that was streamed (the Panda's
-    /// second finger hangs from the hand; TIAGo's tree branches too).
+    /// for bit, on the chains of [`chains_and_qs`].
     #[test]
     fn streamed_batches_equal_single_evaluations() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        for file in [
-            "robots/ur5.yaml",
-            "robots/panda.urdf",
-            "tests/data/reference/urdf/tiago_no_hand.urdf",
-        ] {
-            let chain = Chain::from_file(root.join(file)).unwrap();
+        for (file, chain, qs) in chains_and_qs(None) {
             let (bodies, dof) = (chain.bodies.len(), chain.dof());
-            let frame_bytes = size_of::<Frame<Lanes>>() / LANES;
-            // Just past the cache, and not a whole number of chunks.
-            let n = crate::arith::last_level_cache_bytes() / (frame_bytes * bodies) + 13;
+            let n = qs.len() / dof;
             assert!(streams(n.div_ceil(LANES) * bodies), "{file}");
             // Frames that fill the cache exactly are written through it.
             let fill = crate::arith::last_level_cache_bytes() / size_of::<Frame<Lanes>>();
             assert!(!streams(fill) && streams(fill + 1));
             assert!(chain.bodies.iter().any(|b| b.branches) == (file != "robots/ur5.yaml"));
-            let qs: Vec<f64> = (0..n * dof)
-                .map(|i| ((i as f64) * 0.618_033_988_749_895).fract() * 4.0 - 2.0)
-                .collect();
             let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
             let mut data = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
             let links: Vec<LinkId> = (0..chain.links().len()).map(LinkId).collect();
