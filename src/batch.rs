@@ -188,11 +188,12 @@ impl BatchData {
 /// 65 536 configurations (57 MB of frames) went from 1.59–1.74 ms to 1.24–1.27 ms (medians of
 /// five alternated runs), the UR5's (44 MB) from 1.04–1.12 to 0.82–0.89.
 ///
-/// The parallel batch does not stream. With two threads streaming, the same machine wrote as
-/// fast as one thread for minutes at a time (Panda 1.21–1.23 ms, UR5 0.82–0.85 ms), as did a
-/// plain loop that streams twelve lines between a few arithmetic instructions; with ordinary
-/// stores, two threads took 0.73 ms and 0.41 ms in the same runs. When both scaled, streaming
-/// gained at most 13% (Panda 0.73 → 0.63 ms).
+/// The parallel batch does not stream. Over 2 000 calls in a row, the Panda's batch took
+/// 1.58–1.60 ms on two streaming threads, 1.24–1.26 ms on two with ordinary stores and
+/// 1.26–1.31 ms on one streaming thread (the machine's memory took about 45 GB/s in each case).
+/// In short runs, two streaming threads were at times no faster than one (Panda 1.21–1.23 ms),
+/// as was a plain loop that streams twelve lines between a few arithmetic instructions, and at
+/// best 13% faster than two with ordinary stores (0.73 → 0.63 ms).
 fn streams(frames: usize) -> bool {
     frames.saturating_mul(size_of::<Frame<Lanes>>()) > crate::arith::last_level_cache_bytes()
 }
