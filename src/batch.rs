@@ -745,9 +745,26 @@ fn chunk_poses_generic<A: Arith>(
     stream: bool,
     kept: &mut [Frame<Lanes>],
 ) -> bool {
-    let dof = chain.dof();
     let ok = transpose_chunk::<A::Lanes>(check, q, qs, c);
-    let stream = stream && A::Lanes::STREAMS;
+    // The choice made once per chunk, each kernel compiled without the other's tests.
+    if stream && A::Lanes::STREAMS {
+        chunk_frames::<A, true>(chain, frames, q, kept);
+    } else {
+        chunk_frames::<A, false>(chain, frames, q, kept);
+    }
+    ok
+}
+
+/// The frames of [`chunk_poses_generic`], its joint values transposed into `q`; `STREAM` as its
+/// `stream`.
+#[inline(always)]
+fn chunk_frames<A: Arith, const STREAM: bool>(
+    chain: &Chain,
+    frames: &mut [Frame<Lanes>],
+    q: &[Lanes],
+    kept: &mut [Frame<Lanes>],
+) {
+    let dof = chain.dof();
     // Each body's `sin`/`cos` next to its composition, on eight lanes in one register or as two
     // parts of four. With eight lanes, computing them first for all bodies (into `frames`, read
     // back body by body) was slower on Zen 4: UR5 17.8 → 18.2 ns, Panda 23.5 → 25.3, modified DH
@@ -761,12 +778,12 @@ fn chunk_poses_generic<A: Arith>(
                     kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
                 }
                 Some(p) => {
-                    let parent = Frame::get(if stream { &kept[p] } else { &frames[p] }, part);
+                    let parent = Frame::get(if STREAM { &kept[p] } else { &frames[p] }, part);
                     kernel::pose_step::<A::Lanes, A>(Some(&parent), body, qp, sin_cos)
                 }
                 None => kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos),
             };
-            if stream {
+            if STREAM {
                 f.stream(&mut frames[k]);
                 if body.branches {
                     f.put(&mut kept[k], 0);
@@ -776,7 +793,6 @@ fn chunk_poses_generic<A: Arith>(
             }
         }
     }
-    ok
 }
 
 /// How many chunks ahead of the one being transposed the kernels ask for the joint values: a
