@@ -186,7 +186,7 @@ impl BatchData {
 /// 64 MiB took 1.83 ms with ordinary stores and 1.16 ms streamed; for 16 MiB, which stays in
 /// the 32 MiB cache when written again, streaming took twice as long. The Panda's batch of
 /// 65 536 configurations (57 MB of frames) went from 1.59–1.74 ms to 1.24–1.27 ms (medians of
-/// five alternated runs), the UR5's (44 MB) from 1.04–1.12 to 0.82–0.89.
+/// 60 calls, five runs alternating the two), the UR5's (44 MB) from 1.04–1.12 to 0.82–0.89.
 ///
 /// The parallel batch does not stream. Over 2 000 calls in a row, the Panda's batch took
 /// 1.58–1.60 ms on two streaming threads, 1.24–1.26 ms on two with ordinary stores and
@@ -729,10 +729,10 @@ pub fn forward_kinematics_batch_to<'a>(
 /// One chunk: configurations `8c .. 8c + 8` (the last chunk repeats its last configuration in
 /// the unused lanes). False if `check` rejects one (the frames are then meaningless).
 ///
-/// With `stream` (and a lane type that [`LaneNum::STREAMS`]), the frames are written around the
-/// caches, and the frames of bodies that [`Body::branches`] are kept in `kept` (as long as the
-/// chain's bodies) to be read again, instead of being read back from `frames`; the caller then
-/// calls [`kernel::fence_streams`] before `frames` is used.
+/// With `stream` (and a lane type of one part), the frames are written around the caches
+/// ([`LaneNum::stream`]), and the frames of bodies that [`Body::branches`] are kept in `kept` (as
+/// long as the chain's bodies) to be read again, instead of being read back from `frames`; the
+/// caller then calls [`kernel::fence_streams`] before `frames` is used.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn chunk_poses_generic<A: Arith>(
@@ -747,7 +747,8 @@ fn chunk_poses_generic<A: Arith>(
 ) -> bool {
     let ok = transpose_chunk::<A::Lanes>(check, q, qs, c);
     // The choice made once per chunk, each kernel compiled without the other's tests.
-    if stream && A::Lanes::STREAMS {
+    // (Four-lane types write half lines, which would be flushed to memory half written.)
+    if stream && A::Lanes::PARTS == 1 {
         chunk_frames::<A, true>(chain, frames, q, kept);
     } else {
         chunk_frames::<A, false>(chain, frames, q, kept);

@@ -178,13 +178,11 @@ pub(crate) trait LaneNum: Num {
     fn get(x: &Lanes, part: usize) -> Self;
     /// Writes `self` as part `part` of `x`.
     fn put(self, x: &mut Lanes, part: usize);
-    /// Whether [`LaneNum::stream`] writes around the caches (a type of one part only: a whole
-    /// [`Lanes`] is one cache line).
-    const STREAMS: bool = false;
-    /// Writes `self` as the whole of `x`, around the caches when [`LaneNum::STREAMS`]
-    /// (a non-temporal store: the line is not read first and does not evict other data); the
-    /// writing thread must call [`fence_streams`] before the memory is read or written again.
-    /// Otherwise as [`LaneNum::put`] of part 0.
+    /// Writes `self` as the whole of `x` (a type of one part: a whole [`Lanes`] is one cache
+    /// line), around the caches where the type can (a non-temporal store: the line is not read
+    /// first and does not evict other data); the writing thread must then call
+    /// [`fence_streams`] before the memory is read or written again. By default, and on other
+    /// architectures, an ordinary store.
     #[inline(always)]
     fn stream(self, x: &mut Lanes) {
         self.put(x, 0);
@@ -201,8 +199,6 @@ pub(crate) trait LaneNum: Num {
 
 impl LaneNum for Lanes {
     const PARTS: usize = 1;
-    #[cfg(target_arch = "x86_64")]
-    const STREAMS: bool = true;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         q
@@ -440,7 +436,6 @@ const _: () =
 #[cfg(target_arch = "x86_64")]
 impl LaneNum for Z8 {
     const PARTS: usize = 1;
-    const STREAMS: bool = true;
     #[inline(always)]
     fn cast(q: &[Lanes]) -> &[Self] {
         unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), q.len()) }
