@@ -198,6 +198,16 @@ fn streams(frames: usize) -> bool {
     frames.saturating_mul(size_of::<Frame<Lanes>>()) > crate::arith::last_level_cache_bytes()
 }
 
+/// The length of the all-links kernel's `kept` when it streams: up to the last body whose frame a
+/// branch reads again (none for a serial chain).
+fn kept_len(chain: &Chain) -> usize {
+    chain
+        .bodies
+        .iter()
+        .rposition(|b| b.branches)
+        .map_or(0, |k| k + 1)
+}
+
 /// The number of configurations in `qs` (rows of the chain's dof), or the error for a length
 /// that is not a multiple of it (the index given is that of the incomplete row) or for a chain
 /// without moving joints.
@@ -292,7 +302,8 @@ pub fn forward_kinematics_batch<'a>(
     let stream = streams(data.size_frames(chunks));
     let bodies = chain.bodies.len().max(1);
     if stream {
-        data.kept.resize(bodies, Frame::splat(&Transform::IDENTITY));
+        data.kept
+            .resize(kept_len(chain), Frame::splat(&Transform::IDENTITY));
     }
     let mut all_ok = true;
     for (c, frames) in data
@@ -730,8 +741,8 @@ pub fn forward_kinematics_batch_to<'a>(
 /// the unused lanes). False if `check` rejects one (the frames are then meaningless).
 ///
 /// With `stream` (and a lane type of one part), the frames are written around the caches
-/// ([`LaneNum::stream`]), and the frames of bodies that [`Body::branches`] are kept in `kept` (as
-/// long as the chain's bodies) to be read again, instead of being read back from `frames`; the
+/// ([`LaneNum::stream`]), and the frames of bodies that [`Body::branches`] are kept in `kept` (at
+/// least up to the last such body) to be read again, instead of being read back from `frames`; the
 /// caller then calls [`kernel::fence_streams`] before `frames` is used.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -1053,7 +1064,7 @@ mod tests {
             let zero = Frame::splat(&Transform::IDENTITY);
             let evaluate = |stream: bool, baseline: bool| {
                 let mut frames = vec![zero; 5 * bodies];
-                let mut kept = vec![zero; bodies];
+                let mut kept = vec![zero; kept_len(&chain)];
                 let mut q = vec![Lanes::splat(0.0); dof];
                 for (c, out) in frames.chunks_exact_mut(bodies).enumerate() {
                     let ok = if baseline {
