@@ -149,14 +149,17 @@ impl BatchData {
         self.limit_policy = policy;
     }
 
+    /// The limit policy in force.
+    #[must_use]
+    pub fn limit_policy(&self) -> LimitPolicy {
+        self.limit_policy
+    }
+
     /// Sizes the buffers for `qs`; checks the configurations unless `check` is false (the
     /// kernels check their lanes, or the parallel path checks each chunk in its own task; both
     /// then call [`BatchData::first_error`] on failure).
     fn prepare(&mut self, chain: &Chain, qs: &[f64], check: bool) -> Result<usize, BatchError> {
-        assert!(
-            self.bodies == chain.bodies.len() && self.dof == chain.dof(),
-            "kinechain: BatchData was created for another chain"
-        );
+        crate::data::assert_buffers_match("BatchData", self.bodies, self.dof, chain);
         let n = configurations(chain, qs)?;
         if check && !all_valid(chain, qs, self.limit_policy) {
             first_error(chain, qs, self.limit_policy)?;

@@ -91,14 +91,19 @@ impl Data {
     }
 
     pub(crate) fn assert_matches(&self, chain: &Chain) {
-        assert!(
-            self.world_from_body.len() == chain.bodies.len() && self.dof == chain.dof(),
-            "kinechain: Data was created for another chain ({} moving joints, dof {}), not '{}' ({} moving joints, dof {})",
-            self.world_from_body.len(),
-            self.dof,
-            chain.name(),
-            chain.bodies.len(),
-            chain.dof()
-        );
+        assert_buffers_match("Data", self.world_from_body.len(), self.dof, chain);
     }
+}
+
+/// Panics, naming both sides, unless buffers of type `what` made for a chain of `bodies` moving
+/// joints and `dof` entries were made for one of `chain`'s shape.
+#[inline]
+pub(crate) fn assert_buffers_match(what: &str, bodies: usize, dof: usize, chain: &Chain) {
+    assert!(
+        bodies == chain.bodies.len() && dof == chain.dof(),
+        "kinechain: {what} was created for another chain ({bodies} moving joints, dof {dof}), not '{}' ({} moving joints, dof {})",
+        chain.name(),
+        chain.bodies.len(),
+        chain.dof()
+    );
 }

@@ -244,6 +244,8 @@ fn batches_decide_as_check_q_does_when_lanes_cannot() {
     let tool = chain.link_id("right").unwrap();
     let mut batch = BatchData::new(&chain);
     let mut batch32 = sp::BatchData::new(&chain);
+    assert_eq!(batch.limit_policy(), LimitPolicy::Enforce);
+    assert_eq!(batch32.limit_policy(), LimitPolicy::Enforce);
     // (entry, value): the right finger out of [−0.04, 0] (0.01 − 0.005 > 0), the left out of
     // [0, 0.04], inside both, and non-finite values at the joint that has no limits (which
     // accepts any finite value).
@@ -259,6 +261,10 @@ fn batches_decide_as_check_q_does_when_lanes_cannot() {
     for policy in [LimitPolicy::Enforce, LimitPolicy::Ignore] {
         batch.set_limit_policy(policy);
         batch32.set_limit_policy(policy);
+        assert_eq!(
+            (batch.limit_policy(), batch32.limit_policy()),
+            (policy, policy)
+        );
         // 19 configurations (blocks of eight and a rest) and 5000 (checked in parts in parallel).
         for (n, bads) in [(19, &[0, 7, 8, 18][..]), (5000, &[0, 2999, 4999][..])] {
             for &bad in bads {

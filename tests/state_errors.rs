@@ -703,6 +703,29 @@ fn data_of_another_chain_is_a_programming_error() {
     let _ = forward_kinematics(&puma, &mut data, &[0.0; 6]);
 }
 
+#[test]
+#[should_panic(
+    expected = "BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
+)]
+fn batch_data_of_another_chain_is_a_programming_error() {
+    let puma = robot("puma560.yaml");
+    let planar = robot("planar3.yaml");
+    let mut data = kinechain::batch::BatchData::new(&planar);
+    let _ = kinechain::batch::forward_kinematics_batch(&puma, &mut data, &[0.0; 6]);
+}
+
+#[test]
+#[should_panic(
+    expected = "BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
+)]
+fn single_precision_data_of_another_chain_is_a_programming_error() {
+    use kinechain::batch::single_precision::{BatchData, forward_kinematics_batch};
+    let puma = robot("puma560.yaml");
+    let planar = robot("planar3.yaml");
+    let mut data = BatchData::new(&planar);
+    let _ = forward_kinematics_batch(&puma, &mut data, &[0.0; 6]);
+}
+
 /// The suggestion's bounds: a name at exactly a third of its length from a candidate (in length
 /// and in edits) gets it; two letters swapped are two edits, at the start of a name as elsewhere.
 #[test]

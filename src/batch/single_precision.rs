@@ -262,6 +262,12 @@ impl BatchData {
         self.limit_policy = policy;
     }
 
+    /// The limit policy in force.
+    #[must_use]
+    pub fn limit_policy(&self) -> LimitPolicy {
+        self.limit_policy
+    }
+
     /// The number of chunks of `qs`, after checking its length (and, on one thread, its
     /// configurations when the kernels cannot check them on their lanes).
     fn prepare(
@@ -271,10 +277,7 @@ impl BatchData {
         check: Option<LaneCheck<'_>>,
         parallel: bool,
     ) -> Result<usize, BatchError> {
-        assert!(
-            self.bodies == chain.bodies.len() && self.dof == chain.dof(),
-            "kinechain: BatchData was created for another chain"
-        );
+        crate::data::assert_buffers_match("BatchData", self.bodies, self.dof, chain);
         let n = configurations(chain, qs)?;
         // The parallel path's tasks check their own rows when the kernels cannot.
         if check.is_none() && !parallel && !all_valid(chain, qs, self.limit_policy) {
