@@ -705,7 +705,7 @@ fn data_of_another_chain_is_a_programming_error() {
 
 #[test]
 #[should_panic(
-    expected = "BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
+    expected = "kinechain: BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
 )]
 fn batch_data_of_another_chain_is_a_programming_error() {
     let puma = robot("puma560.yaml");
@@ -716,7 +716,7 @@ fn batch_data_of_another_chain_is_a_programming_error() {
 
 #[test]
 #[should_panic(
-    expected = "BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
+    expected = "single_precision::BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
 )]
 fn single_precision_data_of_another_chain_is_a_programming_error() {
     use kinechain::batch::single_precision::{BatchData, forward_kinematics_batch};

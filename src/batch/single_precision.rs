@@ -277,7 +277,12 @@ impl BatchData {
         check: Option<LaneCheck<'_>>,
         parallel: bool,
     ) -> Result<usize, BatchError> {
-        crate::data::assert_buffers_match("BatchData", self.bodies, self.dof, chain);
+        crate::data::assert_buffers_match(
+            "single_precision::BatchData",
+            self.bodies,
+            self.dof,
+            chain,
+        );
         let n = configurations(chain, qs)?;
         // The parallel path's tasks check their own rows when the kernels cannot.
         if check.is_none() && !parallel && !all_valid(chain, qs, self.limit_policy) {
