@@ -1452,6 +1452,17 @@ fn fk_batch_file(
     fk_batch(chain, args, data, request, path, &mut reader, out)
 }
 
+/// What [`fk_batch`] makes of a line that reads without error.
+enum Row {
+    /// Nothing to write now: a blank line, a header row, or a configuration held for the batch
+    /// kernel.
+    Held,
+    /// A configuration evaluated on its own (rates, or a request the batch kernel does not serve).
+    Single(Configuration),
+    /// A header row of names that cannot be read: the end of the run.
+    BadHeader(CliError),
+}
+
 /// One result per line of `reader` (`path` names it in errors), in line order. Pose-only lines
 /// (the common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with
 /// rates, or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before
@@ -1480,7 +1491,6 @@ fn fk_batch<R: std::io::Read>(
     // The first line that is not blank may be a header row of joint names (`csv_header`).
     let mut first = true;
     let mut header = None;
-    let mut bad_header = false;
     for i in 0.. {
         if reader.buffer().is_empty() {
             failed_lines += pending.flush(chain, args, path, out)?;
@@ -1505,33 +1515,41 @@ fn fk_batch<R: std::io::Read>(
                 _ => line,
             };
             if line.trim().is_empty() {
-                return Ok(None);
+                return Ok(Row::Held);
             }
             if std::mem::take(&mut first)
                 && let Some(order) = crate::input::csv_header(chain, line)
             {
-                // (A header that cannot be read stops the run even under `--keep-going`: the
-                // rows below it would be read in another order than the file's.)
-                bad_header = order.is_err();
-                header = Some(order?);
-                return Ok(None);
+                return Ok(match order {
+                    Ok(order) => {
+                        header = Some(order);
+                        Row::Held
+                    }
+                    Err(e) => Row::BadHeader(e.into()),
+                });
             }
             let c = batch_configuration(chain, line, header.as_ref())?;
             if batchable && c.qd.is_none() && c.qdd.is_none() {
                 check_q(chain, &c.q, data.limit_policy())?;
                 pending.qs.extend_from_slice(&c.q);
                 pending.lines.push(i + 1);
-                return Ok(None);
+                return Ok(Row::Held);
             }
-            Ok(Some(c))
+            Ok(Row::Single(c))
         });
         match result {
-            Ok(None) => {
+            Ok(Row::Held) => {
                 if pending.lines.len() >= PendingPoses::MAX {
                     failed_lines += pending.flush(chain, args, path, out)?;
                 }
             }
-            Ok(Some(c)) => {
+            // A header that cannot be read stops the run even under `--keep-going`: the rows
+            // below it would be read in another order than the file's.
+            Ok(Row::BadHeader(e)) => {
+                pending.flush(chain, args, path, out)?;
+                return Err(at_line(path, i + 1, e));
+            }
+            Ok(Row::Single(c)) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
                 match request.emit(chain, args, data, &c, out) {
                     Ok(()) => {}
@@ -1545,7 +1563,7 @@ fn fk_batch<R: std::io::Read>(
             }
             Err(e) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
-                if !args.keep_going || bad_header {
+                if !args.keep_going {
                     return Err(at_line(path, i + 1, e));
                 }
                 failed_lines += 1;
