@@ -326,7 +326,9 @@ pub fn forward_kinematics_batch<'a>(
             &mut data.kept,
         );
     }
-    kernel::fence_streams();
+    if stream {
+        kernel::fence_streams();
+    }
     if !all_ok {
         data.first_error(chain, qs)?;
     }

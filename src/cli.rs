@@ -1544,11 +1544,9 @@ fn fk_batch<R: std::io::Read>(
                 }
             }
             // A header that cannot be read stops the run even under `--keep-going`: the rows
-            // below it would be read in another order than the file's.
-            Ok(Row::BadHeader(e)) => {
-                pending.flush(chain, args, path, out)?;
-                return Err(at_line(path, i + 1, e));
-            }
+            // below it would be read in another order than the file's. (Nothing is pending: a
+            // header is the first line that is not blank.)
+            Ok(Row::BadHeader(e)) => return Err(at_line(path, i + 1, e)),
             Ok(Row::Single(c)) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
                 match request.emit(chain, args, data, &c, out) {
