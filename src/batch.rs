@@ -63,6 +63,32 @@ macro_rules! block_eval {
     };
 }
 
+/// The limit-policy methods of a `BatchData` (`f64` or `f32`), inside its `impl` block; the
+/// type keeps its policy in a field `limit_policy`.
+macro_rules! limit_policy_methods {
+    () => {
+        /// These buffers, with evaluations checking joint limits under `policy` (as
+        /// [`BatchData::set_limit_policy`] sets it), in one expression:
+        /// `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
+        #[must_use]
+        pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
+            self.set_limit_policy(policy);
+            self
+        }
+
+        /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
+        pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
+            self.limit_policy = policy;
+        }
+
+        /// The limit policy in force.
+        #[must_use]
+        pub fn limit_policy(&self) -> LimitPolicy {
+            self.limit_policy
+        }
+    };
+}
+
 mod claims;
 pub mod single_precision;
 
@@ -135,37 +161,15 @@ impl BatchData {
         }
     }
 
-    /// These buffers, with evaluations checking joint limits under `policy` (as
-    /// [`BatchData::set_limit_policy`] sets it), in one expression:
-    /// `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
-    #[must_use]
-    pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
-        self.set_limit_policy(policy);
-        self
-    }
-
-    /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
-    pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
-        self.limit_policy = policy;
-    }
-
-    /// The limit policy in force.
-    #[must_use]
-    pub fn limit_policy(&self) -> LimitPolicy {
-        self.limit_policy
-    }
+    limit_policy_methods!();
 
     /// Sizes the buffers for `qs`; checks the configurations unless `check` is false (the
     /// kernels check their lanes, or the parallel path checks each chunk in its own task; both
     /// then call [`BatchData::first_error`] on failure).
     fn prepare(&mut self, chain: &Chain, qs: &[f64], check: bool) -> Result<usize, BatchError> {
-        crate::data::assert_buffers_match("BatchData", self.bodies, self.dof, chain);
-        let n = configurations(chain, qs)?;
-        if check && !all_valid(chain, qs, self.limit_policy) {
-            first_error(chain, qs, self.limit_policy)?;
-        }
-        self.len = n;
-        Ok(n.div_ceil(LANES))
+        let shape = (self.bodies, self.dof);
+        self.len = batch_rows("BatchData", shape, self.limit_policy, chain, qs, check)?;
+        Ok(self.len.div_ceil(LANES))
     }
 
     /// Room for every body of `chunks` chunks; returns the number of frames that is.
@@ -232,6 +236,27 @@ fn configurations(chain: &Chain, qs: &[f64]) -> Result<usize, BatchError> {
                 got: qs.len() % dof,
             },
         });
+    }
+    Ok(n)
+}
+
+/// The number of configurations in `qs`, for buffers named `what` that were created for a chain
+/// of `(bodies, dof)`; checks every configuration under `policy` when `check` is true.
+///
+/// # Panics
+/// If the buffers were created for another chain than `chain`.
+fn batch_rows(
+    what: &str,
+    (bodies, dof): (usize, usize),
+    policy: LimitPolicy,
+    chain: &Chain,
+    qs: &[f64],
+    check: bool,
+) -> Result<usize, BatchError> {
+    crate::data::assert_buffers_match(what, bodies, dof, chain);
+    let n = configurations(chain, qs)?;
+    if check && !all_valid(chain, qs, policy) {
+        first_error(chain, qs, policy)?;
     }
     Ok(n)
 }

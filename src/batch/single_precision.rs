@@ -37,7 +37,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{
-    BatchError, LaneCheck, block_len, configurations, first_error, fold_blocks, lane_pose,
+    BatchError, LaneCheck, batch_rows, block_len, first_error, fold_blocks, lane_pose,
     par_chunks_checked, transpose_chunk, worth_parallel,
 };
 use crate::arith::{Arith, fma_dispatch};
@@ -45,7 +45,6 @@ use crate::chain::{Body, Chain, LinkId, Placement};
 use crate::data::LimitPolicy;
 use crate::joint::Term;
 use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
-use crate::kinematics::all_valid;
 use crate::padded;
 use crate::transform::Transform;
 use crate::trig;
@@ -248,25 +247,7 @@ impl BatchData {
         }
     }
 
-    /// These buffers, with evaluations checking joint limits under `policy` (as
-    /// [`BatchData::set_limit_policy`] sets it), in one expression:
-    /// `BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore)`.
-    #[must_use]
-    pub fn with_limit_policy(mut self, policy: LimitPolicy) -> Self {
-        self.set_limit_policy(policy);
-        self
-    }
-
-    /// Chooses whether evaluations check joint limits (default [`LimitPolicy::Enforce`]).
-    pub fn set_limit_policy(&mut self, policy: LimitPolicy) {
-        self.limit_policy = policy;
-    }
-
-    /// The limit policy in force.
-    #[must_use]
-    pub fn limit_policy(&self) -> LimitPolicy {
-        self.limit_policy
-    }
+    limit_policy_methods!();
 
     /// The number of chunks of `qs`, after checking its length (and, on one thread, its
     /// configurations when the kernels cannot check them on their lanes).
@@ -277,19 +258,12 @@ impl BatchData {
         check: Option<LaneCheck<'_>>,
         parallel: bool,
     ) -> Result<usize, BatchError> {
-        crate::data::assert_buffers_match(
-            "single_precision::BatchData",
-            self.bodies,
-            self.dof,
-            chain,
-        );
-        let n = configurations(chain, qs)?;
+        let shape = (self.bodies, self.dof);
         // The parallel path's tasks check their own rows when the kernels cannot.
-        if check.is_none() && !parallel && !all_valid(chain, qs, self.limit_policy) {
-            first_error(chain, qs, self.limit_policy)?;
-        }
-        self.len = n;
-        Ok(n.div_ceil(WIDTH))
+        let check = check.is_none() && !parallel;
+        let what = "single_precision::BatchData";
+        self.len = batch_rows(what, shape, self.limit_policy, chain, qs, check)?;
+        Ok(self.len.div_ceil(WIDTH))
     }
 }
 
