@@ -163,7 +163,8 @@ impl BatchData {
 
     limit_policy_methods!();
 
-    /// Sizes the buffers for `qs`; checks the configurations unless `check` is false (the
+    /// Records the number of configurations in `qs` and returns its number of chunks; checks
+    /// the configurations first unless `check` is false (the
     /// kernels check their lanes, or the parallel path checks each chunk in its own task; both
     /// then call [`BatchData::first_error`] on failure).
     fn prepare(&mut self, chain: &Chain, qs: &[f64], check: bool) -> Result<usize, BatchError> {

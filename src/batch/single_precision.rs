@@ -260,9 +260,9 @@ impl BatchData {
     ) -> Result<usize, BatchError> {
         let shape = (self.bodies, self.dof);
         // The parallel path's tasks check their own rows when the kernels cannot.
-        let check = check.is_none() && !parallel;
+        let check_rows = check.is_none() && !parallel;
         let what = "single_precision::BatchData";
-        self.len = batch_rows(what, shape, self.limit_policy, chain, qs, check)?;
+        self.len = batch_rows(what, shape, self.limit_policy, chain, qs, check_rows)?;
         Ok(self.len.div_ceil(WIDTH))
     }
 }
