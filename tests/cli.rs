@@ -78,6 +78,15 @@ fn position(result: &Value, link: &str) -> [f64; 3] {
     [0, 1, 2].map(|i| pose[i][3].as_f64().unwrap())
 }
 
+/// The entries of a JSON array of numbers.
+fn numbers(array: &Value) -> Vec<f64> {
+    let entries = array.as_array().expect("a JSON array");
+    entries
+        .iter()
+        .map(|x| x.as_f64().expect("a number"))
+        .collect()
+}
+
 #[test]
 fn info_lists_joints_in_q_order_and_links() {
     let v = &ok_json(&["info", "robots/panda.urdf"])[0];
@@ -365,12 +374,8 @@ fn fk_rates_appear_only_when_asked_for() {
     assert!(p.get("omega").is_some() && p.get("v").is_some());
     assert!(p.get("alpha").is_none() && p.get("a").is_none());
     // Ex. 2.8: velocity of P.
-    let vel: Vec<f64> = p["v"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect();
+    let vel = numbers(&p["v"]);
+    assert_eq!(vel.len(), 3, "{vel:?}");
     for (got, want) in vel.iter().zip([-0.51197, -0.51197, 4.48803]) {
         assert!((got - want).abs() < 5e-6, "{vel:?}");
     }
@@ -393,18 +398,8 @@ fn fk_rates_appear_only_when_asked_for() {
     let point = &a["points"][0];
     assert_eq!(point["link"], "arm");
     for (field, link_field) in [("velocity", "v"), ("acceleration", "a")] {
-        let got: Vec<f64> = point[field]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        let want: Vec<f64> = p[link_field]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
+        let got = numbers(&point[field]);
+        let want = numbers(&p[link_field]);
         for k in 0..3 {
             assert!(
                 (got[k] - want[k]).abs() < 1e-14,
@@ -1127,22 +1122,16 @@ fn tables_print_the_orientation_asked_for() {
                 assert_eq!(shown, "undefined", "{kind} {link}");
                 continue;
             }
+            let field = |k: &str| want[k].as_f64().expect("a number");
             let values: Vec<f64> = match want {
-                Value::Array(v) => v.iter().map(|x| x.as_f64().unwrap()).collect(),
+                Value::Array(_) => numbers(want),
                 _ => match kind {
-                    "quat" => ["w", "x", "y", "z"]
-                        .map(|k| want[k].as_f64().unwrap())
-                        .to_vec(),
-                    "rpy" => ["roll", "pitch", "yaw"]
-                        .map(|k| want[k].as_f64().unwrap())
-                        .to_vec(),
-                    "zxz" => ["phi", "theta", "psi"]
-                        .map(|k| want[k].as_f64().unwrap())
-                        .to_vec(),
+                    "quat" => ["w", "x", "y", "z"].map(field).to_vec(),
+                    "rpy" => ["roll", "pitch", "yaw"].map(field).to_vec(),
+                    "zxz" => ["phi", "theta", "psi"].map(field).to_vec(),
                     _ => {
-                        let axis = want["axis"].as_array().unwrap().iter();
-                        let mut v: Vec<f64> = axis.map(|x| x.as_f64().unwrap()).collect();
-                        v.push(want["angle"].as_f64().unwrap());
+                        let mut v = numbers(&want["axis"]);
+                        v.push(field("angle"));
                         v
                     }
                 },
