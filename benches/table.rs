@@ -33,6 +33,9 @@ struct Row {
     position: f64,
     reach: f64,
     rotation: f64,
+    /// The machine epsilon of the method's arithmetic: `f64`'s, or `f32`'s for the
+    /// single-precision batch, whose position error the table also gives in its own ulps.
+    epsilon: f64,
 }
 
 /// One method of a robot: label, poses of every reference configuration, and one timed call
@@ -42,6 +45,8 @@ struct Method<'a> {
     poses: Vec<Vec<[[f64; 4]; 4]>>,
     call: Box<dyn FnMut() + 'a>,
     repeat: usize,
+    /// As [`Row::epsilon`].
+    epsilon: f64,
 }
 
 /// Largest position and rotation-entry errors of per-sample link poses against the 50-digit file.
@@ -65,6 +70,7 @@ fn errors(exact: &serde_json::Value, names: &[String], poses: &[Vec<[[f64; 4]; 4
 /// configurations repeated 16 times) and returns, when `keep`, the poses of the first copy.
 fn batch_method<'a>(
     label: &'static str,
+    epsilon: f64,
     flat: Vec<f64>,
     mut evaluate: impl FnMut(&[f64], bool) -> Vec<Vec<[[f64; 4]; 4]>> + 'a,
 ) -> Method<'a> {
@@ -76,6 +82,7 @@ fn batch_method<'a>(
             black_box(evaluate(black_box(&flat), false));
         }),
         repeat: 16,
+        epsilon,
     }
 }
 
@@ -151,6 +158,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
             poses,
             call,
             repeat: 1,
+            epsilon: f64::EPSILON,
         });
     }
 
@@ -161,6 +169,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
     let mut batch = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch, 1 thread",
+        f64::EPSILON,
         flat.clone(),
         move |flat, keep| {
             let p = forward_kinematics_batch(chain, &mut batch, flat).unwrap();
@@ -173,6 +182,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
         single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch f32, 1 thread",
+        f64::from(f32::EPSILON),
         flat,
         move |flat, keep| {
             let p = single_precision::forward_kinematics_batch(chain, &mut batch32, flat).unwrap();
@@ -207,6 +217,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
                 position,
                 reach,
                 rotation,
+                epsilon: m.epsilon,
             }
         })
         .collect()
@@ -292,6 +303,7 @@ fn k_method<'a>(
             }
         }),
         repeat: 1,
+        epsilon: f64::EPSILON,
     })
 }
 
@@ -327,7 +339,20 @@ fn naive_method<'a>(
             }
         }),
         repeat: 1,
+        epsilon: f64::EPSILON,
     })
+}
+
+/// The position error in ulps of the reach (`f64` ulps, so that every row of the column is in one
+/// unit), followed for a single-precision row by the same error in its own ulps.
+fn reach_ulps(r: &Row) -> String {
+    let ulps = r.position / (r.reach * f64::EPSILON);
+    if r.epsilon == f64::EPSILON {
+        format!("{ulps:.2}")
+    } else {
+        let own = r.position / (r.reach * r.epsilon);
+        format!("{ulps:.2e} ({own:.2} f32 ulp)")
+    }
 }
 
 /// A speed-up for the table, "–" where there is none.
@@ -419,14 +444,14 @@ fn main() {
     for r in &rows {
         writeln!(
             table,
-            "| {} | {} | {:.1} | {} | {} | {:.1e} | {:.2} | {:.1e} |",
+            "| {} | {} | {:.1} | {} | {} | {:.1e} | {} | {:.1e} |",
             r.method,
             r.robot,
             r.ns,
             times(r.vs_k),
             times(r.vs_naive),
             r.position,
-            r.position / (r.reach * f64::EPSILON),
+            reach_ulps(r),
             r.rotation
         )
         .unwrap();
