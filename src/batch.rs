@@ -164,9 +164,9 @@ impl BatchData {
     limit_policy_methods!();
 
     /// Records the number of configurations in `qs` and returns its number of chunks; checks
-    /// the configurations first unless `check` is false (the
-    /// kernels check their lanes, or the parallel path checks each chunk in its own task; both
-    /// then call [`BatchData::first_error`] on failure).
+    /// the configurations first unless `check` is false (the kernels check their lanes, or the
+    /// parallel path checks each chunk in its own task; both then call
+    /// [`BatchData::first_error`] on failure).
     fn prepare(&mut self, chain: &Chain, qs: &[f64], check: bool) -> Result<usize, BatchError> {
         let shape = (self.bodies, self.dof);
         self.len = batch_rows("BatchData", shape, self.limit_policy, chain, qs, check)?;
