@@ -33,9 +33,16 @@ struct Row {
     position: f64,
     reach: f64,
     rotation: f64,
-    /// The machine epsilon of the method's arithmetic: `f64`'s, or `f32`'s for the
-    /// single-precision batch, whose position error the table also gives in its own ulps.
-    epsilon: f64,
+    /// Whether the method computes in `f32` (the single-precision batch), whose position error
+    /// the table also gives in `f32` ulps.
+    single_precision: bool,
+}
+
+impl Row {
+    /// The position error in ulps of the reach, an ulp being `epsilon` times the reach.
+    fn position_ulps(&self, epsilon: f64) -> f64 {
+        self.position / (self.reach * epsilon)
+    }
 }
 
 /// One method of a robot: label, poses of every reference configuration, and one timed call
@@ -45,8 +52,8 @@ struct Method<'a> {
     poses: Vec<Vec<[[f64; 4]; 4]>>,
     call: Box<dyn FnMut() + 'a>,
     repeat: usize,
-    /// As [`Row::epsilon`].
-    epsilon: f64,
+    /// As [`Row::single_precision`].
+    single_precision: bool,
 }
 
 /// Largest position and rotation-entry errors of per-sample link poses against the 50-digit file.
@@ -70,7 +77,7 @@ fn errors(exact: &serde_json::Value, names: &[String], poses: &[Vec<[[f64; 4]; 4
 /// configurations repeated 16 times) and returns, when `keep`, the poses of the first copy.
 fn batch_method<'a>(
     label: &'static str,
-    epsilon: f64,
+    single_precision: bool,
     flat: Vec<f64>,
     mut evaluate: impl FnMut(&[f64], bool) -> Vec<Vec<[[f64; 4]; 4]>> + 'a,
 ) -> Method<'a> {
@@ -82,7 +89,7 @@ fn batch_method<'a>(
             black_box(evaluate(black_box(&flat), false));
         }),
         repeat: 16,
-        epsilon,
+        single_precision,
     }
 }
 
@@ -158,7 +165,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
             poses,
             call,
             repeat: 1,
-            epsilon: f64::EPSILON,
+            single_precision: false,
         });
     }
 
@@ -169,7 +176,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
     let mut batch = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch, 1 thread",
-        f64::EPSILON,
+        false,
         flat.clone(),
         move |flat, keep| {
             let p = forward_kinematics_batch(chain, &mut batch, flat).unwrap();
@@ -182,7 +189,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
         single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
     methods.push(batch_method(
         "kinechain batch f32, 1 thread",
-        f64::from(f32::EPSILON),
+        true,
         flat,
         move |flat, keep| {
             let p = single_precision::forward_kinematics_batch(chain, &mut batch32, flat).unwrap();
@@ -217,7 +224,7 @@ fn rows_for(path: &Path) -> Vec<Row> {
                 position,
                 reach,
                 rotation,
-                epsilon: m.epsilon,
+                single_precision: m.single_precision,
             }
         })
         .collect()
@@ -303,7 +310,7 @@ fn k_method<'a>(
             }
         }),
         repeat: 1,
-        epsilon: f64::EPSILON,
+        single_precision: false,
     })
 }
 
@@ -339,19 +346,19 @@ fn naive_method<'a>(
             }
         }),
         repeat: 1,
-        epsilon: f64::EPSILON,
+        single_precision: false,
     })
 }
 
 /// The position error in ulps of the reach (`f64` ulps, so that every row of the column is in one
 /// unit), followed for a single-precision row by the same error in its own ulps.
 fn reach_ulps(r: &Row) -> String {
-    let ulps = r.position / (r.reach * f64::EPSILON);
-    if r.epsilon == f64::EPSILON {
-        format!("{ulps:.2}")
-    } else {
-        let own = r.position / (r.reach * r.epsilon);
+    let ulps = r.position_ulps(f64::EPSILON);
+    if r.single_precision {
+        let own = r.position_ulps(f64::from(f32::EPSILON));
         format!("{ulps:.2e} ({own:.2} f32 ulp)")
+    } else {
+        format!("{ulps:.2}")
     }
 }
 
@@ -364,7 +371,7 @@ fn plot(rows: &[Row], path: &Path) -> Result<(), Box<dyn std::error::Error>> {
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let ulps = |r: &Row| {
-        (r.position / (r.reach * f64::EPSILON))
+        r.position_ulps(f64::EPSILON)
             .max(r.rotation / f64::EPSILON)
             .max(0.1)
     };
