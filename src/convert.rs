@@ -260,51 +260,7 @@ const KINEMATICS_ONLY: &str = "  <!-- Kinematics only, as written by kinechain c
 /// `convert` prints it, so that the user knows what the written file leaves out.
 #[cfg(feature = "cli")]
 pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
-    let robot = urdf_rs::read_from_string(text).ok()?;
-    let count = |n: usize, what: &str| (n > 0).then(|| format!("{n} {what}"));
-    let inertial = |l: &&urdf_rs::Link| {
-        let (m, i) = (l.inertial.mass.value, &l.inertial.inertia);
-        [m, i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz]
-            .iter()
-            .any(|&x| x != 0.0)
-    };
-    let parts: Vec<String> = [
-        count(
-            robot.links.iter().map(|l| l.visual.len()).sum(),
-            "visual elements",
-        ),
-        count(
-            robot.links.iter().map(|l| l.collision.len()).sum(),
-            "collision elements",
-        ),
-        count(
-            robot.links.iter().filter(inertial).count(),
-            "links' masses and inertias",
-        ),
-        count(
-            robot
-                .joints
-                .iter()
-                .filter(|j| j.limit.effort != 0.0 || j.limit.velocity != 0.0)
-                .count(),
-            "joints' effort and velocity limits",
-        ),
-        count(
-            robot
-                .joints
-                .iter()
-                .filter(|j| {
-                    j.dynamics.is_some() || j.calibration.is_some() || j.safety_controller.is_some()
-                })
-                .count(),
-            "joints' dynamics, calibration or safety controller elements",
-        ),
-        count(robot.materials.len(), "materials"),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    (!parts.is_empty()).then(|| parts.join(", "))
+    crate::io::beyond_kinematics(text)
 }
 
 fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {

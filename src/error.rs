@@ -37,14 +37,14 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
 pub struct LoadError {
     path: PathBuf,
     #[source]
-    kind: LoadErrorKind,
+    kind: Box<LoadErrorKind>,
 }
 
 impl LoadError {
     pub(crate) fn new(path: &Path, kind: LoadErrorKind) -> Self {
         LoadError {
             path: path.to_path_buf(),
-            kind,
+            kind: Box::new(kind),
         }
     }
 
@@ -59,6 +59,27 @@ impl LoadError {
     pub fn kind(&self) -> &LoadErrorKind {
         &self.kind
     }
+
+    /// The 1-based line and column of the problem in the file, when the error has one.
+    #[must_use]
+    pub fn position(&self) -> Option<(u32, Option<u32>)> {
+        self.kind.position()
+    }
+}
+
+impl LoadErrorKind {
+    /// The 1-based line and (when known) column of the problem in the file, if the error has a
+    /// place in it.
+    #[must_use]
+    pub fn position(&self) -> Option<(u32, Option<u32>)> {
+        match self {
+            LoadErrorKind::Yaml { line, column, .. }
+            | LoadErrorKind::Urdf { line, column, .. }
+            | LoadErrorKind::Xacro { line, column, .. }
+            | LoadErrorKind::Field { line, column, .. } => line.map(|l| (l, *column)),
+            _ => None,
+        }
+    }
 }
 
 /// What went wrong while loading a robot file.
@@ -69,10 +90,11 @@ pub enum LoadErrorKind {
     #[error("cannot read file")]
     Io(#[from] std::io::Error),
     /// The file is larger than the loader accepts.
-    #[error("file is {size} bytes, more than the {limit}-byte limit for robot files")]
+    #[error("{}", too_large(*size, *limit))]
     TooLarge {
-        /// Size of the file in bytes.
-        size: u64,
+        /// Size of the file in bytes; `None` for a pipe or device, which was read up to the limit
+        /// and no further.
+        size: Option<u64>,
         /// The limit in bytes.
         limit: u64,
     },
@@ -109,15 +131,47 @@ pub enum LoadErrorKind {
         /// The parser's description.
         message: String,
     },
-    /// The URDF parser rejected the file.
-    #[error("invalid URDF: {message}")]
+    /// The file is not well-formed XML, or its URDF elements are not what URDF defines.
+    #[error("invalid URDF: {}{message}", location_prefix(*line, *column))]
     Urdf {
-        /// The parser's description.
+        /// 1-based line of the element or attribute at fault, when known.
+        line: Option<u32>,
+        /// 1-based column (in characters) of the element or attribute at fault, when known.
+        column: Option<u32>,
+        /// What is wrong, in the terms of the file.
         message: String,
     },
+    /// The file holds xacro macros (or its name says it is a xacro file): it must be expanded
+    /// into URDF first.
+    #[error(
+        "{}{found}: this is a xacro file, not URDF; expand it first (`xacro in.urdf.xacro > out.urdf`) and load the result",
+        location_prefix(*line, *column)
+    )]
+    Xacro {
+        /// 1-based line of the first xacro element or attribute, when it is in the file.
+        line: Option<u32>,
+        /// 1-based column of the first xacro element or attribute, when it is in the file.
+        column: Option<u32>,
+        /// What shows it: the element, the attribute or the file name.
+        found: String,
+    },
+    /// The file is UTF-16 text (it starts with a UTF-16 byte order mark); robot files are read
+    /// as UTF-8.
+    #[error(
+        "file is UTF-16 text; kinechain reads UTF-8 (convert it, e.g. `iconv -f UTF-16 -t UTF-8`)"
+    )]
+    Utf16,
     /// A field has a value kinechain cannot accept.
-    #[error("{}{field}: {problem}", joint_prefix(joint.as_deref()))]
+    #[error(
+        "{}{}{field}: {problem}",
+        location_prefix(*line, *column),
+        joint_prefix(joint.as_deref())
+    )]
     Field {
+        /// 1-based line of the value, when known.
+        line: Option<u32>,
+        /// 1-based column of the value, when known.
+        column: Option<u32>,
         /// The joint whose entry holds the field, if the field belongs to a joint.
         joint: Option<String>,
         /// The field, e.g. `alpha` or `origin.matrix`.
@@ -128,6 +182,17 @@ pub enum LoadErrorKind {
     /// The joints and links do not form a valid chain or tree.
     #[error(transparent)]
     Model(#[from] ModelError),
+}
+
+fn too_large(size: Option<u64>, limit: u64) -> String {
+    match size {
+        Some(size) => {
+            format!("file is {size} bytes, more than the {limit}-byte limit for robot files")
+        }
+        None => format!(
+            "more than {limit} bytes read (the limit for robot files) and the input is not a regular file; reading stopped there"
+        ),
+    }
 }
 
 fn location_prefix(line: Option<u32>, column: Option<u32>) -> String {

@@ -240,6 +240,8 @@ struct Reader<'s> {
 impl Reader<'_> {
     fn problem(&self, field: impl Into<String>, problem: FieldProblem) -> LoadErrorKind {
         LoadErrorKind::Field {
+            line: None,
+            column: None,
             joint: self.joint.clone(),
             field: field.into(),
             problem,

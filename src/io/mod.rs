@@ -3,6 +3,9 @@
 mod dh;
 mod urdf;
 
+#[cfg(feature = "cli")]
+pub(crate) use urdf::beyond_kinematics;
+
 use crate::chain::Chain;
 use crate::error::{LoadError, LoadErrorKind};
 use std::io::Read;
@@ -50,7 +53,20 @@ impl Chain {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Chain, LoadError> {
         let path = path.as_ref();
         let fail = |kind| LoadError::new(path, kind);
-        let format = Format::from_path(path).ok_or_else(|| fail(LoadErrorKind::UnknownFormat))?;
+        let format = Format::from_path(path).ok_or_else(|| {
+            let xacro = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("xacro"));
+            fail(if xacro {
+                LoadErrorKind::Xacro {
+                    line: None,
+                    column: None,
+                    found: "the file name ends in .xacro".into(),
+                }
+            } else {
+                LoadErrorKind::UnknownFormat
+            })
+        })?;
         let file = std::fs::File::open(path).map_err(|e| fail(LoadErrorKind::Io(e)))?;
         let mut bytes = Vec::new();
         // Read one byte past the limit to tell "at the limit" from "over it" without trusting
@@ -59,11 +75,19 @@ impl Chain {
             .read_to_end(&mut bytes)
             .map_err(|e| fail(LoadErrorKind::Io(e)))?;
         if bytes.len() as u64 > MAX_FILE_BYTES {
-            let size = std::fs::metadata(path).map_or(bytes.len() as u64, |m| m.len());
+            // A regular file's size is known; a pipe or a device (`/dev/zero`) was read up to the
+            // limit and no further.
+            let size = std::fs::metadata(path)
+                .ok()
+                .filter(std::fs::Metadata::is_file)
+                .map(|m| m.len());
             return Err(fail(LoadErrorKind::TooLarge {
                 size,
                 limit: MAX_FILE_BYTES,
             }));
+        }
+        if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+            return Err(fail(LoadErrorKind::Utf16));
         }
         let text = std::str::from_utf8(&bytes).map_err(|e| {
             fail(LoadErrorKind::NotText {

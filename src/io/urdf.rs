@@ -1,352 +1,273 @@
-//! URDF through `urdf-rs` (its `package://` expansion, which runs ROS tools, is never used: mesh
-//! paths do not matter for kinematics). The `urdf_rs` types never leave this file.
+//! URDF read through `roxmltree`, a conforming XML parser that keeps the position of every node.
+//!
+//! The kinematic elements (`<robot>`, `<link>`, `<joint>` and a joint's `<origin>`, `<parent>`,
+//! `<child>`, `<axis>`, `<limit>`, `<mimic>`) are taken from the parsed tree with strict checks;
+//! every error names the line and column of the element or attribute at fault. Everything else
+//! (visuals, collisions, inertials, materials, transmissions, Gazebo and vendor elements) cannot
+//! change a pose: it is skipped, and what is malformed in it draws a warning, never a refusal.
+//! XML that is not well-formed is an error, stated as such.
 
 use crate::chain::{ChainBuilder, JointSpec};
 use crate::error::{FieldProblem, LoadErrorKind};
 use crate::joint::{JointKind, Limits};
 use crate::transform::Transform;
+use roxmltree::{Document, Node, ParsingOptions};
 
-/// Deepest element nesting accepted (real URDFs nest about 6 deep); a limit keeps a hostile file
-/// from exhausting the parser's stack.
+/// Deepest element nesting accepted (real URDFs nest about 6 deep).
 pub(crate) const MAX_XML_DEPTH: usize = 100;
+
+/// File bytes per XML node the parser may build. Each node of the tree costs about 70 bytes,
+/// so this bounds a load's memory to about 20 times the file's size whatever the file holds;
+/// real URDFs spend 20 to 40 bytes on a node.
+const BYTES_PER_NODE: usize = 8;
+
+/// Nodes any file may hold, however short.
+const MIN_NODES: usize = 4096;
+
+/// Most warnings listed one by one; the rest are counted.
+const MAX_WARNINGS: usize = 20;
+
+/// The namespace URI of xacro, the ROS macro language.
+const XACRO_URI: &str = "http://www.ros.org/wiki/xacro";
 
 /// Parses URDF text into a chain description.
 pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
-    check_depth(source)?;
-    check_root(source)?;
-    check_vector_attributes(source)?;
-    let robot = urdf_rs::read_from_string(source).map_err(|e| {
-        let message = parser_message(&e.to_string());
-        LoadErrorKind::Urdf {
-            message: locate(source, &message).unwrap_or(message),
+    let limit = (source.len() / BYTES_PER_NODE).max(MIN_NODES);
+    let options = ParsingOptions {
+        allow_dtd: false,
+        nodes_limit: u32::try_from(limit).unwrap_or(u32::MAX),
+        ..ParsingOptions::default()
+    };
+    let doc =
+        Document::parse_with_options(source, options).map_err(|e| xml_error(source, &e, limit))?;
+    check_depth(&doc)?;
+    check_xacro(&doc)?;
+    let robot = doc.root_element();
+    let mut reader = Reader {
+        doc: &doc,
+        notes: Notes::default(),
+    };
+    if qualified_name(&doc, robot) != "robot" {
+        return Err(reader.error(
+            robot.range().start,
+            format!(
+                "the root element is <{}>; a URDF file's is <robot>",
+                qualified_name(&doc, robot)
+            ),
+        ));
+    }
+    let Some(name) = robot.attribute("name") else {
+        return Err(reader.error(
+            robot.range().start,
+            "<robot> has no name attribute (URDF requires one)".into(),
+        ));
+    };
+    let mut b = ChainBuilder::new(name);
+    for node in robot.children() {
+        if node.is_text() {
+            reader.stray_text(node, "text inside <robot> is not URDF and is ignored");
+            continue;
         }
-    })?;
-    let mut b = ChainBuilder::new(robot.name.clone());
-    let scan = scan_parts(source);
-    for warning in scan.warnings {
+        if !node.is_element() {
+            continue;
+        }
+        match qualified_name(&doc, node) {
+            "link" => {
+                let name = reader.required(node, "name", "<link>")?;
+                reader.link_contents(node, name);
+                b.link(name);
+            }
+            "joint" => {
+                let spec = reader.joint(node)?;
+                b.joint(spec);
+            }
+            "material" | "transmission" | "gazebo" | "ros2_control" | "sensor" => {}
+            other if other.contains(':') => {}
+            other => reader.notes.add(node.range().start, || {
+                format!("<{other}> is not a URDF element under <robot> and is ignored")
+            }),
+        }
+    }
+    for warning in reader.notes.numbered(&doc) {
         b.warn(warning);
-    }
-    for link in &robot.links {
-        b.link(link.name.clone());
-    }
-    // Counted in the same order as urdf-rs reads them; should the counts differ, a `<limit>` is
-    // taken as missing when all its values are zero, as urdf-rs fills a missing one.
-    let aligned = scan.joint_has_limit.len() == robot.joints.len();
-    for (k, j) in robot.joints.iter().enumerate() {
-        let l = &j.limit;
-        let has_limit = if aligned {
-            scan.joint_has_limit[k]
-        } else {
-            [l.lower, l.upper, l.velocity, l.effort] != [0.0; 4]
-        };
-        let spec = joint_spec(j, has_limit, &mut b)?;
-        b.joint(spec);
     }
     Ok(b)
 }
 
-/// The joint `j` as a [`JointSpec`] (`has_limit`: whether the file gives it a `<limit>`), after
-/// checking its numbers; a warning in `b` for limits that allow no motion.
-fn joint_spec(
-    j: &urdf_rs::Joint,
-    has_limit: bool,
-    b: &mut ChainBuilder,
-) -> Result<JointSpec, LoadErrorKind> {
-    let field = |field: &str, problem| LoadErrorKind::Field {
-        joint: Some(j.name.clone()),
-        field: field.to_string(),
-        problem,
-    };
-    let finite = |name: &str, values: &[f64]| match values.iter().find(|x| !x.is_finite()) {
-        Some(&value) => Err(field(name, FieldProblem::NonFinite { value })),
-        None => Ok(()),
-    };
-    let kind = match j.joint_type {
-        urdf_rs::JointType::Revolute => JointKind::Revolute,
-        urdf_rs::JointType::Continuous => JointKind::Continuous,
-        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-        urdf_rs::JointType::Fixed => JointKind::Fixed,
-        ref other => {
-            return Err(field(
-                "type",
-                FieldProblem::UnsupportedJointType {
-                    kind: format!("{other:?}").to_lowercase(),
-                },
-            ));
+/// The parser's error in the file author's terms, with its line and column.
+fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind {
+    use roxmltree::Error as E;
+    let end = line_column(source, source.len());
+    let at = |pos: roxmltree::TextPos| (Some(pos.row), Some(pos.col));
+    let (place, message) = match e {
+        E::NoRootNode
+            if source
+                .trim_start_matches('\u{feff}')
+                .trim_start()
+                .starts_with('<') =>
+        {
+            (
+                (Some(end.0), Some(end.1)),
+                "not a complete XML document (the file ends inside its first element)".to_string(),
+            )
+        }
+        E::NoRootNode => (
+            (Some(end.0), Some(end.1)),
+            "not an XML document (no root element)".to_string(),
+        ),
+        E::UnclosedRootNode | E::UnexpectedEndOfStream => (
+            (Some(end.0), Some(end.1)),
+            "not a complete XML document (the file ends inside an element)".to_string(),
+        ),
+        E::DtdDetected => {
+            let offset = source.find("<!DOCTYPE").unwrap_or(0);
+            let (line, column) = line_column(source, offset);
+            (
+                (Some(line), Some(column)),
+                "a <!DOCTYPE> declaration is not accepted in a robot file".to_string(),
+            )
+        }
+        E::NodesLimitReached => (
+            (None, None),
+            format!(
+                "the file holds more than {nodes} XML nodes, more than a robot file of its size \
+                 does (one node per {BYTES_PER_NODE} bytes is the most accepted)"
+            ),
+        ),
+        E::UnknownNamespace(prefix, pos) if prefix == "xacro" => {
+            return LoadErrorKind::Xacro {
+                line: Some(pos.row),
+                column: Some(pos.col),
+                found: "a <xacro:...> element or attribute".into(),
+            };
+        }
+        E::UnknownNamespace(prefix, pos) => (
+            at(*pos),
+            format!("not well-formed XML: the namespace prefix '{prefix}:' is not declared"),
+        ),
+        E::UnexpectedCloseTag(expected, actual, pos) => (
+            at(*pos),
+            format!("not well-formed XML: </{actual}> where </{expected}> closes the open element"),
+        ),
+        E::UnknownEntityReference(name, pos) => (
+            at(*pos),
+            format!("not well-formed XML: unknown entity &{name};"),
+        ),
+        E::MalformedEntityReference(pos) => (
+            at(*pos),
+            "not well-formed XML: a '&' that starts no entity or character reference (write &amp;)"
+                .into(),
+        ),
+        E::DuplicatedAttribute(name, pos) => (
+            at(*pos),
+            format!("not well-formed XML: attribute {name} is given twice"),
+        ),
+        E::UnexpectedDeclaration(pos) => (
+            at(*pos),
+            "not well-formed XML: an XML declaration (<?xml ...?>) is allowed only at the start \
+             of the file"
+                .into(),
+        ),
+        E::NonXmlChar(c, pos) => (
+            at(*pos),
+            format!(
+                "not well-formed XML: character U+{:04X} is not allowed in XML",
+                u32::from(*c)
+            ),
+        ),
+        E::InvalidComment(pos) => (at(*pos), "not well-formed XML: a comment holds '--'".into()),
+        E::UnknownToken(pos) => (at(*pos), outside_root(source, *pos)),
+        other => {
+            let pos = other.pos();
+            (at(pos), "not well-formed XML: unexpected character".into())
         }
     };
-    finite("origin.xyz", &j.origin.xyz.0)?;
-    finite("origin.rpy", &j.origin.rpy.0)?;
-    let mut spec = JointSpec::new(
-        j.name.clone(),
-        kind,
-        j.parent.link.clone(),
-        j.child.link.clone(),
-    )
-    .with_origin(Transform::from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
-    if kind != JointKind::Fixed {
-        finite("axis.xyz", &j.axis.xyz.0)?;
-        if j.axis.xyz.0 == [0.0; 3] {
-            return Err(field("axis.xyz", FieldProblem::ZeroAxis));
-        }
-        spec = spec.with_axis(j.axis.xyz.0);
-    }
-    if matches!(kind, JointKind::Revolute | JointKind::Prismatic) {
-        let l = &j.limit;
-        if !has_limit {
-            return Err(field(
-                "limit",
-                FieldProblem::MissingLimit {
-                    kind: kind.as_str(),
-                },
-            ));
-        }
-        // (An infinite bound is refused as in DH tables: a joint without bounds is
-        // `continuous`, and JSON output could not print it.)
-        finite("limit", &[l.lower, l.upper])?;
-        if l.lower > l.upper {
-            return Err(field(
-                "limit",
-                FieldProblem::ReversedLimits {
-                    lower: l.lower,
-                    upper: l.upper,
-                },
-            ));
-        }
-        if l.lower == l.upper {
-            b.warn(format!(
-                "joint '{}': limit [{}, {}] allows no motion (URDF reads a missing lower or upper as 0); values other than {} are refused unless limits are ignored",
-                j.name, l.lower, l.upper, l.lower
-            ));
-        }
-        spec.limits[0] = Some(Limits {
-            lower: l.lower,
-            upper: l.upper,
-        });
-    }
-    if let Some(m) = &j.mimic {
-        let (multiplier, offset) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
-        finite("mimic", &[multiplier, offset])?;
-        spec = spec.with_mimic(m.joint.clone(), multiplier, offset);
-    }
-    Ok(spec)
-}
-
-/// The XML parser's message in the file author's terms: without the deserializer's `custom: `
-/// prefix, and saying what "No elements found" means.
-fn parser_message(message: &str) -> String {
-    match message.strip_prefix("custom: ").unwrap_or(message) {
-        "No elements found" => {
-            "not a complete XML document (no root element, or the file ends inside one)".into()
-        }
-        m => m.to_string(),
+    LoadErrorKind::Urdf {
+        line: place.0,
+        column: place.1,
+        message,
     }
 }
 
-/// Attributes `urdf-rs` reads as one number.
-const NUMBER_ATTRIBUTES: [&str; 23] = [
-    "lower",
-    "upper",
-    "effort",
-    "velocity",
-    "multiplier",
-    "offset",
-    "damping",
-    "friction",
-    "soft_lower_limit",
-    "soft_upper_limit",
-    "k_position",
-    "k_velocity",
-    "rising",
-    "falling",
-    "value",
-    "radius",
-    "length",
-    "ixx",
-    "ixy",
-    "ixz",
-    "iyy",
-    "iyz",
-    "izz",
-];
-
-/// Where the parser's complaint `message` comes from, for messages that do not say (`missing
-/// field`, `invalid float literal`, `unknown variant`): each element under `<robot>` is parsed on
-/// its own, and the first that fails with the same message is named with its line. For a number
-/// that is not one, the attribute is named too. `None` when no single element reproduces it.
-/// Runs only on a file the parser refused.
-fn locate(source: &str, message: &str) -> Option<String> {
-    for (start, end, tag) in top_level_elements(source) {
-        let alone = format!("<robot name=\"r\">{}</robot>", &source[start..end]);
-        match urdf_rs::read_from_string(&alone) {
-            Err(e) if parser_message(&e.to_string()) == message => {}
-            _ => continue,
-        }
-        let element = match attribute(tag, "name") {
-            Some(name) => format!("{} '{name}'", element_name(tag)),
-            None => format!("<{}>", element_name(tag)),
-        };
-        if message == "invalid float literal" {
-            let inner = tags(&source[start..end]).find_map(|(offset, inner)| {
-                attributes(inner)
-                    .find(|(name, value)| {
-                        NUMBER_ATTRIBUTES.contains(name) && value.trim().parse::<f64>().is_err()
-                    })
-                    .map(|(name, value)| (start + offset, element_name(inner), name, value))
-            });
-            if let Some((offset, inner, name, value)) = inner {
-                return Some(format!(
-                    "line {}: {element}: <{inner}> attribute {name}=\"{value}\" is not a number",
-                    line_at(source, offset)
-                ));
-            }
-        }
-        let message = match message.strip_prefix("missing field ") {
-            Some(field) => format!("missing {field}"),
-            None => message.to_string(),
-        };
-        return Some(format!(
-            "line {}: {element}: {message}",
-            line_at(source, start)
-        ));
-    }
-    None
-}
-
-/// The elements directly under the root, as (start offset, end offset, opening tag); an element
-/// the file does not close is left out.
-fn top_level_elements(source: &str) -> Vec<(usize, usize, &str)> {
-    let mut open = None;
-    let mut elements = Vec::new();
-    for (offset, tag, depth) in nested_tags(source) {
-        if depth != 1 {
-            continue;
-        }
-        if closes(tag) {
-            if let Some((start, opening)) = open.take() {
-                elements.push((start, offset + tag.len(), opening));
-            }
-        } else if tag.ends_with("/>") {
-            elements.push((offset, offset + tag.len(), tag));
-        } else {
-            open = Some((offset, tag));
-        }
-    }
-    elements
-}
-
-/// The 1-based line of byte `offset` in `source`.
-fn line_at(source: &str, offset: usize) -> usize {
-    source[..offset].matches('\n').count() + 1
-}
-
-/// The element name of a tag's text (`<limit lower="0"/>` → `limit`).
-fn element_name(tag: &str) -> &str {
-    tag.trim_start_matches('<')
-        .split(|c: char| c.is_whitespace() || c == '/' || c == '>')
-        .next()
-        .unwrap_or("")
-}
-
-/// The attributes of a tag's text as (name, value), in order; stops at the first thing that is
-/// not `name="value"` or `name='value'`.
-fn attributes(tag: &str) -> impl Iterator<Item = (&str, &str)> {
-    let mut rest = tag
-        .trim_start_matches('<')
-        .trim_end_matches('>')
-        .trim_end_matches('/');
-    rest = rest.trim_start_matches(|c: char| !c.is_whitespace());
-    std::iter::from_fn(move || {
-        let (name, after) = rest.trim_start().split_once('=')?;
-        let after = after.trim_start();
-        let quote = after.chars().next().filter(|c| *c == '"' || *c == '\'')?;
-        let (value, tail) = after[1..].split_once(quote)?;
-        rest = tail;
-        Some((name.trim(), value))
-    })
-}
-
-/// The tags of an XML text, skipping comments, CDATA sections, declarations and processing
-/// instructions: yields (byte offset, tag text from `<` to `>`).
-fn tags(source: &str) -> impl Iterator<Item = (usize, &str)> {
-    let mut i = 0;
-    std::iter::from_fn(move || {
-        loop {
-            let off = source[i..].find('<')?;
-            i += off;
-            let (len, is_tag) = markup(&source[i..]);
-            let start = i;
-            i += len;
-            if is_tag {
-                return Some((start, &source[start..i]));
-            }
-        }
-    })
-}
-
-/// The length of the markup that `rest` starts with (at a `<`), and whether it is a tag rather
-/// than a comment, CDATA section, declaration or processing instruction.
-fn markup(rest: &str) -> (usize, bool) {
-    let skip_to = |end: &str| rest.find(end).map_or(rest.len(), |e| e + end.len());
-    if rest.starts_with("<!--") {
-        (skip_to("-->"), false)
-    } else if rest.starts_with("<![CDATA[") {
-        (skip_to("]]>"), false)
-    } else if rest.starts_with("<?") || rest.starts_with("<!") {
-        (skip_to(">"), false)
+/// What the tokenizer found where an XML document allows only markup around its root element.
+fn outside_root(source: &str, pos: roxmltree::TextPos) -> String {
+    let offset = offset_of(source, pos);
+    let rest = &source[offset..];
+    let name = |after: &str| -> String {
+        after
+            .chars()
+            .take_while(|c| !c.is_whitespace() && *c != '>' && *c != '/')
+            .collect()
+    };
+    if let Some(after) = rest.strip_prefix("</") {
+        format!(
+            "not well-formed XML: </{}> closes no open element",
+            name(after)
+        )
+    } else if let Some(after) = rest
+        .strip_prefix('<')
+        .filter(|a| !a.starts_with('!') && !a.starts_with('?'))
+    {
+        format!(
+            "not well-formed XML: <{}> follows the root element; a URDF file has one root \
+             element",
+            name(after)
+        )
+    } else if rest.starts_with('<') {
+        "not well-formed XML: markup that XML does not define".into()
     } else {
-        (skip_to(">"), true)
+        "not well-formed XML: text outside the root element".into()
     }
 }
 
-/// The offset of the first text in `source[range]` that is neither blank nor markup.
-fn stray_text(source: &str, range: std::ops::Range<usize>) -> Option<usize> {
-    let mut i = range.start;
-    while i < range.end {
-        let rest = &source[i..range.end];
-        let text = rest.find('<').unwrap_or(rest.len());
-        if let Some(at) = rest[..text].find(|c: char| !c.is_whitespace() && c != '\u{feff}') {
-            return Some(i + at);
-        }
-        i += text;
-        if i < range.end {
-            i += markup(&source[i..range.end]).0;
-        }
-    }
-    None
+/// The byte offset of a 1-based (line, column in characters) position.
+fn offset_of(source: &str, pos: roxmltree::TextPos) -> usize {
+    let line_start = if pos.row <= 1 {
+        0
+    } else {
+        source
+            .match_indices('\n')
+            .nth(pos.row as usize - 2)
+            .map_or(source.len(), |(i, _)| i + 1)
+    };
+    source[line_start..]
+        .char_indices()
+        .nth(pos.col.saturating_sub(1) as usize)
+        .map_or(source.len(), |(i, _)| line_start + i)
 }
 
-/// Whether a tag's text closes an element (`</joint>`).
-fn closes(tag: &str) -> bool {
-    tag.starts_with("</")
+/// The 1-based line and column (in characters) of byte `offset`.
+fn line_column(source: &str, offset: usize) -> (u32, u32) {
+    let before = &source[..offset];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = before[line_start..].chars().count() + 1;
+    (
+        u32::try_from(line).unwrap_or(u32::MAX),
+        u32::try_from(column).unwrap_or(u32::MAX),
+    )
 }
 
-/// Whether a tag's text opens an element that a closing tag ends (not `<axis/>`).
-fn opens(tag: &str) -> bool {
-    !closes(tag) && !tag.ends_with("/>")
+/// The 1-based line and column of byte `offset` of the document.
+fn place(doc: &Document<'_>, offset: usize) -> (u32, u32) {
+    let pos = doc.text_pos_at(offset);
+    (pos.row, pos.col)
 }
 
-/// [`tags`] with the number of elements open around each: the root's opening tag is at depth 0,
-/// its children's tags at 1, and a closing tag at the depth of its opening tag.
-fn nested_tags(source: &str) -> impl Iterator<Item = (usize, &str, usize)> {
-    let mut depth = 0usize;
-    tags(source).map(move |(offset, tag)| {
-        if closes(tag) {
-            depth = depth.saturating_sub(1);
-            return (offset, tag, depth);
-        }
-        let at = depth;
-        depth += usize::from(opens(tag));
-        (offset, tag, at)
-    })
-}
-
-/// Refuses element nesting deeper than [`MAX_XML_DEPTH`] before the recursive XML parser sees
-/// the file.
-fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
-    for (_, tag, depth) in nested_tags(source) {
-        if depth >= MAX_XML_DEPTH && opens(tag) {
+/// Refuses element nesting deeper than [`MAX_XML_DEPTH`].
+fn check_depth(doc: &Document<'_>) -> Result<(), LoadErrorKind> {
+    // Nodes come in document order, so a node's parent has its depth when the node is reached.
+    let mut depth = vec![0u32; doc.descendants().count() + 1];
+    for node in doc.descendants() {
+        let d = node
+            .parent()
+            .map_or(0, |p| depth[p.id().get_usize()].saturating_add(1));
+        depth[node.id().get_usize()] = d;
+        if node.is_element() && d as usize > MAX_XML_DEPTH {
+            let (line, column) = place(doc, node.range().start);
             return Err(LoadErrorKind::Urdf {
+                line: Some(line),
+                column: Some(column),
                 message: format!("elements nest deeper than {MAX_XML_DEPTH} levels"),
             });
         }
@@ -354,52 +275,50 @@ fn check_depth(source: &str) -> Result<(), LoadErrorKind> {
     Ok(())
 }
 
-/// Refuses a document whose root element is not `<robot>`, whose `<robot>` has no name, or that
-/// has a second element or any text (other than comments and the like) before or after the root
-/// (the parser would read any root, default the name to empty, and skip the rest). A file with
-/// no element at all is left to the parser, which says so.
-fn check_root(source: &str) -> Result<(), LoadErrorKind> {
-    let mut outside = nested_tags(source).filter(|(_, _, depth)| *depth == 0);
-    let Some((offset, tag, _)) = outside.next() else {
-        return Ok(());
-    };
-    let line = line_at(source, offset);
-    let root_end = if tag.ends_with("/>") {
-        Some(offset + tag.len())
-    } else {
-        outside.next().map(|(o, t, _)| o + t.len())
-    };
-    let stray = |range| {
-        stray_text(source, range).map(|at| {
-            format!(
-                "line {}: text outside the root element <robot>",
-                line_at(source, at)
-            )
-        })
-    };
-    let message = match element_name(tag) {
-        "robot" if attribute(tag, "name").is_some() => match outside.next() {
-            Some((offset, tag, _)) if closes(tag) => format!(
-                "line {}: </{}> closes no open element",
-                line_at(source, offset),
-                element_name(tag.trim_start_matches("</"))
-            ),
-            Some((offset, tag, _)) => format!(
-                "line {}: <{}> follows the <robot> element; a URDF file has one root element",
-                line_at(source, offset),
-                element_name(tag)
-            ),
-            None => match stray(0..offset)
-                .or_else(|| root_end.and_then(|end| stray(end..source.len())))
-            {
-                Some(message) => message,
-                None => return Ok(()),
-            },
-        },
-        "robot" => format!("line {line}: <robot> has no name attribute (URDF requires one)"),
-        other => format!("line {line}: the root element is <{other}>; a URDF file's is <robot>"),
-    };
-    Err(LoadErrorKind::Urdf { message })
+/// Refuses a file that still holds xacro macros: what they would expand to is not in it.
+fn check_xacro(doc: &Document<'_>) -> Result<(), LoadErrorKind> {
+    for node in doc.descendants().filter(Node::is_element) {
+        let found = if node.tag_name().namespace() == Some(XACRO_URI)
+            || qualified_name(doc, node).starts_with("xacro:")
+        {
+            Some((
+                node.range().start,
+                format!("<{}>", qualified_name(doc, node)),
+            ))
+        } else {
+            node.attributes()
+                .find(|a| {
+                    a.namespace() == Some(XACRO_URI)
+                        || doc.input_text()[a.range_qname()].starts_with("xacro:")
+                })
+                .map(|a| {
+                    (
+                        a.range().start,
+                        format!("attribute {}", &doc.input_text()[a.range_qname()]),
+                    )
+                })
+        };
+        if let Some((offset, what)) = found {
+            let (line, column) = place(doc, offset);
+            return Err(LoadErrorKind::Xacro {
+                line: Some(line),
+                column: Some(column),
+                found: what,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// An element's name as written, with its namespace prefix if it has one (`xacro:macro`).
+fn qualified_name<'i>(doc: &Document<'i>, node: Node<'_, 'i>) -> &'i str {
+    let text: &'i str = doc.input_text();
+    let start = node.range().start + 1;
+    let rest = &text[start..];
+    let len = rest
+        .find(|c: char| c.is_whitespace() || c == '/' || c == '>')
+        .unwrap_or(rest.len());
+    &rest[..len]
 }
 
 /// The elements URDF defines inside `<joint>`, each with its attributes when they take part in
@@ -417,133 +336,548 @@ const JOINT_PARTS: [(&str, Option<&[&str]>); 9] = [
     ("safety_controller", None),
 ];
 
-/// The elements URDF and its common extensions put under `<robot>`.
-const TOP_LEVEL: [&str; 7] = [
-    "link",
-    "joint",
-    "material",
-    "transmission",
-    "gazebo",
-    "ros2_control",
-    "sensor",
-];
-
-/// Most warnings [`scan_parts`] lists one by one; the rest are counted.
-const MAX_PART_WARNINGS: usize = 20;
-
-/// Warnings for what the parser skips without a word: an element under `<robot>` that URDF does
-/// not define (`<jiont>`: the joint would be missing), and inside a `<joint>` an element or
-/// attribute URDF does not define there, such as `<orgin>` or `<origin rp="..">`, which would
-/// leave the joint's origin at the identity; and text directly inside `<robot>`, a `<link>` or a
-/// `<joint>`, whose contents URDF defines as elements only (a stray character left by an edit).
-/// Elements and attributes with a namespace prefix (`xacro:`) are not checked. One pass over the
-/// text, lines counted as it goes.
-///
-/// The same pass notes, for each `<joint>` under `<robot>` in the order of the file, whether it
-/// holds a `<limit>` element: urdf-rs fills a missing one with zeros, which cannot be told from
-/// `<limit lower="0" upper="0" effort="0" velocity="0"/>` (a joint locked at 0, as `kinechain
-/// convert` writes it) by the values alone.
-fn scan_parts(source: &str) -> Scanned {
-    let mut joint_has_limit = Vec::new();
-    let mut notes = Notes::default();
-    // The <link> or <joint> open under <robot>, as (label, element name): its parts are checked
-    // when it is a joint, and text directly inside it in both cases.
-    let mut holder: Option<(String, &str)> = None;
-    // Where the text after the previous tag starts, and how many elements are open there.
-    let (mut text_from, mut open) = (0, 0);
-    for (offset, tag, depth) in nested_tags(source) {
-        let checked = open == 1 || (open == 2 && holder.is_some());
-        if checked && let Some(at) = stray_text(source, text_from..offset) {
-            notes.add(at, || match (open, &holder) {
-                (2, Some((label, element))) => {
-                    format!("{label}: text inside <{element}> is not URDF and is ignored")
-                }
-                _ => "text inside <robot> is not URDF and is ignored".to_string(),
-            });
-        }
-        text_from = offset + tag.len();
-        open = depth + usize::from(opens(tag));
-        if closes(tag) {
-            continue;
-        }
-        let name = element_name(tag);
-        match depth {
-            1 if name == "joint" => {
-                let label =
-                    attribute(tag, "name").map_or("<joint>".into(), |n| format!("joint '{n}'"));
-                for attr in unknown_attributes(tag, &["name", "type"]) {
-                    notes.add(offset, || {
-                        format!(
-                            "{label}: attribute {attr} is not a URDF joint attribute and is ignored"
-                        )
-                    });
-                }
-                holder = Some((label, "joint"));
-                joint_has_limit.push(false);
-            }
-            1 => {
-                holder = (name == "link").then(|| {
-                    let label =
-                        attribute(tag, "name").map_or("<link>".into(), |n| format!("link '{n}'"));
-                    (label, "link")
-                });
-                if !name.contains(':') && !TOP_LEVEL.contains(&name) {
-                    notes.add(offset, || {
-                        format!("<{name}> is not a URDF element under <robot> and is ignored")
-                    });
-                }
-            }
-            2 => {
-                if let Some((label, "joint")) = &holder {
-                    if name == "limit"
-                        && let Some(has) = joint_has_limit.last_mut()
-                    {
-                        *has = true;
-                    }
-                    joint_part(&mut notes, offset, tag, label);
-                }
-            }
-            _ => {}
-        }
-    }
-    Scanned {
-        warnings: notes.numbered(source),
-        joint_has_limit,
-    }
+/// Reads the elements of one document, collecting warnings.
+struct Reader<'d, 'i> {
+    doc: &'d Document<'i>,
+    notes: Notes,
 }
 
-/// Notes on an element `tag` (at byte `offset`) inside the joint `label`: an element URDF does
-/// not define there, or an attribute it does not define on that element.
-fn joint_part(notes: &mut Notes, offset: usize, tag: &str, label: &str) {
-    let name = element_name(tag);
-    match JOINT_PARTS.iter().find(|(part, _)| *part == name) {
-        Some((_, None)) => {}
-        Some((_, Some(allowed))) => {
-            for attr in unknown_attributes(tag, allowed) {
-                notes.add(offset, || {
+/// The kinematic children of a `<joint>`, each the first of its name.
+#[derive(Default)]
+struct JointParts<'d, 'i> {
+    origin: Option<Node<'d, 'i>>,
+    parent: Option<Node<'d, 'i>>,
+    child: Option<Node<'d, 'i>>,
+    axis: Option<Node<'d, 'i>>,
+    limit: Option<Node<'d, 'i>>,
+    mimic: Option<Node<'d, 'i>>,
+}
+
+impl<'d, 'i> Reader<'d, 'i> {
+    /// A [`LoadErrorKind::Urdf`] at byte `offset`.
+    fn error(&self, offset: usize, message: String) -> LoadErrorKind {
+        let (line, column) = place(self.doc, offset);
+        LoadErrorKind::Urdf {
+            line: Some(line),
+            column: Some(column),
+            message,
+        }
+    }
+
+    /// A [`LoadErrorKind::Field`] of joint `joint` at byte `offset`.
+    fn field(
+        &self,
+        offset: usize,
+        joint: &str,
+        field: &str,
+        problem: FieldProblem,
+    ) -> LoadErrorKind {
+        let (line, column) = place(self.doc, offset);
+        LoadErrorKind::Field {
+            line: Some(line),
+            column: Some(column),
+            joint: Some(joint.to_string()),
+            field: field.to_string(),
+            problem,
+        }
+    }
+
+    /// The attribute `attr` of `node`, which URDF requires: an error naming the element
+    /// (`what`: `<link>`, `joint 'j'`, `joint 'j': <parent>`) without it.
+    fn required(
+        &self,
+        node: Node<'d, 'i>,
+        attr: &str,
+        what: &str,
+    ) -> Result<&'d str, LoadErrorKind> {
+        node.attribute(attr).ok_or_else(|| {
+            self.error(
+                node.range().start,
+                format!("{what} has no {attr} attribute (URDF requires one)"),
+            )
+        })
+    }
+
+    /// A warning for a text node that holds more than white space.
+    fn stray_text(&mut self, node: Node<'_, '_>, message: &str) {
+        let text = node.text().unwrap_or("");
+        if let Some(at) = text.find(|c: char| !c.is_whitespace()) {
+            // A text node's range covers its source text; entities may make the decoded text
+            // shorter, so the offset is only used when it is inside the range.
+            let range = node.range();
+            let offset = if range.start + at < range.end {
+                range.start + at
+            } else {
+                range.start
+            };
+            self.notes.add(offset, || message.to_string());
+        }
+    }
+
+    /// The joint element `node` as a [`JointSpec`].
+    fn joint(&mut self, node: Node<'d, 'i>) -> Result<JointSpec, LoadErrorKind> {
+        let start = node.range().start;
+        let name = self.required(node, "name", "<joint>")?;
+        let label = format!("joint '{name}'");
+        let type_name = self.required(node, "type", &label)?;
+        for attr in node.attributes() {
+            let qname = &self.doc.input_text()[attr.range_qname()];
+            if !qname.contains(':') && !["name", "type"].contains(&qname) {
+                self.notes.add(attr.range().start, || {
                     format!(
-                        "{label}: <{name}> attribute {attr} is not a URDF attribute and is ignored (it takes {})",
-                        allowed.join(", ")
+                        "{label}: attribute {qname} is not a URDF joint attribute and is ignored"
                     )
                 });
             }
         }
-        None => notes.add(offset, || {
-            format!("{label}: <{name}> is not a URDF joint element and is ignored")
-        }),
+        let type_offset = node
+            .attribute_node("type")
+            .map_or(start, |a| a.range_value().start);
+        let kind = match type_name {
+            "revolute" => JointKind::Revolute,
+            "continuous" => JointKind::Continuous,
+            "prismatic" => JointKind::Prismatic,
+            "fixed" => JointKind::Fixed,
+            other => {
+                return Err(self.field(
+                    type_offset,
+                    name,
+                    "type",
+                    FieldProblem::UnsupportedJointType {
+                        kind: other.to_string(),
+                    },
+                ));
+            }
+        };
+        let parts = self.joint_parts(node, name, &label)?;
+        let link = |part: Option<Node<'d, 'i>>, role: &str| -> Result<&'d str, LoadErrorKind> {
+            let Some(part) = part else {
+                return Err(self.error(start, format!("{label} has no <{role}> element")));
+            };
+            self.required(part, "link", &format!("{label}: <{role}>"))
+        };
+        let parent = link(parts.parent, "parent")?;
+        let child = link(parts.child, "child")?;
+        let mut spec = JointSpec::new(name, kind, parent, child);
+        if let Some(origin) = parts.origin {
+            let xyz = self.vector(origin, name, "origin", "xyz", [0.0; 3])?;
+            let rpy = self.vector(origin, name, "origin", "rpy", [0.0; 3])?;
+            spec = spec.with_origin(Transform::from_xyz_rpy(xyz, rpy));
+        }
+        if kind != JointKind::Fixed {
+            let axis = match parts.axis {
+                Some(axis) => self.vector(axis, name, "axis", "xyz", [1.0, 0.0, 0.0])?,
+                None => [1.0, 0.0, 0.0],
+            };
+            if axis == [0.0; 3] {
+                let offset = parts.axis.map_or(start, |a| a.range().start);
+                return Err(self.field(offset, name, "axis.xyz", FieldProblem::ZeroAxis));
+            }
+            spec = spec.with_axis(axis);
+        }
+        match kind {
+            JointKind::Revolute | JointKind::Prismatic => {
+                let Some(limit) = parts.limit else {
+                    return Err(self.field(
+                        start,
+                        name,
+                        "limit",
+                        FieldProblem::MissingLimit {
+                            kind: kind.as_str(),
+                        },
+                    ));
+                };
+                spec.limits[0] = self.limits(limit, name, &label)?;
+            }
+            _ => {
+                if let Some(limit) = parts.limit {
+                    self.unused_numbers(limit, &label, &["lower", "upper", "effort", "velocity"]);
+                }
+            }
+        }
+        if let Some(mimic) = parts.mimic {
+            if kind == JointKind::Fixed {
+                self.notes.add(mimic.range().start, || {
+                    format!("{label}: a fixed joint cannot follow another; its <mimic> is ignored")
+                });
+            } else {
+                let target = self.required(mimic, "joint", &format!("{label}: <mimic>"))?;
+                let multiplier = self.number(mimic, name, "mimic", "multiplier", 1.0)?;
+                let offset = self.number(mimic, name, "mimic", "offset", 0.0)?;
+                spec = spec.with_mimic(target, multiplier, offset);
+            }
+        }
+        Ok(spec)
+    }
+
+    /// The kinematic children of joint `node`, with warnings for what URDF does not define in a
+    /// joint and an error for a kinematic element given twice.
+    fn joint_parts(
+        &mut self,
+        node: Node<'d, 'i>,
+        name: &str,
+        label: &str,
+    ) -> Result<JointParts<'d, 'i>, LoadErrorKind> {
+        let mut parts = JointParts::default();
+        for part in node.children() {
+            if part.is_text() {
+                self.stray_text(
+                    part,
+                    &format!("{label}: text inside <joint> is not URDF and is ignored"),
+                );
+                continue;
+            }
+            if !part.is_element() {
+                continue;
+            }
+            let element = qualified_name(self.doc, part);
+            if element.contains(':') {
+                continue;
+            }
+            let Some((_, allowed)) = JOINT_PARTS.iter().find(|(p, _)| *p == element) else {
+                self.notes.add(part.range().start, || {
+                    format!("{label}: <{element}> is not a URDF joint element and is ignored")
+                });
+                continue;
+            };
+            if let Some(allowed) = allowed {
+                for attr in part.attributes() {
+                    let qname = &self.doc.input_text()[attr.range_qname()];
+                    if !qname.contains(':') && !allowed.contains(&qname) {
+                        self.notes.add(attr.range().start, || {
+                            format!(
+                                "{label}: <{element}> attribute {qname} is not a URDF attribute and is ignored (it takes {})",
+                                allowed.join(", ")
+                            )
+                        });
+                    }
+                }
+            }
+            let slot = match element {
+                "origin" => &mut parts.origin,
+                "parent" => &mut parts.parent,
+                "child" => &mut parts.child,
+                "axis" => &mut parts.axis,
+                "limit" => &mut parts.limit,
+                "mimic" => &mut parts.mimic,
+                _ => continue,
+            };
+            if let Some(first) = slot {
+                let (line, column): (u32, u32) = place(self.doc, first.range().start);
+                return Err(self.error(
+                    part.range().start,
+                    format!(
+                        "joint '{name}' has a second <{element}> (the first is at line {line} column {column}); a joint has one"
+                    ),
+                ));
+            }
+            *slot = Some(part);
+        }
+        Ok(parts)
+    }
+
+    /// The position limits a revolute or prismatic joint's `<limit>` gives: `None` (with a
+    /// warning) when it gives neither bound or a lower bound above the upper one, which some
+    /// tools write for "no limit".
+    fn limits(
+        &mut self,
+        limit: Node<'d, 'i>,
+        name: &str,
+        label: &str,
+    ) -> Result<Option<Limits>, LoadErrorKind> {
+        let at = limit.range().start;
+        for attr in ["effort", "velocity"] {
+            match limit.attribute(attr) {
+                None => self.notes.add(at, || {
+                    format!(
+                        "{label}: <limit> has no {attr} attribute, which URDF requires (kinematics does not use it)"
+                    )
+                }),
+                Some(_) => self.unused_numbers(limit, label, &[attr]),
+            }
+        }
+        if !limit.has_attribute("lower") && !limit.has_attribute("upper") {
+            self.notes.add(at, || {
+                format!(
+                    "{label}: <limit> gives neither lower nor upper; the joint is loaded without position limits"
+                )
+            });
+            return Ok(None);
+        }
+        let lower = self.number(limit, name, "limit", "lower", 0.0)?;
+        let upper = self.number(limit, name, "limit", "upper", 0.0)?;
+        if lower > upper {
+            self.notes.add(at, || {
+                format!(
+                    "{label}: <limit> lower {lower} is greater than upper {upper} (a way of writing \"no limit\"); the joint is loaded without position limits"
+                )
+            });
+            return Ok(None);
+        }
+        if lower == upper {
+            self.notes.add(at, || {
+                format!(
+                    "{label}: limit [{lower}, {upper}] allows no motion (URDF reads a missing lower or upper as 0); values other than {lower} are refused unless limits are ignored"
+                )
+            });
+        }
+        Ok(Some(Limits { lower, upper }))
+    }
+
+    /// Warnings for attributes among `attrs` of `node` that are not one finite number, in an
+    /// element whose numbers kinematics does not use.
+    fn unused_numbers(&mut self, node: Node<'d, 'i>, label: &str, attrs: &[&str]) {
+        for attr in attrs {
+            let Some(a) = node.attribute_node(*attr) else {
+                continue;
+            };
+            if a.value().trim().parse::<f64>().is_err() {
+                let element = qualified_name(self.doc, node);
+                let value = a.value();
+                self.notes.add(a.range().start, || {
+                    format!(
+                        "{label}: <{element}> attribute {attr}=\"{value}\" is not a number; ignored (kinematics does not use it)"
+                    )
+                });
+            }
+        }
+    }
+
+    /// The number in attribute `attr` of `node` (`default` without it); an error naming the
+    /// attribute when it is not a finite number.
+    fn number(
+        &self,
+        node: Node<'d, 'i>,
+        joint: &str,
+        element: &str,
+        attr: &str,
+        default: f64,
+    ) -> Result<f64, LoadErrorKind> {
+        let Some(a) = node.attribute_node(attr) else {
+            return Ok(default);
+        };
+        let value = a.value();
+        let Ok(x) = value.trim().parse::<f64>() else {
+            return Err(self.error(
+                a.range().start,
+                format!(
+                    "joint '{joint}': <{element}> attribute {attr}=\"{value}\" is not a number{}",
+                    xacro_hint(value)
+                ),
+            ));
+        };
+        if !x.is_finite() {
+            return Err(self.field(
+                a.range().start,
+                joint,
+                element,
+                FieldProblem::NonFinite { value: x },
+            ));
+        }
+        Ok(x)
+    }
+
+    /// The three numbers in attribute `attr` of `node` (`default` without it); an error naming
+    /// the attribute when it is not three finite numbers.
+    fn vector(
+        &self,
+        node: Node<'d, 'i>,
+        joint: &str,
+        element: &str,
+        attr: &str,
+        default: [f64; 3],
+    ) -> Result<[f64; 3], LoadErrorKind> {
+        let Some(a) = node.attribute_node(attr) else {
+            return Ok(default);
+        };
+        let value = a.value();
+        let Some(v) = three_numbers(value) else {
+            return Err(self.error(
+                a.range().start,
+                format!(
+                    "joint '{joint}': <{element}> attribute {attr}=\"{value}\" is not three numbers{}",
+                    xacro_hint(value)
+                ),
+            ));
+        };
+        if let Some(&bad) = v.iter().find(|x| !x.is_finite()) {
+            return Err(self.field(
+                a.range().start,
+                joint,
+                &format!("{element}.{attr}"),
+                FieldProblem::NonFinite { value: bad },
+            ));
+        }
+        Ok(v)
+    }
+
+    /// Warnings for what is malformed in a link's visuals, collisions and inertial (none of
+    /// which changes a pose), and for text directly inside the link.
+    fn link_contents(&mut self, link: Node<'d, 'i>, name: &str) {
+        let label = format!("link '{name}'");
+        let mut inertials = 0;
+        for part in link.children() {
+            if part.is_text() {
+                self.stray_text(
+                    part,
+                    &format!("{label}: text inside <link> is not URDF and is ignored"),
+                );
+                continue;
+            }
+            if !part.is_element() {
+                continue;
+            }
+            match qualified_name(self.doc, part) {
+                "inertial" => {
+                    inertials += 1;
+                    if inertials == 2 {
+                        self.ignored(part, &label, "a second <inertial>");
+                    }
+                    self.inertial(part, &label);
+                }
+                "visual" => self.shape(part, &label, true),
+                "collision" => self.shape(part, &label, false),
+                _ => {}
+            }
+        }
+    }
+
+    /// A warning that `what`, at `node`, is not URDF and is ignored.
+    fn ignored(&mut self, node: Node<'_, '_>, label: &str, what: &str) {
+        self.notes.add(node.range().start, || {
+            format!("{label}: {what} is not valid URDF; ignored (it does not change a pose)")
+        });
+    }
+
+    /// Checks the numbers of an `<origin>` outside the kinematics.
+    fn loose_origin(&mut self, origin: Node<'d, 'i>, label: &str) {
+        for attr in ["xyz", "rpy"] {
+            self.loose_numbers(origin, label, attr, 3);
+        }
+    }
+
+    /// A warning when attribute `attr` of `node`, if present, is not `count` numbers.
+    fn loose_numbers(&mut self, node: Node<'d, 'i>, label: &str, attr: &str, count: usize) {
+        let Some(a) = node.attribute_node(attr) else {
+            return;
+        };
+        let value = a.value();
+        let tokens: Vec<&str> = value.split_whitespace().collect();
+        if tokens.len() != count || tokens.iter().any(|t| t.parse::<f64>().is_err()) {
+            let element = qualified_name(self.doc, node);
+            let what = if count == 1 {
+                "a number".to_string()
+            } else {
+                format!("{count} numbers")
+            };
+            self.notes.add(a.range().start, || {
+                format!(
+                    "{label}: <{element}> attribute {attr}=\"{value}\" is not {what}; ignored (it does not change a pose)"
+                )
+            });
+        }
+    }
+
+    /// Checks an `<inertial>`: its origin, mass and inertia.
+    fn inertial(&mut self, inertial: Node<'d, 'i>, label: &str) {
+        for part in inertial.children().filter(Node::is_element) {
+            match qualified_name(self.doc, part) {
+                "origin" => self.loose_origin(part, label),
+                "mass" => self.loose_numbers(part, label, "value", 1),
+                "inertia" => {
+                    for attr in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"] {
+                        self.loose_numbers(part, label, attr, 1);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Checks a `<visual>` or `<collision>`: its origin, one geometry, and (visuals) at most one
+    /// material.
+    fn shape(&mut self, shape: Node<'d, 'i>, label: &str, visual: bool) {
+        let (mut geometries, mut materials) = (0, 0);
+        for part in shape.children().filter(Node::is_element) {
+            match qualified_name(self.doc, part) {
+                "origin" => self.loose_origin(part, label),
+                "geometry" => {
+                    geometries += 1;
+                    if geometries == 2 {
+                        self.ignored(part, label, "a second <geometry>");
+                    }
+                    self.geometry(part, label);
+                }
+                "material" if visual => {
+                    materials += 1;
+                    if materials == 2 {
+                        self.ignored(part, label, "a second <material> in a <visual>");
+                    }
+                    for color in part
+                        .children()
+                        .filter(|c| c.is_element() && qualified_name(self.doc, *c) == "color")
+                    {
+                        self.loose_numbers(color, label, "rgba", 4);
+                    }
+                }
+                _ => {}
+            }
+        }
+        if geometries == 0 {
+            let element = if visual { "<visual>" } else { "<collision>" };
+            self.ignored(shape, label, &format!("a {element} without <geometry>"));
+        }
+    }
+
+    /// Checks a `<geometry>`: one shape, with its numbers.
+    fn geometry(&mut self, geometry: Node<'d, 'i>, label: &str) {
+        let mut shapes = 0;
+        for part in geometry.children().filter(Node::is_element) {
+            let element = qualified_name(self.doc, part);
+            match element {
+                "box" => self.loose_numbers(part, label, "size", 3),
+                "cylinder" | "capsule" => {
+                    self.loose_numbers(part, label, "radius", 1);
+                    self.loose_numbers(part, label, "length", 1);
+                }
+                "sphere" => self.loose_numbers(part, label, "radius", 1),
+                "mesh" => self.loose_numbers(part, label, "scale", 3),
+                other if other.contains(':') => continue,
+                other => {
+                    self.ignored(part, label, &format!("<{other}> inside <geometry>"));
+                    continue;
+                }
+            }
+            shapes += 1;
+            if shapes == 2 {
+                self.ignored(part, label, "a second shape in one <geometry>");
+            }
+        }
     }
 }
 
-/// The attributes of `tag` without a namespace prefix that are not in `allowed`.
-fn unknown_attributes<'t>(tag: &'t str, allowed: &[&str]) -> Vec<&'t str> {
-    attributes(tag)
-        .map(|(attr, _)| attr)
-        .filter(|attr| !attr.contains(':') && !allowed.contains(attr))
-        .collect()
+/// The three numbers of a URDF vector attribute (`"0 0.1 -2"`), `None` unless there are exactly
+/// three tokens and each is a number.
+fn three_numbers(value: &str) -> Option<[f64; 3]> {
+    let mut tokens = value.split_whitespace();
+    let mut v = [0.0; 3];
+    for x in &mut v {
+        *x = tokens.next()?.parse().ok()?;
+    }
+    tokens.next().is_none().then_some(v)
 }
 
-/// The warnings [`scan_parts`] collects: the first [`MAX_PART_WARNINGS`] as (byte offset,
-/// message without its line), the rest counted.
+/// A hint for a value holding a xacro expression (`${...}`, `$(...)`).
+fn xacro_hint(value: &str) -> &'static str {
+    if value.contains("${") || value.contains("$(") {
+        " (a xacro expression: expand the file first, `xacro in.urdf.xacro > out.urdf`)"
+    } else {
+        ""
+    }
+}
+
+/// The warnings a read collects: the first [`MAX_WARNINGS`] as (byte offset, message without its
+/// place), the rest counted.
 #[derive(Default)]
 struct Notes {
     found: Vec<(usize, String)>,
@@ -553,29 +887,28 @@ struct Notes {
 impl Notes {
     /// A warning at byte `offset`; its message is made only if it is listed.
     fn add(&mut self, offset: usize, message: impl FnOnce() -> String) {
-        if self.found.len() < MAX_PART_WARNINGS {
+        if self.found.len() < MAX_WARNINGS {
             self.found.push((offset, message()));
         } else {
             self.more += 1;
         }
     }
 
-    /// The warnings with their line numbers in `source` (offsets in increasing order, so the
-    /// lines are counted in one pass), and a count of the rest.
-    fn numbered(self, source: &str) -> Vec<String> {
-        let (mut line, mut counted) = (1, 0);
+    /// The warnings with their lines and columns, in the order of the file, and a count of the
+    /// rest.
+    fn numbered(mut self, doc: &Document<'_>) -> Vec<String> {
+        self.found.sort_by_key(|(offset, _)| *offset);
         let mut warnings: Vec<String> = self
             .found
             .into_iter()
             .map(|(offset, message)| {
-                line += source[counted..offset].matches('\n').count();
-                counted = offset;
-                format!("line {line}: {message}")
+                let pos = doc.text_pos_at(offset);
+                format!("line {} column {}: {message}", pos.row, pos.col)
             })
             .collect();
         if self.more > 0 {
             warnings.push(format!(
-                "{} more elements or attributes are not URDF and are ignored",
+                "{} more warnings of the same kinds (elements or attributes that are not URDF, or are malformed, and are ignored)",
                 self.more
             ));
         }
@@ -583,44 +916,96 @@ impl Notes {
     }
 }
 
-/// What [`scan_parts`] finds in a URDF text.
-struct Scanned {
-    /// Parts the parser skips without a word, each a warning with its line.
-    warnings: Vec<String>,
-    /// For each `<joint>` under `<robot>`, in the order of the file: whether it holds a `<limit>`.
-    joint_has_limit: Vec<bool>,
-}
-
-/// `urdf-rs` reads `xyz`/`rpy` attributes by dropping tokens that are not numbers
-/// (`"1 x 2 3"` reads as `[1, 2, 3]`); refuse such attributes of `<origin>` and `<axis>` instead
-/// of guessing.
-fn check_vector_attributes(source: &str) -> Result<(), LoadErrorKind> {
-    for (offset, tag) in tags(source) {
-        let name = element_name(tag);
-        if name != "origin" && name != "axis" {
-            continue;
-        }
-        for attr in ["xyz", "rpy"] {
-            let Some(value) = attribute(tag, attr) else {
-                continue;
-            };
-            let tokens: Vec<&str> = value.split_whitespace().collect();
-            if tokens.len() != 3 || tokens.iter().any(|t| t.parse::<f64>().is_err()) {
-                let line = line_at(source, offset);
-                return Err(LoadErrorKind::Urdf {
-                    message: format!(
-                        "line {line}: <{name}> attribute {attr}=\"{value}\" is not three numbers"
-                    ),
-                });
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The value of attribute `name` in a tag's text.
-fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
-    attributes(tag)
-        .find(|(n, _)| *n == name)
-        .map(|(_, value)| value)
+/// Counts what a URDF file holds beyond its kinematics (visual and collision elements, masses,
+/// materials, transmissions, Gazebo and other extension elements, joints' effort and velocity
+/// limits and their dynamics, calibration and safety data), as a phrase such as `"12 visual
+/// elements, 3 materials"`; `None` when it holds none of these or cannot be read.
+#[cfg(feature = "cli")]
+pub(crate) fn beyond_kinematics(source: &str) -> Option<String> {
+    let doc = Document::parse(source).ok()?;
+    let robot = doc.root_element();
+    let count = |n: usize, what: &str| (n > 0).then(|| format!("{n} {what}"));
+    let children = |node: Node<'_, '_>, name: &str| {
+        node.children()
+            .filter(move |c| c.is_element() && c.tag_name().name() == name)
+            .count()
+    };
+    let elements = |name: &str| children(robot, name);
+    let links = || {
+        robot
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "link")
+    };
+    let joints = || {
+        robot
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "joint")
+    };
+    let parts: Vec<String> = [
+        count(
+            links().map(|l| children(l, "visual")).sum(),
+            "visual elements",
+        ),
+        count(
+            links().map(|l| children(l, "collision")).sum(),
+            "collision elements",
+        ),
+        count(
+            links()
+                .filter(|l| {
+                    // A link whose masses and inertias are all zero holds no data to drop.
+                    l.descendants().filter(Node::is_element).any(|e| {
+                        e.attributes().any(|a| {
+                            ["value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz"].contains(&a.name())
+                                && e.ancestors().any(|p| p.tag_name().name() == "inertial")
+                                && a.value().trim().parse::<f64>() != Ok(0.0)
+                        })
+                    })
+                })
+                .count(),
+            "links' masses and inertias",
+        ),
+        count(
+            joints()
+                .filter(|j| {
+                    j.children().any(|c| {
+                        c.is_element()
+                            && c.tag_name().name() == "limit"
+                            && ["effort", "velocity"].iter().any(|a| {
+                                c.attribute(*a)
+                                    .is_some_and(|v| v.trim().parse::<f64>() != Ok(0.0))
+                            })
+                    })
+                })
+                .count(),
+            "joints' effort and velocity limits",
+        ),
+        count(
+            joints()
+                .filter(|j| {
+                    ["dynamics", "calibration", "safety_controller"]
+                        .iter()
+                        .any(|e| children(*j, e) > 0)
+                })
+                .count(),
+            "joints' dynamics, calibration or safety controller elements",
+        ),
+        count(elements("material"), "materials"),
+        count(elements("transmission"), "transmissions"),
+        count(
+            robot
+                .children()
+                .filter(|c| {
+                    c.is_element()
+                        && !["link", "joint", "material", "transmission"]
+                            .contains(&c.tag_name().name())
+                })
+                .count(),
+            "other elements (Gazebo, ros2_control and the like)",
+        ),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
 }
