@@ -239,9 +239,12 @@ impl ChainBuilder {
         self.world_from_root
     }
 
-    /// Records a warning that the built chain will carry (see [`Chain::warnings`]).
+    /// Records a warning that the built chain will carry (see [`Chain::warnings`]), with its
+    /// control characters escaped ([`escape_controls`](crate::error::escape_controls)).
     pub fn warn(&mut self, message: impl Into<String>) -> &mut Self {
-        self.warnings.push(message.into());
+        let message = message.into();
+        self.warnings
+            .push(crate::error::escape_controls(&message).into_owned());
         self
     }
 
@@ -1503,53 +1506,69 @@ fn q_layout(
 }
 
 /// Each mimic joint's (primary joint, multiplier, offset), following mimics of mimics to an
-/// independent joint.
+/// independent joint. Each joint's target is looked up once and each joint resolved once, so a
+/// chain of mimics of mimics resolves in time linear in its length.
 fn resolve_mimics(
     spec: &ChainBuilder,
     joint_of: &NameIndex<'_>,
 ) -> Result<Vec<Option<Resolved>>, ModelError> {
-    let mut mimic: Vec<Option<Resolved>> = vec![None; spec.joints.len()];
-    for (i, js) in spec.joints.iter().enumerate() {
-        let Some(m) = &js.mimic else { continue };
-        let (mut multiplier, mut offset) = (m.multiplier, m.offset);
-        let mut target_name = &m.joint;
-        let mut hops = 0;
-        let primary = loop {
-            let t = *joint_of.get(target_name.as_str()).ok_or_else(|| {
-                ModelError::UnknownMimicTarget {
+    let n = spec.joints.len();
+    let mut mimic: Vec<Option<Resolved>> = vec![None; n];
+    // The walk (1-based number of the joint it started from) that last reached each joint, to
+    // tell a cycle from a joint resolved by an earlier walk.
+    let mut reached = vec![0usize; n];
+    let mut path = Vec::new();
+    for (start, js) in spec.joints.iter().enumerate() {
+        if js.mimic.is_none() || mimic[start].is_some() {
+            continue;
+        }
+        // Follow the targets until an independent joint or one already resolved.
+        path.clear();
+        let mut at = start;
+        let end = loop {
+            let Some(m) = &spec.joints[at].mimic else {
+                break (at, 1.0, 0.0);
+            };
+            if let Some(done) = mimic[at] {
+                break done;
+            }
+            if reached[at] == start + 1 {
+                return Err(ModelError::MimicCycle {
                     joint: js.name.clone(),
-                    target: target_name.clone(),
-                    suggestion: closest_name(
-                        target_name,
-                        spec.joints.iter().map(|j| j.name.as_str()),
-                    ),
-                }
-            })?;
+                });
+            }
+            reached[at] = start + 1;
+            path.push(at);
+            let t =
+                *joint_of
+                    .get(m.joint.as_str())
+                    .ok_or_else(|| ModelError::UnknownMimicTarget {
+                        joint: spec.joints[at].name.clone(),
+                        target: m.joint.clone(),
+                        suggestion: closest_name(
+                            &m.joint,
+                            spec.joints.iter().map(|j| j.name.as_str()),
+                        ),
+                    })?;
             let tj = &spec.joints[t];
             if tj.kind.dof() != 1 {
                 return Err(ModelError::BadMimicTarget {
-                    joint: js.name.clone(),
+                    joint: spec.joints[at].name.clone(),
                     target: tj.name.clone(),
                     kind: tj.kind.as_str(),
                 });
             }
-            match &tj.mimic {
-                None => break t,
-                Some(next) => {
-                    hops += 1;
-                    if hops > spec.joints.len() {
-                        return Err(ModelError::MimicCycle {
-                            joint: js.name.clone(),
-                        });
-                    }
-                    // q_t = m2 q_next + o2, so q = m (m2 q_next + o2) + o.
-                    offset += multiplier * next.offset;
-                    multiplier *= next.multiplier;
-                    target_name = &next.joint;
-                }
-            }
+            at = t;
         };
-        mimic[i] = Some((primary, multiplier, offset));
+        // Back along the path: q_j = m_j q_target + o_j, with q_target = M q_primary + O.
+        let (primary, mut multiplier, mut offset) = end;
+        for &j in path.iter().rev() {
+            if let Some(m) = &spec.joints[j].mimic {
+                offset = m.multiplier * offset + m.offset;
+                multiplier *= m.multiplier;
+                mimic[j] = Some((primary, multiplier, offset));
+            }
+        }
     }
     Ok(mimic)
 }

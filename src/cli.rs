@@ -4,7 +4,7 @@
 use crate::batch::{BatchData, forward_kinematics_batch};
 use crate::chain::{Chain, LinkId};
 use crate::data::{Data, LimitPolicy};
-use crate::error::error_chain;
+use crate::error::{error_chain, escape_controls};
 use crate::input::{InputError, joint_vector_from_str};
 use crate::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
@@ -208,6 +208,15 @@ pub enum CliError {
         /// The cap, in bytes.
         limit: usize,
     },
+    /// More than the bytes a batch line may skip came without a line end: the rest of the input
+    /// cannot be split into lines.
+    #[error(
+        "no line end in the {limit} bytes that follow the line's start; the input cannot be read as lines (the results before it are written)"
+    )]
+    Unended {
+        /// Bytes read without a line end.
+        limit: usize,
+    },
     /// A batch line is not UTF-8 text.
     #[error("byte {byte} of the line is not UTF-8 text")]
     NotUtf8 {
@@ -221,6 +230,18 @@ pub enum CliError {
         path: PathBuf,
         /// Lines that failed.
         count: usize,
+    },
+    /// `convert -o` or `render -o` names the robot file being read.
+    #[error(
+        "the output {} is the robot file {} (the same file): refusing to overwrite it",
+        output.display(),
+        input.display()
+    )]
+    OutputIsInput {
+        /// The output path given.
+        output: PathBuf,
+        /// The robot file.
+        input: PathBuf,
     },
     /// Reading input or writing output failed.
     #[error("{context}")]
@@ -237,6 +258,15 @@ pub enum CliError {
 /// line, `error: ` followed by the error and its sources.
 #[must_use]
 pub fn main() -> ExitCode {
+    main_with(false)
+}
+
+/// [`main`], told whether the process started with its standard output closed (the standard
+/// library reopens a closed one on `/dev/null` before `main` runs, so only code that runs
+/// earlier can tell; the `kinechain` binary does). A command whose results go to standard output
+/// then fails rather than lose them.
+#[must_use]
+pub fn main_with(stdout_closed: bool) -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -253,10 +283,24 @@ pub fn main() -> ExitCode {
                 .take_while(|l| !l.starts_with("Usage:") && !l.starts_with("For more information"))
                 .filter(|l| !l.is_empty())
                 .collect();
-            eprintln!("{} (see --help)", message.join(" "));
+            eprintln!("{} (see --help)", escape_controls(&message.join(" ")));
             return ExitCode::from(2);
         }
     };
+    let writes_stdout = !matches!(
+        &cli.command,
+        Command::Convert {
+            output: Some(_),
+            ..
+        } | Command::Render {
+            output: Some(_),
+            ..
+        }
+    );
+    if writes_stdout && stdout_closed {
+        eprintln!("error: standard output is closed: the results would be lost");
+        return ExitCode::FAILURE;
+    }
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
     let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(output_error));
@@ -274,10 +318,15 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// A path as printed in a message, its control characters escaped.
+fn shown(path: &Path) -> String {
+    escape_controls(&path.display().to_string()).into_owned()
+}
+
 fn load(path: &PathBuf) -> Result<Chain, CliError> {
     let chain = Chain::from_file(path)?;
     for w in chain.warnings() {
-        eprintln!("warning: {}: {w}", path.display());
+        eprintln!("warning: {}: {w}", shown(path));
     }
     Ok(chain)
 }
@@ -290,19 +339,89 @@ fn warn_dropped(path: &Path) {
     if let Some(dropped) = dropped {
         eprintln!(
             "warning: {}: the URDF written has the kinematics only; not written: {dropped}",
-            path.display()
+            shown(path)
         );
     }
 }
 
-/// Writes `text` to `path`, or to `out` when there is no path.
-fn write_output(path: Option<&PathBuf>, text: &str, out: &mut dyn Write) -> Result<(), CliError> {
-    match path {
-        Some(p) => std::fs::write(p, text).map_err(|source| CliError::Io {
-            context: format!("cannot write {}", p.display()),
-            source,
+/// Writes `text` to `path`, or to `out` when there is no path. A path that names the file
+/// `input` (the same file by path, symbolic link or hard link) is refused, and the file is
+/// written whole to a temporary file beside it and renamed into place, so that a failure leaves
+/// no half-written output and an existing file is replaced only by a complete one.
+fn write_output(
+    path: Option<&PathBuf>,
+    input: &Path,
+    text: &str,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let Some(path) = path else {
+        return out.write_all(text.as_bytes()).map_err(output_error);
+    };
+    // (Checked before the robot is read too, so that the refusal comes first; again here, in
+    // case a link was made meanwhile.)
+    refuse_overwrite(Some(path), input)?;
+    let fail = |source| CliError::Io {
+        context: format!("cannot write {}", path.display()),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().ok_or_else(|| {
+        fail(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "the path names no file",
+        ))
+    })?;
+    let mut temp_name = std::ffi::OsString::from(".");
+    temp_name.push(name);
+    temp_name.push(format!(".kinechain-{}.tmp", std::process::id()));
+    let temp = dir.join(temp_name);
+    let written = (|| {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temp)?;
+        file.write_all(text.as_bytes())?;
+        file.sync_all()?;
+        std::fs::rename(&temp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&temp);
+        return Err(fail(e));
+    }
+    Ok(())
+}
+
+/// An error when `output` names the file `input`.
+fn refuse_overwrite(output: Option<&PathBuf>, input: &Path) -> Result<(), CliError> {
+    match output {
+        Some(path) if same_file(path, input) => Err(CliError::OutputIsInput {
+            output: path.clone(),
+            input: input.to_path_buf(),
         }),
-        None => out.write_all(text.as_bytes()).map_err(output_error),
+        _ => Ok(()),
+    }
+}
+
+/// Whether `a` and `b` name the same existing file (through symbolic or hard links too).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        ma.dev() == mb.dev() && ma.ino() == mb.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (ma, mb);
+        matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(x), Ok(y)) if x == y
+        )
     }
 }
 
@@ -329,12 +448,13 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
             link,
         } => bench(&robot, level, configurations, link.as_deref(), out),
         Command::Convert { robot, output } => {
+            refuse_overwrite(output.as_ref(), &robot)?;
             let chain = load(&robot)?;
             let text = crate::convert::to_urdf(&chain)?;
             if crate::io::Format::from_path(&robot) == Some(crate::io::Format::Urdf) {
                 warn_dropped(&robot);
             }
-            write_output(output.as_ref(), &text, out)
+            write_output(output.as_ref(), &robot, &text, out)
         }
         Command::Render {
             robot,
@@ -342,6 +462,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
             output,
             ignore_limits,
         } => {
+            refuse_overwrite(output.as_ref(), &robot)?;
             let chain = load(&robot)?;
             let q = joint_vector_from_str(&chain, &q, "q")?;
             let mut data = Data::new(&chain);
@@ -353,7 +474,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
                 what: e.what,
                 place: e.place,
             })?;
-            write_output(output.as_ref(), &drawing, out)
+            write_output(output.as_ref(), &robot, &drawing, out)
         }
     }
 }
@@ -811,6 +932,8 @@ impl Coordinates {
 /// output, since a `Value` tree allocates a node per number (which took most of a batch run's
 /// time).
 struct ResultsJson<'a> {
+    /// The batch line the results are for (none for `--q`).
+    line: Option<usize>,
     chain: &'a Chain,
     results: &'a [LinkResult],
     orientation: Orientation,
@@ -838,6 +961,9 @@ impl Serialize for ResultsJson<'_> {
             }
         }
         let mut m = s.serialize_map(None)?;
+        if let Some(line) = self.line {
+            m.serialize_entry("line", &line)?;
+        }
         m.serialize_entry("links", &Links(self))?;
         if !self.points.is_empty() {
             let points = self.points.iter().zip(self.point_results);
@@ -1237,7 +1363,7 @@ fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
             .map(|t| joint_vector_from_str(&chain, t, "qdd"))
             .transpose()?,
     };
-    request.emit(&chain, args, &mut data, &c, out)
+    request.emit(&chain, args, &mut data, &c, None, out)
 }
 
 /// What `fk` prints for each configuration (`--link`, `--point`, `--jacobian`), with the
@@ -1301,13 +1427,15 @@ impl Request {
             && chain.dof() > 0
     }
 
-    /// Evaluates `c` and writes its results in the format `args` asks for.
+    /// Evaluates `c` and writes its results in the format `args` asks for, headed by the batch
+    /// line `line` they are for, if any.
     fn emit(
         &mut self,
         chain: &Chain,
         args: &FkArgs,
         data: &mut Data,
         c: &Configuration,
+        line: Option<usize>,
         out: &mut dyn Write,
     ) -> Result<(), CliError> {
         evaluate(chain, data, c, &self.links, &self.points, &mut self.outputs)?;
@@ -1321,6 +1449,7 @@ impl Request {
         match args.format {
             OutputFormat::Json => {
                 let value = ResultsJson {
+                    line,
                     chain,
                     results,
                     orientation: args.orientation,
@@ -1331,12 +1460,20 @@ impl Request {
                 write_json_line(out, &mut self.text, &value)
             }
             OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
+                line_heading(line, buf);
                 results_table(chain, results, args.orientation, buf);
                 points_table(chain, points, point_results, buf);
                 jacobians_table(chain, jacobians, buf);
                 Ok(())
             }),
         }
+    }
+}
+
+/// The heading of a batch line's table, `line N:` on a line of its own.
+fn line_heading(line: Option<usize>, buf: &mut Vec<u8>) {
+    if let Some(line) = line {
+        buf.extend_from_slice(format!("line {line}:\n").as_bytes());
     }
 }
 
@@ -1396,6 +1533,7 @@ impl PendingPoses {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
                         let value = ResultsJson {
+                            line: Some(line),
                             chain,
                             results: &results,
                             orientation: args.orientation,
@@ -1406,6 +1544,7 @@ impl PendingPoses {
                         write_json_line(out, &mut self.text, &value)?;
                     }
                     OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
+                        line_heading(Some(line), buf);
                         results_table(chain, &results, args.orientation, buf);
                         Ok(())
                     })?,
@@ -1496,8 +1635,26 @@ fn fk_batch<R: std::io::Read>(
             failed_lines += pending.flush(chain, args, path, out)?;
             out.flush().map_err(output_error)?;
         }
-        let result = match read_capped_line(reader, &mut bytes, limit) {
+        // Without --keep-going a line past the cap ends the run, so nothing of it is skipped;
+        // with it, a line is skipped up to 64 times the cap before reading gives up.
+        let skip = if args.keep_going {
+            limit.saturating_mul(64)
+        } else {
+            0
+        };
+        let result = match read_capped_line(reader, &mut bytes, limit, skip) {
             Ok(CappedLine::End) => break,
+            Ok(CappedLine::Unended) if args.keep_going => {
+                pending.flush(chain, args, path, out)?;
+                return Err(at_line(
+                    path,
+                    i + 1,
+                    CliError::Unended {
+                        limit: limit.saturating_add(skip),
+                    },
+                ));
+            }
+            Ok(CappedLine::Unended) => Err(CliError::LineTooLong { limit }),
             Ok(CappedLine::Line) => std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
                 byte: e.valid_up_to() + 1,
             }),
@@ -1549,7 +1706,7 @@ fn fk_batch<R: std::io::Read>(
             Ok(Row::BadHeader(e)) => return Err(at_line(path, i + 1, e)),
             Ok(Row::Single(c)) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
-                match request.emit(chain, args, data, &c, out) {
+                match request.emit(chain, args, data, &c, Some(i + 1), out) {
                     Ok(()) => {}
                     Err(e @ CliError::Io { .. }) => return Err(e),
                     Err(e) if args.keep_going => {
@@ -1592,20 +1749,25 @@ enum CappedLine {
     Line,
     /// The line was longer than the cap; the rest of it was skipped.
     TooLong,
+    /// The line was longer than the cap, and more than the bytes allowed to skip followed
+    /// without a line end (`/dev/zero`, a stream that never sends one): reading stopped.
+    Unended,
     /// The input is exhausted.
     End,
 }
 
 /// Reads one line of at most `limit` bytes into `buf` (cleared first; `\n` and a `\r` before it
 /// dropped). A longer line is skipped to its end without being kept, so one huge line costs no
-/// more memory than the cap.
+/// more memory than the cap, unless more than `skip` bytes past the cap come without a line end.
 fn read_capped_line(
     reader: &mut impl BufRead,
     buf: &mut Vec<u8>,
     limit: usize,
+    skip: usize,
 ) -> std::io::Result<CappedLine> {
     buf.clear();
     let mut too_long = false;
+    let mut skipped = 0usize;
     let mut any = false;
     loop {
         let available = match reader.fill_buf() {
@@ -1627,6 +1789,12 @@ fn read_capped_line(
                 buf.clear();
             } else {
                 buf.extend_from_slice(chunk);
+            }
+        }
+        if too_long {
+            skipped = skipped.saturating_add(chunk.len());
+            if done.is_none() && skipped > skip {
+                return Ok(CappedLine::Unended);
             }
         }
         let used = done.unwrap_or(chunk.len());
@@ -2289,10 +2457,10 @@ mod tests {
         let mut reader = std::io::BufReader::with_capacity(chunk, input);
         let (mut buf, mut out) = (Vec::new(), Vec::new());
         loop {
-            match read_capped_line(&mut reader, &mut buf, limit).unwrap() {
+            match read_capped_line(&mut reader, &mut buf, limit, usize::MAX).unwrap() {
                 CappedLine::Line => out.push(Some(String::from_utf8(buf.clone()).unwrap())),
                 CappedLine::TooLong => out.push(None),
-                CappedLine::End => return out,
+                CappedLine::End | CappedLine::Unended => return out,
             }
         }
     }

@@ -26,7 +26,38 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
         text.push_str(&s.to_string());
         source = s.source();
     }
-    text.replace('\n', " ")
+    escape_controls(&text.replace('\n', " ")).into_owned()
+}
+
+/// `text` with every character that could change a terminal's state or the order in which
+/// text shows written as an escape (`\u{1b}` for ESC, `\r`, `\0`, `\u{202e}` for a
+/// right-to-left override): control characters (C0, DEL, C1) and Unicode's bidirectional
+/// formatting characters. Names and file text in errors and warnings go through it, so that a
+/// crafted joint name cannot rewrite the terminal it is printed to.
+///
+/// ```
+/// use kinechain::error::escape_controls;
+/// assert_eq!(escape_controls("joint\u{1b}[2J"), "joint\\u{1b}[2J");
+/// assert_eq!(escape_controls("plain name"), "plain name");
+/// ```
+#[must_use]
+pub fn escape_controls(text: &str) -> std::borrow::Cow<'_, str> {
+    let unsafe_char = |c: char| {
+        c.is_control()
+            || matches!(c, '\u{200e}' | '\u{200f}' | '\u{202a}'..='\u{202e}' | '\u{2066}'..='\u{2069}')
+    };
+    if !text.contains(unsafe_char) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if unsafe_char(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
 }
 
 /// A robot file could not be turned into a [`Chain`](crate::Chain).
@@ -195,6 +226,23 @@ fn too_large(size: Option<u64>, limit: u64) -> String {
     }
 }
 
+/// Most names an error message lists; the rest are counted.
+const MAX_LISTED: usize = 10;
+
+/// `names` joined by commas, the first [`MAX_LISTED`] of them and a count of the rest.
+fn listed(names: &[String]) -> String {
+    let mut text = names
+        .iter()
+        .take(MAX_LISTED)
+        .map(String::as_str)
+        .collect::<Vec<_>>()
+        .join(", ");
+    if names.len() > MAX_LISTED {
+        text.push_str(&format!(" and {} more", names.len() - MAX_LISTED));
+    }
+    text
+}
+
 fn location_prefix(line: Option<u32>, column: Option<u32>) -> String {
     match (line, column) {
         (Some(l), Some(c)) => format!("line {l} column {c}: "),
@@ -330,7 +378,7 @@ pub enum ModelError {
         second: String,
     },
     /// More than one link has no parent joint.
-    #[error("more than one root link: {}", roots.join(", "))]
+    #[error("more than one root link: {}", listed(roots))]
     MultipleRoots {
         /// The links without a parent joint.
         roots: Vec<String>,

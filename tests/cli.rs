@@ -263,9 +263,13 @@ fn fk_batch_writes_one_line_per_configuration() {
     assert!(from_rows.status.success());
     assert_eq!(from_rows.stdout, from_objects.stdout);
     assert_eq!(
-        String::from_utf8(from_rows.stdout).unwrap().lines().count(),
+        String::from_utf8(from_rows.stdout.clone())
+            .unwrap()
+            .lines()
+            .count(),
         3
     );
+    let objects_results = json_lines(from_objects.stdout);
     // A header row of joint names gives the order of the columns of the rows below it (not of
     // arrays or objects, which are in q order).
     dir.write(
@@ -274,7 +278,13 @@ fn fk_batch_writes_one_line_per_configuration() {
     );
     let from_rows = kinechain(&["fk", "robots/planar3.yaml", "--batch", &rows]);
     assert!(from_rows.status.success());
-    assert_eq!(from_rows.stdout, from_objects.stdout);
+    // The same results, each naming its own line (the header and a blank line come first).
+    let rows_results = json_lines(from_rows.stdout);
+    for (k, (a, b)) in rows_results.iter().zip(&objects_results).enumerate() {
+        assert_eq!(a["links"], b["links"]);
+        assert_eq!(a["line"], k + 3);
+    }
+    assert_eq!(rows_results.len(), 3);
     // A header that names what is not a joint stops the run, even with --keep-going: the rows
     // cannot be read in the file's order.
     dir.write("rows.csv", "q1,q2,q3\n0.25,-0.5,1\n");
@@ -703,16 +713,26 @@ fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
     let text = String::from_utf8(out.stdout).unwrap();
     let mut tables = 0;
     let mut failed = Vec::new();
+    let mut headed = Vec::new();
     for line in text.lines() {
         if line.starts_with("link ") {
             tables += 1;
         } else if let Some(rest) = line.strip_prefix("line ") {
+            if let Some(number) = rest.strip_suffix(':') {
+                // Each table is headed by its line's number.
+                headed.push(number.parse::<usize>().unwrap());
+                continue;
+            }
             let (number, error) = rest.split_once(": error: ").unwrap();
             assert!(error.len() > 5, "{line}");
             failed.push((number.parse::<usize>().unwrap(), tables));
         }
     }
     assert_eq!(tables, 997);
+    let expected: Vec<usize> = (1..=1000)
+        .filter(|l| ![201, 301, 451].contains(l))
+        .collect();
+    assert_eq!(headed, expected);
     assert_eq!(failed, [(201, 200), (301, 299), (451, 448)]);
 }
 
@@ -947,7 +967,7 @@ fn a_closed_output_pipe_ends_the_run_quietly() {
     BufReader::new(child.stdout.take().unwrap())
         .read_line(&mut first)
         .unwrap();
-    assert!(first.starts_with("{\"links\""), "{first}");
+    assert!(first.starts_with("{\"line\":1,\"links\""), "{first}");
     // The reader is dropped here, closing the pipe.
     assert_quiet_success(&child.wait_with_output().unwrap());
 }
@@ -1052,11 +1072,19 @@ fn results_that_overflow_are_errors() {
     let many = dir.write("many.jsonl", text);
     let out = kinechain(&["fk", robot, "--batch", &many, "--keep-going"]);
     assert!(!out.status.success());
-    let failed: Vec<u64> = json_lines(out.stdout)
+    let results = json_lines(out.stdout);
+    let failed: Vec<u64> = results
         .iter()
+        .filter(|v| v.get("error").is_some())
         .filter_map(|v| v["line"].as_u64())
         .collect();
     assert_eq!(failed, [2, 3, 4, 6, 262]);
+    // Every line has its result or its error, in order, each naming its line.
+    let lines: Vec<u64> = results
+        .iter()
+        .map(|v| v["line"].as_u64().unwrap())
+        .collect();
+    assert_eq!(lines, (1..=262).collect::<Vec<u64>>());
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(stderr.contains("5 line(s) failed"), "{stderr}");
 }
@@ -1605,7 +1633,7 @@ fn json_output_text() {
     .collect();
     assert_eq!(
         text(&["--batch", &batch, "--orientation", "rpy"]),
-        format!("{{\"links\":{{{}}}}}\n", links.join(","))
+        format!("{{\"line\":1,\"links\":{{{}}}}}\n", links.join(","))
     );
 }
 
@@ -1679,4 +1707,172 @@ fn table_columns_line_up_under_names_that_are_not_ascii() {
     // The longest name has seven characters (eight bytes): the header's `x` ends the first
     // 12-wide number column after those seven and a space.
     assert_eq!(rows[0].find('x'), Some(7 + 1 + 11), "{table}");
+}
+
+/// `convert -o` and `render -o` never write over the robot file they read, named by the same
+/// path, another path, a symbolic link or a hard link; the file is left as it was.
+#[test]
+fn outputs_never_overwrite_the_robot_file() {
+    let dir = Scratch::new("cli-same-file");
+    let original =
+        std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/robots/panda.urdf")).unwrap();
+    let robot = dir.write("panda.urdf", &original);
+    let symlink = dir.path("symlink.urdf");
+    std::os::unix::fs::symlink(&robot, &symlink).unwrap();
+    let hard = dir.path("hard.urdf");
+    std::fs::hard_link(&robot, &hard).unwrap();
+    let dotted = format!("{}/./panda.urdf", dir.path(""));
+    for output in [robot.as_str(), &symlink, &hard, &dotted] {
+        for args in [
+            vec!["convert", robot.as_str(), "-o", output],
+            vec![
+                "render",
+                robot.as_str(),
+                "--q",
+                "0 0 0 -1 0 1 0 0",
+                "-o",
+                output,
+            ],
+            vec!["convert", output, "-o", robot.as_str()],
+        ] {
+            let e = error(&args);
+            assert!(
+                e.contains("(the same file): refusing to overwrite it"),
+                "{args:?}: {e}"
+            );
+        }
+    }
+    assert_eq!(std::fs::read(&robot).unwrap(), original);
+    assert_eq!(std::fs::read(&hard).unwrap(), original);
+    // Another file is written whole, and written again over an earlier output.
+    let out = dir.path("out.urdf");
+    for _ in 0..2 {
+        let status = kinechain(&["convert", &robot, "-o", &out]);
+        assert!(status.status.success());
+        let written = std::fs::read_to_string(&out).unwrap();
+        assert!(written.trim_end().ends_with("</robot>"), "{written}");
+    }
+}
+
+/// An output that cannot be put in place (here a directory stands at its path) is an error that
+/// leaves nothing behind: no temporary file, and the directory as it was.
+#[test]
+fn a_failed_write_leaves_no_partial_output() {
+    let dir = Scratch::new("cli-failed-write");
+    std::fs::create_dir(dir.path("taken")).unwrap();
+    let e = error(&["convert", "robots/puma560.yaml", "-o", &dir.path("taken")]);
+    assert!(e.starts_with("error: cannot write "), "{e}");
+    let left: Vec<String> = std::fs::read_dir(dir.path(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(left, ["taken"]);
+    assert_eq!(std::fs::read_dir(dir.path("taken")).unwrap().count(), 0);
+    let e = error(&[
+        "convert",
+        "robots/puma560.yaml",
+        "-o",
+        &dir.path("missing/out.urdf"),
+    ]);
+    assert!(e.starts_with("error: cannot write "), "{e}");
+}
+
+/// A command whose results go to a closed standard output fails and says so; one that writes a
+/// file does not need it, and a reader that goes away early (`| head`) is not an error.
+#[test]
+fn a_closed_standard_output_is_an_error() {
+    let run = |args: &str| {
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!("exec \"$0\" {args} >&-"))
+            .arg(env!("CARGO_BIN_EXE_kinechain"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap()
+    };
+    for args in [
+        "info robots/panda.urdf",
+        "fk robots/puma560.yaml --q 0,0,0,0,0,0",
+        "convert robots/puma560.yaml",
+    ] {
+        let out = run(args);
+        assert!(!out.status.success(), "{args}");
+        assert_eq!(
+            String::from_utf8_lossy(&out.stderr).trim_end(),
+            "error: standard output is closed: the results would be lost",
+            "{args}"
+        );
+    }
+    let dir = Scratch::new("cli-closed-stdout");
+    let out = run(&format!(
+        "convert robots/puma560.yaml -o {}",
+        dir.path("p.urdf")
+    ));
+    assert!(out.status.success(), "{out:?}");
+    let piped = Command::new("sh")
+        .arg("-c")
+        .arg("\"$0\" fk robots/snake50.yaml --batch - --format table < /dev/zero | head -c 1 > /dev/null; exit 0")
+        .arg(env!("CARGO_BIN_EXE_kinechain"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(piped.status.success());
+}
+
+/// Names and file text in errors and warnings have their control characters escaped, so that a
+/// crafted name cannot move the cursor, clear the screen or reorder what the terminal shows.
+#[test]
+fn control_characters_in_messages_are_escaped() {
+    let dir = Scratch::new("cli-escapes");
+    let yaml = dir.write(
+        "evil.yaml",
+        "convention: standard\njoints:\n  - {name: \"j\\e[2J\\r\", type: revolute, a: 0, alpha: 0, d: 0, theta: 0, limits: [-1, 1]}\n",
+    );
+    let e = error(&["fk", &yaml, "--q", "5"]);
+    assert!(e.contains("joint 'j\\u{1b}[2J\\r'"), "{e}");
+    assert!(!e.contains('\u{1b}') && !e.contains('\r'), "{e}");
+    // XML allows C1 controls and bidirectional overrides in names.
+    let urdf = dir.write(
+        "evil.urdf",
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\u{9b}2J\"/>\
+         <joint name=\"j\u{202e}\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\u{9b}2J\"/><lmit/></joint></robot>",
+    );
+    let out = kinechain(&["info", &urdf]);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("joint 'j\\u{202e}'"), "{stderr}");
+    assert!(
+        !stderr.contains('\u{202e}') && !stderr.contains('\u{9b}'),
+        "{stderr}"
+    );
+    let out = kinechain(&["fk", &urdf, "--q", "[]", "--link", "b\u{9b}2"]);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("error: no link named 'b\\u{9b}2' (did you mean 'b\\u{9b}2J'?)"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains('\u{9b}'), "{stderr}");
+}
+
+/// A batch input without line ends (`/dev/zero`) ends the run with an error once its first line
+/// passes the cap, rather than reading on forever; with `--keep-going`, after 64 times the cap.
+#[test]
+fn an_input_without_line_ends_is_an_error_not_a_hang() {
+    let e = error(&["fk", "robots/puma560.yaml", "--batch", "/dev/zero"]);
+    assert!(
+        e.starts_with("error: /dev/zero: line 1: the line is longer than"),
+        "{e}"
+    );
+    let out = kinechain(&[
+        "fk",
+        "robots/puma560.yaml",
+        "--batch",
+        "/dev/zero",
+        "--keep-going",
+    ]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("error: /dev/zero: line 1: no line end in the "),
+        "{stderr}"
+    );
 }

@@ -1074,6 +1074,66 @@ fn urdf_hostile_files() {
     assert!(message(&e).contains("UTF-16"), "{}", message(&e));
 }
 
+/// A chain of 40 000 joints, each mimicking the one before, resolves each joint once (following
+/// every chain to its primary from every joint took 40 000²/2 steps), and composes the
+/// multipliers and offsets: joint k follows joint 0 with multiplier 1 and offset k·0.001.
+#[test]
+fn long_mimic_chains_load_quickly() {
+    let n = 40_000;
+    let mut text = String::from("<robot name=\"r\">\n<link name=\"l0\"/>\n");
+    for k in 1..=n {
+        text += &format!("<link name=\"l{k}\"/>");
+        text += &format!(
+            "<joint name=\"j{k}\" type=\"continuous\"><parent link=\"l{}\"/><child link=\"l{k}\"/>",
+            k - 1
+        );
+        if k > 1 {
+            text += &format!("<mimic joint=\"j{}\" offset=\"0.001\"/>", k - 1);
+        }
+        text += "</joint>\n";
+    }
+    text += "</robot>\n";
+    let start = std::time::Instant::now();
+    let chain = Chain::from_urdf_str(&text).unwrap();
+    let took = start.elapsed();
+    assert!(took.as_secs_f64() < 2.0, "{took:?}");
+    assert_eq!(chain.dof(), 1);
+    let last = chain.joint(chain.joint_id(&format!("j{n}")).unwrap());
+    let m = last.mimic().unwrap();
+    assert_eq!(m.multiplier, 1.0);
+    assert!(
+        (m.offset - 0.001 * (n - 1) as f64).abs() < 1e-9,
+        "{}",
+        m.offset
+    );
+    // A cycle far down a long chain is still found, naming the first joint that leads into it.
+    let cyclic = text.replace(
+        "<joint name=\"j1\" type=\"continuous\"><parent link=\"l0\"/><child link=\"l1\"/>",
+        &format!("<joint name=\"j1\" type=\"continuous\"><parent link=\"l0\"/><child link=\"l1\"/><mimic joint=\"j{n}\"/>"),
+    );
+    assert!(matches!(
+        model(&Chain::from_urdf_str(&cyclic).unwrap_err()),
+        ModelError::MimicCycle { joint } if joint == "j1"
+    ));
+}
+
+/// Two merge keys in one mapping are refused like any other repeated key: the parser merged
+/// both, each silently winning or losing on the keys they share. A list of merges is the way to
+/// merge several.
+#[test]
+fn yaml_two_merge_keys_in_one_mapping() {
+    let e = load("yaml/two_merge_keys.yaml");
+    let (joint, line, msg) = yaml(&e);
+    assert_eq!((joint, line), (Some("j1"), Some(7)));
+    assert!(
+        msg.starts_with("a second merge key `<<` in one mapping"),
+        "{msg}"
+    );
+    assert_eq!(yaml_field(&e), None);
+    let listed = "convention: standard\njoints:\n  - &t {name: j0, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}\n  - &u {name: j9, type: revolute, a: 1, alpha: 0, d: 0, theta: 0}\n  - name: j1\n    <<: [*t, *u]\n";
+    assert_eq!(Chain::from_dh_yaml_str(listed).unwrap().dof(), 3);
+}
+
 #[test]
 fn files_that_cannot_be_read() {
     let missing = Chain::from_file("tests/data/bad/does_not_exist.yaml").unwrap_err();

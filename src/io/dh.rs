@@ -502,6 +502,7 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
     );
     let raw: RawRobot =
         serde_saphyr::from_str_with_options(source, options).map_err(|e| yaml_error(source, &e))?;
+    check_merge_keys(source)?;
     let unit = raw.angle_unit;
     let mut r = Reader {
         source,
@@ -622,6 +623,39 @@ fn yaml_error(source: &str, e: &serde_saphyr::Error) -> LoadErrorKind {
 /// one and the one that places errors, stop there.
 fn replay_limit(source: &str) -> usize {
     source.len().saturating_mul(REPLAYS_PER_BYTE)
+}
+
+/// Refuses a mapping with two merge keys (`<<: *a` and `<<: *b`), which the parser merges
+/// both of, each silently winning or losing on the keys they share: like any other key, a merge
+/// key may appear once in a mapping (merge several with `<<: [*a, *b]`). Runs after the typed
+/// parse, under its limits, on files that hold `<<` at all.
+fn check_merge_keys(source: &str) -> Result<(), LoadErrorKind> {
+    if !source.contains("<<") {
+        return Ok(());
+    }
+    let options = with_limits(
+        serde_saphyr::options! {
+            angle_conversions: true,
+            merge_keys: serde_saphyr::MergeKeyPolicy::AsOrdinary,
+            duplicate_keys: serde_saphyr::DuplicateKeyPolicy::Error,
+        },
+        source,
+    );
+    match serde_saphyr::from_str_with_options::<Node>(source, options) {
+        Err(e) if e.to_string().contains("duplicate") && e.to_string().contains("<<") => {
+            let mut error = yaml_error(source, &e);
+            if let LoadErrorKind::Yaml { field, message, .. } = &mut error {
+                // (The entries a merge brings in stand where its alias does, which misleads
+                // the search for the field; the key is the merge key itself.)
+                *field = None;
+                *message = "a second merge key `<<` in one mapping (merge several with \
+                            `<<: [*a, *b]`)"
+                    .into();
+            }
+            Err(error)
+        }
+        _ => Ok(()),
+    }
 }
 
 /// See [`replay_limit`].

@@ -16,10 +16,11 @@ use roxmltree::{Document, Node, ParsingOptions};
 /// Deepest element nesting accepted (real URDFs nest about 6 deep).
 pub(crate) const MAX_XML_DEPTH: usize = 100;
 
-/// File bytes per XML node the parser may build. Each node of the tree costs about 70 bytes,
-/// so this bounds a load's memory to about 20 times the file's size whatever the file holds;
-/// real URDFs spend 20 to 40 bytes on a node.
-const BYTES_PER_NODE: usize = 8;
+/// File bytes per XML node the parser may build. Each node of the tree costs about 70 bytes
+/// (and the parser reserves room for one per `<` before it starts, so a file may have at most two
+/// `<` per node allowed), which bounds a load's memory to about 15 times the file's size whatever
+/// the file holds; real URDFs spend 30 to 45 bytes on a `<`.
+const BYTES_PER_NODE: usize = 12;
 
 /// Nodes any file may hold, however short.
 const MIN_NODES: usize = 4096;
@@ -33,6 +34,9 @@ const XACRO_URI: &str = "http://www.ros.org/wiki/xacro";
 /// Parses URDF text into a chain description.
 pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     let limit = (source.len() / BYTES_PER_NODE).max(MIN_NODES);
+    if source.bytes().filter(|&b| b == b'<').count() > 2 * limit {
+        return Err(too_many_nodes(limit));
+    }
     let options = ParsingOptions {
         allow_dtd: false,
         nodes_limit: u32::try_from(limit).unwrap_or(u32::MAX),
@@ -127,13 +131,7 @@ fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind 
                 "a <!DOCTYPE> declaration is not accepted in a robot file".to_string(),
             )
         }
-        E::NodesLimitReached => (
-            (None, None),
-            format!(
-                "the file holds more than {nodes} XML nodes, more than a robot file of its size \
-                 does (one node per {BYTES_PER_NODE} bytes is the most accepted)"
-            ),
-        ),
+        E::NodesLimitReached => return too_many_nodes(nodes),
         E::UnknownNamespace(prefix, pos) if prefix == "xacro" => {
             return LoadErrorKind::Xacro {
                 line: Some(pos.row),
@@ -186,6 +184,19 @@ fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind 
         line: place.0,
         column: place.1,
         message,
+    }
+}
+
+/// The error for a file with more than `limit` XML nodes.
+fn too_many_nodes(limit: usize) -> LoadErrorKind {
+    LoadErrorKind::Urdf {
+        line: None,
+        column: None,
+        message: format!(
+            "the file holds more than {limit} XML nodes, more than a robot file of its size \
+             does (one node per {BYTES_PER_NODE} bytes is the most accepted, which bounds the \
+             memory a load takes)"
+        ),
     }
 }
 
