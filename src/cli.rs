@@ -185,6 +185,19 @@ pub enum CliError {
     /// `bench` on a chain without moving joints.
     #[error("the chain has no moving joints: its poses are constant and there is nothing to time")]
     NothingToTime,
+    /// `bench --configurations` times the links would keep more frames than the run may hold.
+    #[error(
+        "--configurations {configurations} with {links} links would keep {} link frames of 96 bytes, more than the {MAX_BENCH_FRAMES} that `bench` holds; at most {most} configurations for this robot",
+        configurations.saturating_mul(*links)
+    )]
+    BenchTooLarge {
+        /// Configurations asked for.
+        configurations: usize,
+        /// Links of the robot.
+        links: usize,
+        /// The most configurations allowed for this robot.
+        most: usize,
+    },
     /// `--qdd` without `--qd`.
     #[error("--qdd needs --qd (accelerations depend on velocities)")]
     QddWithoutQd,
@@ -1849,6 +1862,10 @@ const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
 const THREADED_ROWS_WORK: usize = 40_000;
 
 /// `--configurations`: a whole number from 2 to [`MAX_BENCH_CONFIGURATIONS`].
+/// The most link frames (configurations times links) `bench` keeps: 2²³, 768 MiB of frames, so
+/// that a robot with many links cannot make the batch rows exhaust memory.
+const MAX_BENCH_FRAMES: usize = 1 << 23;
+
 fn configuration_count(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if n < 2 => {
@@ -1887,6 +1904,14 @@ fn bench(
     let chain = &load(path)?;
     if chain.dof() == 0 {
         return Err(CliError::NothingToTime);
+    }
+    let links = chain.links().len();
+    if n.saturating_mul(links) > MAX_BENCH_FRAMES {
+        return Err(CliError::BenchTooLarge {
+            configurations: n,
+            links,
+            most: (MAX_BENCH_FRAMES / links).max(1),
+        });
     }
     let qs = &crate::measure::configurations(chain, n, 0x6b69_6e65);
     let qd: &Vec<Vec<f64>> = &qs

@@ -1876,3 +1876,24 @@ fn an_input_without_line_ends_is_an_error_not_a_hang() {
         "{stderr}"
     );
 }
+
+/// `bench` keeps every link's frame for each configuration: a robot with many links gets an
+/// error saying how many configurations it may have, not an exhausted memory.
+#[test]
+fn bench_is_capped_by_configurations_times_links() {
+    let dir = Scratch::new("cli-bench-cap");
+    let mut urdf = String::from("<robot name=\"many\"><link name=\"l0\"/>");
+    for i in 1..=2000 {
+        urdf += &format!(
+            "<link name=\"l{i}\"/><joint name=\"j{i}\" type=\"continuous\"><parent link=\"l{}\"/><child link=\"l{i}\"/></joint>",
+            i - 1
+        );
+    }
+    urdf += "</robot>";
+    let robot = dir.write("many.urdf", urdf);
+    let e = error(&["bench", &robot, "--configurations", "65536"]);
+    assert!(
+        e.ends_with("at most 4192 configurations for this robot"),
+        "{e}"
+    );
+}

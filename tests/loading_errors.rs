@@ -1134,6 +1134,40 @@ fn yaml_two_merge_keys_in_one_mapping() {
     assert_eq!(Chain::from_dh_yaml_str(listed).unwrap().dof(), 3);
 }
 
+/// A robot path that is not a regular file is read up to the size limit: a pipe that ends
+/// sooner loads, and a device that never ends (`/dev/zero`) is refused with a message that says
+/// what happened rather than a size it does not have.
+#[test]
+fn robot_paths_that_are_not_regular_files() {
+    let dir = Scratch::new("special");
+    let zero = dir.path("zero.urdf");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    let e = Chain::from_file(&zero).unwrap_err();
+    assert!(
+        matches!(e.kind(), LoadErrorKind::TooLarge { size: None, .. }),
+        "{}",
+        message(&e)
+    );
+    assert!(
+        message(&e).ends_with("the input is not a regular file; reading stopped there"),
+        "{}",
+        message(&e)
+    );
+    let fifo = dir.path("fifo.urdf");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::write(fifo, common::FIXED_ONLY_URDF).unwrap())
+    };
+    let chain = Chain::from_file(&fifo).unwrap();
+    writer.join().unwrap();
+    assert_eq!(chain.links().len(), 2);
+}
+
 #[test]
 fn files_that_cannot_be_read() {
     let missing = Chain::from_file("tests/data/bad/does_not_exist.yaml").unwrap_err();
