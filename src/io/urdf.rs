@@ -42,8 +42,20 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         nodes_limit: u32::try_from(limit).unwrap_or(u32::MAX),
         ..ParsingOptions::default()
     };
+    // An XML declaration after white space (a blank first line) is not XML, but a common slip
+    // that changes nothing of the document; it is read as a processing instruction of the same
+    // length, so that every position stays where it is in the file.
+    let late = late_declaration(source);
+    let patched;
+    let text = match late {
+        Some(at) => {
+            patched = format!("{}<?xm-{}", &source[..at], &source[at + 5..]);
+            patched.as_str()
+        }
+        None => source,
+    };
     let doc =
-        Document::parse_with_options(source, options).map_err(|e| xml_error(source, &e, limit))?;
+        Document::parse_with_options(text, options).map_err(|e| xml_error(text, &e, limit))?;
     check_depth(&doc)?;
     check_xacro(&doc)?;
     let robot = doc.root_element();
@@ -66,6 +78,11 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
             "<robot> has no name attribute (URDF requires one)".into(),
         ));
     };
+    if let Some(at) = late {
+        reader.notes.add(at, || {
+            "the XML declaration <?xml ...?> is not at the start of the file, as XML requires; read anyway".into()
+        });
+    }
     let mut b = ChainBuilder::new(name);
     for node in robot.children() {
         if node.is_text() {
@@ -96,6 +113,13 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         b.warn(warning);
     }
     Ok(b)
+}
+
+/// Where an XML declaration starts that white space precedes, if the file starts so.
+fn late_declaration(source: &str) -> Option<usize> {
+    let body = source.trim_start_matches('\u{feff}');
+    let at = source.len() - body.trim_start().len();
+    (at > source.len() - body.len() && source[at..].starts_with("<?xml")).then_some(at)
 }
 
 /// The parser's error in the file author's terms, with its line and column.
@@ -575,6 +599,14 @@ impl<'d, 'i> Reader<'d, 'i> {
             };
             if let Some(first) = slot {
                 let (line, column): (u32, u32) = place(self.doc, first.range().start);
+                if same_attributes(*first, part) && !part.has_children() {
+                    self.notes.add(part.range().start, || {
+                        format!(
+                            "{label}: a second <{element}> repeats the one at line {line} column {column}; ignored"
+                        )
+                    });
+                    continue;
+                }
                 return Err(self.error(
                     part.range().start,
                     format!(
@@ -865,6 +897,19 @@ impl<'d, 'i> Reader<'d, 'i> {
             }
         }
     }
+}
+
+/// Whether two elements have the same attributes with the same values, in any order.
+fn same_attributes(a: Node<'_, '_>, b: Node<'_, '_>) -> bool {
+    let sorted = |n: Node<'_, '_>| {
+        let mut all: Vec<(String, String)> = n
+            .attributes()
+            .map(|a| (a.name().to_string(), a.value().to_string()))
+            .collect();
+        all.sort_unstable();
+        all
+    };
+    sorted(a) == sorted(b)
 }
 
 /// The three numbers of a URDF vector attribute (`"0 0.1 -2"`), `None` unless there are exactly
