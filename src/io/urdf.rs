@@ -199,9 +199,48 @@ fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind 
         ),
         E::InvalidComment(pos) => (at(*pos), "not well-formed XML: a comment holds '--'".into()),
         E::UnknownToken(pos) => (at(*pos), outside_root(source, *pos)),
+        E::InvalidChar(expected, actual, pos) => (
+            at(*pos),
+            format!(
+                "not well-formed XML: '{}' where '{}' belongs",
+                char::from(*actual),
+                char::from(*expected)
+            ),
+        ),
+        E::InvalidChar2(expected, actual, pos) => (
+            at(*pos),
+            format!(
+                "not well-formed XML: '{}' where {expected} belongs",
+                char::from(*actual)
+            ),
+        ),
+        E::InvalidString(expected, pos) => (
+            at(*pos),
+            format!("not well-formed XML: '{expected}' expected here"),
+        ),
+        E::InvalidName(pos) => (
+            at(*pos),
+            "not well-formed XML: a name that XML does not allow".into(),
+        ),
+        E::InvalidAttributeValue(pos) => (
+            at(*pos),
+            "not well-formed XML: '<' inside an attribute value (write &lt;)".into(),
+        ),
+        E::EntityReferenceLoop(pos) => (
+            at(*pos),
+            "not well-formed XML: entity references nest too deep (a loop?)".into(),
+        ),
+        E::InvalidCharacterData(pos) => (
+            at(*pos),
+            "not well-formed XML: ']]>' in text (write ]]&gt;)".into(),
+        ),
         other => {
             let pos = other.pos();
-            (at(pos), "not well-formed XML: unexpected character".into())
+            (
+                at(pos),
+                "not well-formed XML: a namespace declaration or reference XML does not allow"
+                    .into(),
+            )
         }
     };
     LoadErrorKind::Urdf {
