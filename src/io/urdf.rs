@@ -84,14 +84,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         });
     }
     let mut b = ChainBuilder::new(name);
-    for node in robot.children() {
-        if node.is_text() {
-            reader.stray_text(node, "text inside <robot> is not URDF and is ignored");
-            continue;
-        }
-        if !node.is_element() {
-            continue;
-        }
+    for node in reader.elements(robot, "text inside <robot> is not URDF and is ignored") {
         match qualified_name(&doc, node) {
             "link" => {
                 let name = reader.required(node, "name", "<link>")?;
@@ -472,6 +465,15 @@ impl<'d, 'i> Reader<'d, 'i> {
         })
     }
 
+    /// The element children of `node`, with the warning `text` for any of its text that is more
+    /// than white space (URDF's `<robot>`, `<link>` and `<joint>` hold elements only).
+    fn elements(&mut self, node: Node<'d, 'i>, text: &str) -> Vec<Node<'d, 'i>> {
+        for child in node.children().filter(Node::is_text) {
+            self.stray_text(child, text);
+        }
+        node.children().filter(Node::is_element).collect()
+    }
+
     /// A warning for a text node that holds more than white space.
     fn stray_text(&mut self, node: Node<'_, '_>, message: &str) {
         let text = node.text().unwrap_or("");
@@ -593,17 +595,8 @@ impl<'d, 'i> Reader<'d, 'i> {
         label: &str,
     ) -> Result<JointParts<'d, 'i>, LoadErrorKind> {
         let mut parts = JointParts::default();
-        for part in node.children() {
-            if part.is_text() {
-                self.stray_text(
-                    part,
-                    &format!("{label}: text inside <joint> is not URDF and is ignored"),
-                );
-                continue;
-            }
-            if !part.is_element() {
-                continue;
-            }
+        let text = format!("{label}: text inside <joint> is not URDF and is ignored");
+        for part in self.elements(node, &text) {
             let element = qualified_name(self.doc, part);
             if element.contains(':') {
                 continue;
@@ -798,17 +791,8 @@ impl<'d, 'i> Reader<'d, 'i> {
     fn link_contents(&mut self, link: Node<'d, 'i>, name: &str) {
         let label = format!("link '{name}'");
         let mut inertials = 0;
-        for part in link.children() {
-            if part.is_text() {
-                self.stray_text(
-                    part,
-                    &format!("{label}: text inside <link> is not URDF and is ignored"),
-                );
-                continue;
-            }
-            if !part.is_element() {
-                continue;
-            }
+        let text = format!("{label}: text inside <link> is not URDF and is ignored");
+        for part in self.elements(link, &text) {
             match qualified_name(self.doc, part) {
                 "inertial" => {
                     inertials += 1;
