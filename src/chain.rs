@@ -11,7 +11,6 @@ use crate::error::{ModelError, NameError, StateError, closest_name};
 use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
 use crate::transform::{NotRigid, Transform};
 use nalgebra::{Matrix4, Unit, Vector3};
-use std::borrow::Cow;
 use std::collections::HashMap;
 
 /// Index of a link in a [`Chain`] (valid only for the chain that produced it).
@@ -256,16 +255,24 @@ impl ChainBuilder {
     /// joint referring to a missing joint or forming a cycle, a zero axis, a non-finite number,
     /// reversed limits, a placement that is not rigid.
     pub fn build(&self) -> Result<Chain, ModelError> {
-        build(Cow::Borrowed(self))
+        let mut chain = build(self)?;
+        chain.source = self.clone();
+        Ok(chain)
     }
 
     /// [`ChainBuilder::build`] keeping this description in the chain rather than a copy of it
     /// (the loaders': a load then holds one description at a time), without the room its lists
-    /// grew while it was read.
-    pub(crate) fn into_chain(mut self) -> Result<Chain, ModelError> {
+    /// grew while it was read. On an error, the description comes back with it.
+    pub(crate) fn into_chain(mut self) -> Result<Chain, Box<(ModelError, ChainBuilder)>> {
         self.links.shrink_to_fit();
         self.joints.shrink_to_fit();
-        build(Cow::Owned(self))
+        match build(&self) {
+            Ok(mut chain) => {
+                chain.source = self;
+                Ok(chain)
+            }
+            Err(e) => Err(Box::new((e, self))),
+        }
     }
 }
 
@@ -1189,11 +1196,10 @@ fn norm(p: [f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
 }
 
-/// Validates `description` and lays it out for evaluation, in stages whose errors come in this
-/// order: names, each joint's numbers, the tree, mimic joints. The chain keeps `description`
-/// (copied only when it is borrowed and valid).
-fn build(description: Cow<'_, ChainBuilder>) -> Result<Chain, ModelError> {
-    let spec = description.as_ref();
+/// Validates `spec` and lays it out for evaluation, in stages whose errors come in this order:
+/// names, each joint's numbers, the tree, mimic joints. The chain's description is left empty
+/// for the caller to fill (with `spec` itself or a copy).
+fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     let (link_of, joint_of) = name_indices(spec)?;
     let axes = checked_axes(spec)?;
     let tree = Tree::new(spec, &link_of)?;
@@ -1280,7 +1286,7 @@ fn build(description: Cow<'_, ChainBuilder>) -> Result<Chain, ModelError> {
         serial_run,
         tail_start,
         reach,
-        source: description.into_owned(),
+        source: ChainBuilder::default(),
     })
 }
 

@@ -107,7 +107,8 @@ impl LoadErrorKind {
             LoadErrorKind::Yaml { line, column, .. }
             | LoadErrorKind::Urdf { line, column, .. }
             | LoadErrorKind::Xacro { line, column, .. }
-            | LoadErrorKind::Field { line, column, .. } => line.map(|l| (l, *column)),
+            | LoadErrorKind::Field { line, column, .. }
+            | LoadErrorKind::Model { line, column, .. } => line.map(|l| (l, *column)),
             _ => None,
         }
     }
@@ -211,8 +212,25 @@ pub enum LoadErrorKind {
         problem: FieldProblem,
     },
     /// The joints and links do not form a valid chain or tree.
-    #[error(transparent)]
-    Model(#[from] ModelError),
+    #[error("{}{error}", location_prefix(*line, *column))]
+    Model {
+        /// 1-based line of the joint or link element at fault, when the format gives one (URDF).
+        line: Option<u32>,
+        /// 1-based column of that element, when known.
+        column: Option<u32>,
+        /// What is wrong.
+        error: ModelError,
+    },
+}
+
+impl From<ModelError> for LoadErrorKind {
+    fn from(error: ModelError) -> Self {
+        LoadErrorKind::Model {
+            line: None,
+            column: None,
+            error,
+        }
+    }
 }
 
 fn too_large(size: Option<u64>, limit: u64) -> String {

@@ -80,7 +80,7 @@ fn urdf_message(text: &str) -> String {
 
 fn model(e: &LoadError) -> &ModelError {
     match e.kind() {
-        LoadErrorKind::Model(m) => m,
+        LoadErrorKind::Model { error, .. } => error,
         other => panic!("expected a model error, got {other:?}"),
     }
 }
@@ -563,6 +563,28 @@ fn urdf_topology_errors_name_the_joint_or_link() {
         matches!(model(&e), ModelError::UnknownMimicTarget { target, suggestion: Some(s), .. } if target == "Elbow" && s == "elbow"),
         "{e:?}"
     );
+}
+
+/// A URDF's model errors place the element at fault: the joint they name, the second of two
+/// links or joints with one name, the joint that gives a link its second parent, the second root.
+#[test]
+fn urdf_model_errors_give_the_element_s_place() {
+    for (file, place) in [
+        ("urdf/dangling.urdf", (4, 3)),
+        ("urdf/two_parents.urdf", (6, 3)),
+        ("urdf/duplicate_link.urdf", (3, 38)),
+        ("urdf/duplicate_joint.urdf", (5, 3)),
+        ("urdf/multiple_roots.urdf", (3, 40)),
+        ("urdf/mimic_missing.urdf", (4, 3)),
+    ] {
+        let e = load(file);
+        assert_eq!(e.position(), Some((place.0, Some(place.1))), "{file}");
+        assert!(
+            message(&e).contains(&format!("line {} column {}: ", place.0, place.1)),
+            "{file}: {}",
+            message(&e)
+        );
+    }
 }
 
 #[test]

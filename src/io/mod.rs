@@ -119,11 +119,18 @@ fn parse(text: &str, format: Format, default_name: &str) -> Result<Chain, LoadEr
     if is_blank(text, format) {
         return Err(LoadErrorKind::Empty);
     }
-    let builder = match format {
-        Format::DhYaml => dh::parse(text, default_name)?,
-        Format::Urdf => urdf::parse(text)?,
-    };
-    Ok(builder.into_chain()?)
+    match format {
+        Format::DhYaml => dh::parse(text, default_name)?
+            .into_chain()
+            .map_err(|failed| failed.0.into()),
+        Format::Urdf => {
+            let (builder, places) = urdf::parse(text)?;
+            builder.into_chain().map_err(|failed| {
+                let (e, builder) = *failed;
+                places.locate(text, &builder, e.into())
+            })
+        }
+    }
 }
 
 /// Nothing but whitespace (and, for YAML, comments).

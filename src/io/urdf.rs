@@ -31,8 +31,83 @@ const MAX_WARNINGS: usize = 20;
 /// The namespace URI of xacro, the ROS macro language.
 const XACRO_URI: &str = "http://www.ros.org/wiki/xacro";
 
-/// Parses URDF text into a chain description.
-pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
+/// Where the `<link>` and `<joint>` elements of a URDF start (byte offsets, in the order of the
+/// chain description's links and joints), to place the errors of building the chain.
+pub(crate) struct Places {
+    links: Vec<usize>,
+    joints: Vec<usize>,
+}
+
+impl Places {
+    /// `kind` with the line and column of the element its model error names, if it is one.
+    pub(crate) fn locate(
+        &self,
+        source: &str,
+        builder: &ChainBuilder,
+        kind: LoadErrorKind,
+    ) -> LoadErrorKind {
+        let LoadErrorKind::Model {
+            line: None, error, ..
+        } = kind
+        else {
+            return kind;
+        };
+        let nth_named = |names: &mut dyn Iterator<Item = &str>, name: &str, n: usize| {
+            names
+                .enumerate()
+                .filter(|(_, x)| *x == name)
+                .nth(n)
+                .map(|(i, _)| i)
+        };
+        let joint = |name: &str, n: usize| {
+            nth_named(
+                &mut builder.joints().iter().map(|j| j.name.as_str()),
+                name,
+                n,
+            )
+            .and_then(|i| self.joints.get(i))
+        };
+        let link = |name: &str, n: usize| {
+            nth_named(&mut builder.links().iter().map(String::as_str), name, n)
+                .and_then(|i| self.links.get(i))
+        };
+        use crate::error::ModelError as M;
+        let offset = match &error {
+            M::DuplicateJoint { name } => joint(name, 1),
+            M::DuplicateLink { name } => link(name, 1),
+            M::EmptyName { what: "joint" } => joint("", 0),
+            M::EmptyName { .. } => link("", 0),
+            M::TwoParents { second, .. } => joint(second, 0),
+            M::MultipleRoots { roots } => roots.get(1).and_then(|r| link(r, 0)),
+            M::UnknownLink { joint: j, .. }
+            | M::UnknownMimicTarget { joint: j, .. }
+            | M::BadMimicTarget { joint: j, .. }
+            | M::BadMimicKind { joint: j, .. }
+            | M::MimicCycle { joint: j }
+            | M::Cycle { joint: j }
+            | M::NonFinite { joint: j, .. }
+            | M::ZeroAxis { joint: j }
+            | M::ReversedLimits { joint: j, .. }
+            | M::NotRigid { joint: j, .. } => joint(j, 0),
+            _ => None,
+        };
+        let (line, column) = match offset {
+            Some(&at) => {
+                let (l, c) = line_column(source, at);
+                (Some(l), Some(c))
+            }
+            None => (None, None),
+        };
+        LoadErrorKind::Model {
+            line,
+            column,
+            error,
+        }
+    }
+}
+
+/// Parses URDF text into a chain description, with where its links and joints are.
+pub(crate) fn parse(source: &str) -> Result<(ChainBuilder, Places), LoadErrorKind> {
     let limit = (source.len() / BYTES_PER_NODE).max(MIN_NODES);
     if source.bytes().filter(|&b| b == b'<').count() > 2 * limit {
         return Err(too_many_nodes(limit));
@@ -84,16 +159,22 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
         });
     }
     let mut b = ChainBuilder::new(name);
+    let mut places = Places {
+        links: Vec::new(),
+        joints: Vec::new(),
+    };
     for node in reader.elements(robot, "text inside <robot> is not URDF and is ignored") {
         match qualified_name(&doc, node) {
             "link" => {
                 let name = reader.required(node, "name", "<link>")?;
                 reader.link_contents(node, name);
                 b.link(name);
+                places.links.push(node.range().start);
             }
             "joint" => {
                 let spec = reader.joint(node)?;
                 b.joint(spec);
+                places.joints.push(node.range().start);
             }
             "material" | "transmission" | "gazebo" | "ros2_control" | "sensor" => {}
             other if other.contains(':') => {}
@@ -105,7 +186,7 @@ pub(crate) fn parse(source: &str) -> Result<ChainBuilder, LoadErrorKind> {
     for warning in reader.notes.numbered(&doc) {
         b.warn(warning);
     }
-    Ok(b)
+    Ok((b, places))
 }
 
 /// Where an XML declaration starts that white space precedes, if the file starts so.
