@@ -1,7 +1,7 @@
 //! Typed errors: what loading a file can fail with ([`LoadError`]), what building a chain can
 //! fail with ([`ModelError`]), and what an evaluation can fail with ([`StateError`]).
 
-use crate::transform::NotRigid;
+use crate::model::transform::NotRigid;
 use std::path::{Path, PathBuf};
 
 /// An error and its sources on one line, `error: source: source…`, with any line breaks of

@@ -7,10 +7,10 @@
 //! kernels is their evaluation error; rounding made while loading a file (e.g. `rpy` to a matrix)
 //! is not part of it (the 50-digit files of the reference data measure that too).
 
-use crate::chain::{Body, Chain, LinkId, Placement};
-use crate::joint::Term;
 use crate::measure::worse;
-use crate::transform::Transform;
+use crate::model::chain::{Body, Chain, LinkId, Placement};
+use crate::model::joint::Term;
+use crate::model::transform::Transform;
 use dashu_float::FBig;
 use dashu_float::round::mode::HalfEven;
 
@@ -244,7 +244,7 @@ struct BigMotion {
 }
 
 /// Link poses, velocities and accelerations at `(q, q_dot, q_ddot)` (in [`Chain::links`]
-/// order), by the recursion of [`crate::kinematics`] in [`PRECISION_BITS`]-bit arithmetic.
+/// order), by the recursion of [`crate::eval::kinematics`] in [`PRECISION_BITS`]-bit arithmetic.
 ///
 /// # Panics
 /// If a vector does not have [`Chain::dof`] entries.

@@ -11,10 +11,10 @@
 //!   - {name: j1, link: link1, type: revolute, a: 0, alpha: 1.5708, d: 0.6718, theta: 0, limits: [-2.79, 2.79]}
 //! ```
 
-use crate::chain::{ChainBuilder, JointSpec};
 use crate::error::{FieldProblem, LoadErrorKind};
-use crate::joint::{JointKind, Limits};
-use crate::transform::Transform;
+use crate::model::chain::{ChainBuilder, JointSpec};
+use crate::model::joint::{JointKind, Limits};
+use crate::model::transform::Transform;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use serde_saphyr::{Location, Spanned, Tagged};

@@ -1,13 +1,17 @@
 //! Loading robot files: DH YAML (`.yaml`, `.yml`) and URDF (`.urdf`).
 
+pub mod convert;
 mod dh;
+pub mod input;
+pub mod render;
 mod urdf;
+pub(crate) mod xml;
 
 #[cfg(feature = "cli")]
 pub(crate) use urdf::beyond_kinematics;
 
-use crate::chain::Chain;
 use crate::error::{LoadError, LoadErrorKind};
+use crate::model::chain::Chain;
 use std::io::Read;
 use std::path::Path;
 

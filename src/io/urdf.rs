@@ -7,10 +7,10 @@
 //! change a pose: it is skipped, and what is malformed in it draws a warning, never a refusal.
 //! XML that is not well-formed is an error, stated as such.
 
-use crate::chain::{ChainBuilder, JointSpec};
 use crate::error::{FieldProblem, LoadErrorKind};
-use crate::joint::{JointKind, Limits};
-use crate::transform::Transform;
+use crate::model::chain::{ChainBuilder, JointSpec};
+use crate::model::joint::{JointKind, Limits};
+use crate::model::transform::Transform;
 use roxmltree::{Document, Node, ParsingOptions};
 
 /// Deepest element nesting accepted (real URDFs nest about 6 deep).

@@ -40,14 +40,14 @@ use super::{
     BatchError, LaneCheck, batch_rows, block_len, first_error, fold_blocks, lane_pose,
     par_chunks_checked, transpose_chunk, worth_parallel,
 };
-use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, LinkId, Placement};
-use crate::data::LimitPolicy;
-use crate::joint::Term;
-use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
-use crate::padded;
-use crate::transform::Transform;
-use crate::trig;
+use crate::eval::arith::{Arith, fma_dispatch};
+use crate::eval::data::LimitPolicy;
+use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
+use crate::eval::padded;
+use crate::eval::trig;
+use crate::model::chain::{Body, Chain, LinkId, Placement};
+use crate::model::joint::Term;
+use crate::model::transform::Transform;
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// Number of configurations evaluated together.
@@ -652,7 +652,7 @@ fma_dispatch!(#[allow(clippy::too_many_arguments)] fn chunk_path(chain: &Chain, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::arith::Separate;
+    use crate::eval::arith::Separate;
     use crate::measure::worse;
 
     /// Sixteen angles uniform in `[−scale, scale)`, from the xorshift generator `state`.

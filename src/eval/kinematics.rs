@@ -34,14 +34,14 @@
 //! ```
 //! (tangential, normal, Coriolis and local terms of eq. 2.75).
 
-use crate::arith::{Arith, Separate, fma_dispatch};
-use crate::chain::{Body, Chain, DenseLimits, LinkId, Placement};
-use crate::data::{Data, LimitPolicy};
 use crate::error::StateError;
-use crate::joint::{Motion, Term};
-use crate::kernel::{self, Lanes};
-use crate::padded::{self, Frame4, Rates4};
-use crate::transform::{Transform, add3, cross3, scale3, sub3};
+use crate::eval::arith::{Arith, Separate, fma_dispatch};
+use crate::eval::data::{Data, LimitPolicy};
+use crate::eval::kernel::{self, Lanes};
+use crate::eval::padded::{self, Frame4, Rates4};
+use crate::model::chain::{Body, Chain, DenseLimits, LinkId, Placement};
+use crate::model::joint::{Motion, Term};
+use crate::model::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
 use std::ops::Range;
 
@@ -149,7 +149,7 @@ impl<'a> Poses<'a> {
     #[must_use]
     pub fn joint_axis(
         &self,
-        joint: crate::chain::JointId,
+        joint: crate::model::chain::JointId,
     ) -> Option<(nalgebra::Point3<f64>, Vector3<f64>)> {
         let _ = self.chain.joint(joint);
         let body = self
@@ -911,7 +911,7 @@ pub fn forward_accelerations<'a>(
 }
 
 // ---------------------------------------------------------------------------------------------
-// Loops over the bodies, single configuration (the per-body work is in `crate::kernel`).
+// Loops over the bodies, single configuration (the per-body work is in `crate::eval::kernel`).
 
 #[inline(always)]
 fn poses_all_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]) {
@@ -936,7 +936,7 @@ fn kernel_check<'a>(
 }
 
 /// Whether `q` (of the chain's length) passes the check [`kernel_check`] chose: finiteness, or
-/// [`crate::chain::within`] the limits of each entry. Four entries per vector compare on the
+/// [`crate::model::chain::within`] the limits of each entry. Four entries per vector compare on the
 /// AVX paths (a loop over single entries stays scalar, about 40 instructions more on a
 /// seven-joint arm), each against one contiguous block of limit columns.
 #[inline(always)]
@@ -982,7 +982,7 @@ fn completed(rest: &[f64]) -> [f64; 4] {
 /// upper]`.
 #[inline(always)]
 fn admitted_block<A: Arith>(x: &[f64; 4], [s, o, l, u]: &[[f64; 4]; 4]) -> bool {
-    use crate::arith::Col;
+    use crate::eval::arith::Col;
     type C<A> = <A as Arith>::Col;
     let columns = [
         C::<A>::load(s),

@@ -1,9 +1,9 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
-use crate::chain::Chain;
-use crate::kernel::{LANES, Lanes};
-use crate::padded::Rates;
-use crate::transform::Transform;
+use crate::eval::kernel::{LANES, Lanes};
+use crate::eval::padded::Rates;
+use crate::model::chain::Chain;
+use crate::model::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -24,8 +24,8 @@ pub enum LimitPolicy {
 /// programming error and panics.
 #[derive(Clone, Debug)]
 pub struct Data {
-    /// Padded columns (see [`crate::padded`]).
-    pub(crate) world_from_body: Vec<crate::padded::Stored>,
+    /// Padded columns (see [`crate::eval::padded`]).
+    pub(crate) world_from_body: Vec<crate::eval::padded::Stored>,
     /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
     pub(crate) rates: Vec<Rates>,
     /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain, in
@@ -53,7 +53,7 @@ impl Data {
         // Whole chunks of lanes, at least one (constant-θ bodies read slot 0).
         let trig = chain.theta_gather.len().max(1);
         Data {
-            world_from_body: vec![crate::padded::stored(&Transform::IDENTITY); n],
+            world_from_body: vec![crate::eval::padded::stored(&Transform::IDENTITY); n],
             rates: vec![Rates::ZERO; n],
             sin: vec![Lanes([0.0; LANES]); trig],
             cos: vec![Lanes([1.0; LANES]); trig],

@@ -1,17 +1,17 @@
 //! The `kinechain` command line: argument parsing, library calls, output. `main.rs` only calls
 //! [`main`].
 
-use crate::batch::{BatchData, forward_kinematics_batch};
-use crate::chain::{Chain, LinkId};
-use crate::data::{Data, LimitPolicy};
 use crate::error::{error_chain, escape_controls};
-use crate::input::{InputError, joint_vector_from_str};
-use crate::kinematics::{
+use crate::eval::batch::{BatchData, forward_kinematics_batch};
+use crate::eval::data::{Data, LimitPolicy};
+use crate::eval::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_to, forward_velocities,
 };
+use crate::io::input::{InputError, joint_vector_from_str};
 use crate::measure::worse;
-use crate::transform::Transform;
+use crate::model::chain::{Chain, LinkId};
+use crate::model::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
 use serde::{Serialize, Serializer, ser::SerializeMap};
@@ -169,7 +169,7 @@ pub enum CliError {
     Name(#[from] crate::error::NameError),
     /// The robot cannot be written as URDF.
     #[error(transparent)]
-    Convert(#[from] crate::convert::ConvertError),
+    Convert(#[from] crate::io::convert::ConvertError),
     /// A result overflowed (finite joint values so large that a position, velocity or
     /// acceleration exceeds the `f64` range), which JSON could not print nor `render` draw.
     #[error(
@@ -348,7 +348,7 @@ fn load(path: &PathBuf) -> Result<Chain, CliError> {
 fn warn_dropped(path: &Path) {
     let dropped = std::fs::read_to_string(path)
         .ok()
-        .and_then(|text| crate::convert::dropped_from_urdf(&text));
+        .and_then(|text| crate::io::convert::dropped_from_urdf(&text));
     if let Some(dropped) = dropped {
         eprintln!(
             "warning: {}: the URDF written has the kinematics only; not written: {dropped}",
@@ -463,7 +463,7 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Convert { robot, output } => {
             refuse_overwrite(output.as_ref(), &robot)?;
             let chain = load(&robot)?;
-            let text = crate::convert::to_urdf(&chain)?;
+            let text = crate::io::convert::to_urdf(&chain)?;
             if crate::io::Format::from_path(&robot) == Some(crate::io::Format::Urdf) {
                 warn_dropped(&robot);
             }
@@ -483,17 +483,18 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
                 data.set_limit_policy(LimitPolicy::Ignore);
             }
             let poses = forward_kinematics(&chain, &mut data, &q)?;
-            let drawing = crate::render::svg(&chain, &poses).map_err(|e| CliError::NotFinite {
-                what: e.what,
-                place: e.place,
-            })?;
+            let drawing =
+                crate::io::render::svg(&chain, &poses).map_err(|e| CliError::NotFinite {
+                    what: e.what,
+                    place: e.place,
+                })?;
             write_output(output.as_ref(), &robot, &drawing, out)
         }
     }
 }
 
-fn limits_json(joint: &crate::chain::Joint) -> Value {
-    let one = |l: &Option<crate::joint::Limits>| match l {
+fn limits_json(joint: &crate::model::chain::Joint) -> Value {
+    let one = |l: &Option<crate::model::joint::Limits>| match l {
         Some(l) => json!([l.lower, l.upper]),
         None => Value::Null,
     };
@@ -506,8 +507,8 @@ fn limits_json(joint: &crate::chain::Joint) -> Value {
 
 /// The limits column of `info --format table`: `[lower, upper]` or `none`, a cylindrical
 /// joint's as `theta [..], d [..]`.
-fn limits_text(joint: &crate::chain::Joint) -> String {
-    let one = |l: &Option<crate::joint::Limits>| match l {
+fn limits_text(joint: &crate::model::chain::Joint) -> String {
+    let one = |l: &Option<crate::model::joint::Limits>| match l {
         Some(l) => format!("[{}, {}]", l.lower, l.upper),
         None => "none".to_string(),
     };
@@ -891,7 +892,7 @@ enum Orientation {
 /// row by row, quaternion `w x y z`, `roll pitch yaw`, `phi theta psi`, the axis then the angle,
 /// `γ1 γ2 γ3`); `None` where the representation is undefined (a singularity).
 fn orientation_values(a: &nalgebra::Matrix3<f64>, kind: Orientation) -> Option<Coordinates> {
-    use crate::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
+    use crate::orientation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
     match kind {
         Orientation::Matrix => Some(Coordinates::new([
             a.m11, a.m12, a.m13, a.m21, a.m22, a.m23, a.m31, a.m32, a.m33,
@@ -1688,7 +1689,7 @@ fn fk_batch<R: std::io::Read>(
                 return Ok(Row::Held);
             }
             if std::mem::take(&mut first)
-                && let Some(order) = crate::input::csv_header(chain, line)
+                && let Some(order) = crate::io::input::csv_header(chain, line)
             {
                 return Ok(match order {
                     Ok(order) => {
@@ -1837,14 +1838,14 @@ fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
     }
 }
 
-/// One batch line through [`crate::input::parse_batch_row`] (rows of numbers in the order of
+/// One batch line through [`crate::io::input::parse_batch_row`] (rows of numbers in the order of
 /// `header`).
 fn batch_configuration(
     chain: &Chain,
     line: &str,
-    header: Option<&crate::input::CsvHeader>,
+    header: Option<&crate::io::input::CsvHeader>,
 ) -> Result<Configuration, CliError> {
-    let l = crate::input::parse_batch_row(chain, line, header)?;
+    let l = crate::io::input::parse_batch_row(chain, line, header)?;
     Ok(Configuration {
         q: l.q,
         qd: l.q_dot,
@@ -1857,7 +1858,7 @@ const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
 
 /// Joint evaluations of the batch that `bench`'s two-thread rows time (≈70 µs of one thread's
 /// work, some 5 000 configurations of a seven-joint arm): well above
-/// [`crate::batch::PARALLEL_WORK`], yet small enough for its frames to stay in the last-level
+/// [`crate::eval::batch::PARALLEL_WORK`], yet small enough for its frames to stay in the last-level
 /// cache.
 const THREADED_ROWS_WORK: usize = 40_000;
 
@@ -1978,12 +1979,12 @@ impl<'a> Workload<'a> {
         Data::new(self.chain).with_limit_policy(LimitPolicy::Ignore)
     }
 
-    fn batch_data(&self) -> crate::batch::BatchData {
-        crate::batch::BatchData::new(self.chain).with_limit_policy(LimitPolicy::Ignore)
+    fn batch_data(&self) -> crate::eval::batch::BatchData {
+        crate::eval::batch::BatchData::new(self.chain).with_limit_policy(LimitPolicy::Ignore)
     }
 
-    fn single_data(&self) -> crate::batch::single_precision::BatchData {
-        crate::batch::single_precision::BatchData::new(self.chain)
+    fn single_data(&self) -> crate::eval::batch::single_precision::BatchData {
+        crate::eval::batch::single_precision::BatchData::new(self.chain)
             .with_limit_policy(LimitPolicy::Ignore)
     }
 
@@ -1995,9 +1996,10 @@ impl<'a> Workload<'a> {
         let mut errors = [(0.0_f64, 0.0_f64); 2];
         let mut d = self.data();
         let mut b32 = self.single_data();
-        let rough =
-            crate::batch::single_precision::forward_kinematics_batch(chain, &mut b32, self.flat)
-                .map_err(|e| e.source)?;
+        let rough = crate::eval::batch::single_precision::forward_kinematics_batch(
+            chain, &mut b32, self.flat,
+        )
+        .map_err(|e| e.source)?;
         for (i, q) in self.qs.iter().enumerate() {
             let exact = crate::reference::link_poses(chain, q);
             let poses = forward_kinematics(chain, &mut d, q)?;
@@ -2080,7 +2082,7 @@ impl<'a> Workload<'a> {
     /// The batch rows of `--level pose`: all links on one thread in `f64` and `f32`, all links
     /// of the repeated batch on the pool, and the end link alone on one thread and on the pool.
     fn batch_methods(&self) -> Vec<Method<'a>> {
-        use crate::batch::{
+        use crate::eval::batch::{
             forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
             single_precision,
         };
@@ -2164,7 +2166,7 @@ impl<'a> Workload<'a> {
     /// The incremental update moving only the last entry of `q` on the end link's path, from
     /// the first configuration's other entries; `None` if no joint moves the end link.
     fn incremental_method(&self) -> Option<Method<'a>> {
-        use crate::kinematics::forward_kinematics_incremental;
+        use crate::eval::kinematics::forward_kinematics_incremental;
         let Workload { chain, qs, end, .. } = *self;
         let last = last_variable_to(chain, end)?;
         let (joint, component) = chain.variables().nth(last)?;
@@ -2413,7 +2415,7 @@ fn k_method<'a>(
             let robot = k::Chain::<f64>::from_urdf_file(path).ok()?;
             (robot, None, "k 0.32, update_transforms")
         } else {
-            let text = crate::convert::to_urdf(chain).ok()?;
+            let text = crate::io::convert::to_urdf(chain).ok()?;
             let written = Chain::from_urdf_str(&text).ok()?;
             // Through a file: `k` parses URDF with another version of `urdf-rs`.
             let file =

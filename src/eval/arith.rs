@@ -8,8 +8,8 @@
 //! bit; both are within the accuracy the tests assert.
 
 #[cfg(target_arch = "x86_64")]
-use crate::kernel::Z8;
-use crate::kernel::{LaneNum, Lanes};
+use crate::eval::kernel::Z8;
+use crate::eval::kernel::{LaneNum, Lanes};
 use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Multiply–add policy of a kernel instantiation.
@@ -53,7 +53,7 @@ pub(crate) trait Col: Copy {
     fn yzx(self) -> Self;
     /// Entries `[2, 0, 1, 3]`.
     fn zxy(self) -> Self;
-    /// Whether every entry `x` is [`crate::chain::within`] the limits of the same entry of
+    /// Whether every entry `x` is [`crate::model::chain::within`] the limits of the same entry of
     /// `(scale, offset, lower, upper)`.
     fn admitted(x: Self, limits: [Self; 4]) -> bool;
 }
@@ -83,7 +83,7 @@ impl Arith for Fused {
     #[cfg(not(target_arch = "x86_64"))]
     type Col = Portable<Fused>;
     #[cfg(target_arch = "x86_64")]
-    type Lanes = crate::kernel::Y4;
+    type Lanes = crate::eval::kernel::Y4;
     #[cfg(not(target_arch = "x86_64"))]
     type Lanes = Lanes;
     const FUSED: bool = true;
@@ -128,7 +128,10 @@ impl<A: Arith> Col for Portable<A> {
     fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
         let mut ok = true;
         for i in 0..4 {
-            ok &= crate::chain::within(x.0[i], (scale.0[i], offset.0[i], lower.0[i], upper.0[i]));
+            ok &= crate::model::chain::within(
+                x.0[i],
+                (scale.0[i], offset.0[i], lower.0[i], upper.0[i]),
+            );
         }
         ok
     }
@@ -191,7 +194,7 @@ impl<A: Arith> Col for Portable<A> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx(std::arch::x86_64::__m256d);
 
-/// [`crate::chain::within`] for four values at once, each against the same entry of
+/// [`crate::model::chain::within`] for four values at once, each against the same entry of
 /// `(scale, offset, lower, upper)`: the product and the sum rounded separately, then three
 /// compares. Used by [`Avx`] and the AVX2 batch lanes.
 #[cfg(target_arch = "x86_64")]
@@ -522,7 +525,7 @@ fn detect() -> Isa {
 /// brings no wider vectors; the two give the same bits).
 macro_rules! fma_dispatch {
     (avx2 $($function:tt)*) => {
-        $crate::arith::fma_dispatch!(@wide false, $($function)*);
+        $crate::eval::arith::fma_dispatch!(@wide false, $($function)*);
     };
     (@wide $wide:literal, $(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $generic:ident) => {
         $(#[$meta])*
@@ -531,32 +534,32 @@ macro_rules! fma_dispatch {
             {
                 #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2,fma")]
                 fn with_avx512($($arg: $ty),*) $(-> $ret)? {
-                    $generic::<$crate::arith::Fused512>($($arg),*)
+                    $generic::<$crate::eval::arith::Fused512>($($arg),*)
                 }
                 #[target_feature(enable = "avx2,fma")]
                 fn with_avx2($($arg: $ty),*) $(-> $ret)? {
-                    $generic::<$crate::arith::Fused>($($arg),*)
+                    $generic::<$crate::eval::arith::Fused>($($arg),*)
                 }
-                match $crate::arith::isa() {
+                match $crate::eval::arith::isa() {
                     // SAFETY: `isa()` reports these features only when the CPU has them.
-                    $crate::arith::Isa::Avx512 if $wide => return unsafe { with_avx512($($arg),*) },
+                    $crate::eval::arith::Isa::Avx512 if $wide => return unsafe { with_avx512($($arg),*) },
                     // SAFETY: as above (AVX-512 is reported only with AVX2 and FMA).
-                    $crate::arith::Isa::Avx512 | $crate::arith::Isa::Avx2 => {
+                    $crate::eval::arith::Isa::Avx512 | $crate::eval::arith::Isa::Avx2 => {
                         return unsafe { with_avx2($($arg),*) }
                     }
-                    $crate::arith::Isa::Baseline => {}
+                    $crate::eval::arith::Isa::Baseline => {}
                 }
             }
             // Not inlined, so that the dispatch stays a few instructions (no frame of its own).
             #[inline(never)]
             fn baseline($($arg: $ty),*) $(-> $ret)? {
-                $generic::<$crate::arith::Separate>($($arg),*)
+                $generic::<$crate::eval::arith::Separate>($($arg),*)
             }
             baseline($($arg),*)
         }
     };
     ($($function:tt)*) => {
-        $crate::arith::fma_dispatch!(@wide true, $($function)*);
+        $crate::eval::arith::fma_dispatch!(@wide true, $($function)*);
     };
 }
 pub(crate) use fma_dispatch;

@@ -5,15 +5,15 @@
 //! One body (a moving joint with its constant placements folded in) is evaluated as
 //! `frame = parent · pre · M(θ, d) · post` (eq. 2.119 for `M`). The batch kernels use these
 //! directly; single configurations use the same operations on padded columns
-//! ([`crate::padded`]), which also holds the rate recursion.
+//! ([`crate::eval::padded`]), which also holds the rate recursion.
 
 // Index loops over lanes and rows are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
 
-use crate::arith::Arith;
-use crate::chain::{Body, CheapPlacement, Placement, ZTail};
-use crate::joint::{Axis, Term};
-use crate::trig;
+use crate::eval::arith::Arith;
+use crate::eval::trig;
+use crate::model::chain::{Body, CheapPlacement, Placement, ZTail};
+use crate::model::joint::{Axis, Term};
 use std::ops::{Add, Mul, Neg, Sub};
 
 /// A number the kernels compute with.
@@ -187,7 +187,7 @@ pub(crate) trait LaneNum: Num {
     fn stream(self, x: &mut Lanes) {
         self.put(x, 0);
     }
-    /// Whether every lane `x` is [`crate::chain::within`] `(scale, offset, lower, upper)`.
+    /// Whether every lane `x` is [`crate::model::chain::within`] `(scale, offset, lower, upper)`.
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
     /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: entry `j` of
     /// rows `rows[0..8]`, in the layout [`LaneNum::cast`] reads.
@@ -226,7 +226,7 @@ impl LaneNum for Lanes {
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
         let mut ok = true;
         for x in x.0 {
-            ok &= crate::chain::within(x, (scale, offset, lower, upper));
+            ok &= crate::model::chain::within(x, (scale, offset, lower, upper));
         }
         ok
     }
@@ -301,7 +301,7 @@ pub(crate) fn fence_streams() {
     }
 }
 
-/// Four `f64` in one AVX register: the lane type of [`crate::arith::Fused`] (AVX2), two per
+/// Four `f64` in one AVX register: the lane type of [`crate::eval::arith::Fused`] (AVX2), two per
 /// [`Lanes`]. A frame of eight-lane values would be 24 of the 16 registers, and spilled at
 /// every step; one of four fits.
 #[cfg(target_arch = "x86_64")]
@@ -345,7 +345,7 @@ impl LaneNum for Y4 {
             Y4::splat(lower).0,
             Y4::splat(upper).0,
         ];
-        crate::arith::within_all_256(x.0, limits)
+        crate::eval::arith::within_all_256(x.0, limits)
     }
     /// Part 0 (rows 0..4) of every entry, then part 1: four entries of four rows at a time,
     /// read as whole vectors (masked past the end of a row) and transposed in registers.
@@ -418,7 +418,7 @@ impl Y4 {
 
 /// Eight `f64` in one AVX-512 register: [`Lanes`] for kernels compiled with `avx512f`, where an
 /// array of eight would be assembled and spilled through memory (a frame is twelve of them, and
-/// fits the 32 registers). Only the lane type of [`crate::arith::Fused512`].
+/// fits the 32 registers). Only the lane type of [`crate::eval::arith::Fused512`].
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
@@ -644,7 +644,7 @@ pub(crate) struct Frame<N> {
 
 impl<N: Num> Frame<N> {
     #[inline(always)]
-    pub(crate) fn splat(f: &crate::transform::Transform) -> Self {
+    pub(crate) fn splat(f: &crate::model::transform::Transform) -> Self {
         Frame {
             r: f.r.map(|c| c.map(N::splat)),
             p: f.p.map(N::splat),
@@ -652,10 +652,10 @@ impl<N: Num> Frame<N> {
     }
 }
 
-impl From<Frame<f64>> for crate::transform::Transform {
+impl From<Frame<f64>> for crate::model::transform::Transform {
     #[inline(always)]
     fn from(f: Frame<f64>) -> Self {
-        crate::transform::Transform { r: f.r, p: f.p }
+        crate::model::transform::Transform { r: f.r, p: f.p }
     }
 }
 
@@ -956,7 +956,7 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
 ) -> Frame<N> {
     let mut f = match parent {
         Some(f) => *f,
-        None => Frame::splat(&crate::transform::Transform::IDENTITY),
+        None => Frame::splat(&crate::model::transform::Transform::IDENTITY),
     };
     match &body.pre_steps {
         Some(p) => cheap_place::<N, A>(&mut f, p),
@@ -977,14 +977,14 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
 /// (a value assembled lane by lane in memory and read back as a vector would stall the load).
 #[inline(always)]
 pub(crate) fn all_sin_cos<A: Arith>(
-    gather: &[crate::chain::ThetaGather],
+    gather: &[crate::model::chain::ThetaGather],
     q: &[f64],
     sin: &mut [f64],
     cos: &mut [f64],
 ) {
     if A::WIDE
         && let [g] = gather
-        && crate::arith::narrow_trig()
+        && crate::eval::arith::narrow_trig()
     {
         // Two 256-bit halves: the same operations lane by lane, so the same bits (see
         // `narrow_trig` for when and why).
@@ -1011,7 +1011,7 @@ pub(crate) fn all_sin_cos<A: Arith>(
 /// (`W` entries each), in one vector of `W` lanes.
 #[inline(always)]
 fn gathered_sin_cos<A: Arith, const W: usize>(
-    g: &crate::chain::ThetaGather,
+    g: &crate::model::chain::ThetaGather,
     first: usize,
     q: &[f64],
     s_out: &mut [f64],
@@ -1032,8 +1032,8 @@ fn gathered_sin_cos<A: Arith, const W: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::arith::Separate;
-    use crate::transform::Transform;
+    use crate::eval::arith::Separate;
+    use crate::model::transform::Transform;
 
     fn max_diff(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> f64 {
         a.iter()

@@ -2,7 +2,7 @@
 //! along it, the cylindrical joint of Shabana eq. (2.119) of which revolute and prismatic joints
 //! are the special cases with `d` or `θ` constant.
 
-use crate::rotation::{rotation_matrix, skew};
+use crate::orientation::{rotation_matrix, skew};
 use nalgebra::{Matrix4, Unit, Vector3};
 
 /// The closed set of joint kinds kinechain models.
@@ -124,26 +124,6 @@ impl Axis {
             _ => Axis::General(v),
         }
     }
-}
-
-/// Normalises an axis given in a file or by a caller; `None` if it is zero or not finite.
-pub(crate) fn normalize_axis(v: [f64; 3]) -> Option<[f64; 3]> {
-    if v.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
-    // Exact coordinate axes stay exact (a norm computed in floating point could round).
-    let nonzero = v.iter().filter(|x| **x != 0.0).count();
-    if nonzero == 1 {
-        return Some(v.map(|x| if x == 0.0 { 0.0 } else { x.signum() }));
-    }
-    let scale = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    if scale == 0.0 {
-        return None;
-    }
-    // Scale first so that tiny or huge components neither underflow nor overflow.
-    let w = v.map(|x| x / scale);
-    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    Some(w.map(|x| x / n))
 }
 
 /// One scalar of a joint's motion (θ or d): a constant, or `scale * q[index] + offset`.
@@ -299,16 +279,6 @@ pub fn joint_transform_ddot(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn axes_normalise_and_zero_axes_are_refused() {
-        assert_eq!(normalize_axis([0.0, -3.0, 0.0]), Some([0.0, -1.0, 0.0]));
-        // Tiny components must not underflow to a zero norm; the result is within 1 ulp.
-        let v = normalize_axis([1e-300, 1e-300, 0.0]).unwrap_or([0.0; 3]);
-        assert!((v[0] - std::f64::consts::FRAC_1_SQRT_2).abs() <= 1.2e-16);
-        assert_eq!(normalize_axis([0.0; 3]), None);
-        assert_eq!(normalize_axis([f64::NAN, 1.0, 0.0]), None);
-    }
 
     #[test]
     fn each_kind_reports_its_freedoms_and_its_name() {

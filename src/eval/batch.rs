@@ -5,15 +5,15 @@
 //! `i`). Results are the same as [`forward_kinematics`](crate::forward_kinematics) gives for each
 //! configuration, to the last bit on the same instruction set.
 
-use crate::arith::{Arith, fma_dispatch};
-use crate::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZTail};
-use crate::data::LimitPolicy;
 use crate::error::StateError;
-use crate::joint::Term;
-use crate::kernel::{self, Frame, LANES, LaneNum, Lanes, Num, by_shape};
-use crate::kinematics::{all_valid, check_q};
-use crate::padded;
-use crate::transform::Transform;
+use crate::eval::arith::{Arith, fma_dispatch};
+use crate::eval::data::LimitPolicy;
+use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num, by_shape};
+use crate::eval::kinematics::{all_valid, check_q};
+use crate::eval::padded;
+use crate::model::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZTail};
+use crate::model::joint::Term;
+use crate::model::transform::Transform;
 use std::sync::{Mutex, PoisonError};
 
 /// `len` and `is_empty` of result views whose `data` counts the batch's configurations.
@@ -44,7 +44,7 @@ macro_rules! block_eval {
     ($name:ident, $width:expr, $frame:ty) => {
         struct $name;
 
-        impl $crate::batch::BlockEval for $name {
+        impl $crate::eval::batch::BlockEval for $name {
             type Data = BatchData;
             type Poses<'a> = BatchPoses<'a>;
             const WIDTH: usize = $width;
@@ -203,7 +203,7 @@ impl BatchData {
 /// as was a plain loop that streams twelve lines between a few arithmetic instructions, and at
 /// best 13% faster than two with ordinary stores (0.73 → 0.63 ms).
 fn streams(frames: usize) -> bool {
-    frames.saturating_mul(size_of::<Frame<Lanes>>()) > crate::arith::last_level_cache_bytes()
+    frames.saturating_mul(size_of::<Frame<Lanes>>()) > crate::eval::arith::last_level_cache_bytes()
 }
 
 /// The length of the all-links kernel's `kept` when it streams: up to the last body whose frame a
@@ -254,7 +254,7 @@ fn batch_rows(
     qs: &[f64],
     check: bool,
 ) -> Result<usize, BatchError> {
-    crate::data::assert_buffers_match(what, bodies, dof, chain);
+    crate::eval::data::assert_buffers_match(what, bodies, dof, chain);
     let n = configurations(chain, qs)?;
     if check && !all_valid(chain, qs, policy) {
         first_error(chain, qs, policy)?;
@@ -1053,8 +1053,8 @@ fn block_motion<A: Arith, const MOTION: u8>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::Data;
-    use crate::kinematics::forward_kinematics;
+    use crate::eval::data::Data;
+    use crate::eval::kinematics::forward_kinematics;
 
     /// A serial arm, and two chains whose branches read a frame again (the Panda's second finger
     /// hangs from the hand; TIAGo's tree branches too), each with its file and `q` in `n`
@@ -1073,7 +1073,9 @@ mod tests {
                 let chain = Chain::from_file(root.join(file)).unwrap();
                 let frame_bytes = size_of::<Frame<Lanes>>() / LANES;
                 let past_cache = || {
-                    crate::arith::last_level_cache_bytes() / (frame_bytes * chain.bodies.len()) + 13
+                    crate::eval::arith::last_level_cache_bytes()
+                        / (frame_bytes * chain.bodies.len())
+                        + 13
                 };
                 let n = n.unwrap_or_else(past_cache);
                 let qs = (0..n * chain.dof())
@@ -1099,7 +1101,7 @@ mod tests {
                 let mut q = vec![Lanes::splat(0.0); dof];
                 for (c, out) in frames.chunks_exact_mut(bodies).enumerate() {
                     let ok = if baseline {
-                        chunk_poses_generic::<crate::arith::Separate>(
+                        chunk_poses_generic::<crate::eval::arith::Separate>(
                             &chain, None, out, &mut q, &qs, c, stream, &mut kept,
                         )
                     } else {
@@ -1132,7 +1134,7 @@ mod tests {
             let n = qs.len() / dof;
             assert!(streams(n.div_ceil(LANES) * bodies), "{file}");
             // Frames that fill the cache exactly are written through it.
-            let fill = crate::arith::last_level_cache_bytes() / size_of::<Frame<Lanes>>();
+            let fill = crate::eval::arith::last_level_cache_bytes() / size_of::<Frame<Lanes>>();
             assert!(!streams(fill) && streams(fill + 1));
             assert!(chain.bodies.iter().any(|b| b.branches) == (file != "robots/ur5.yaml"));
             let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);

@@ -14,10 +14,11 @@
 //! frame), and a `<limit>`'s required effort and velocity as 0, which a comment at the top of the
 //! file states. Fixed and continuous joints get no `<limit>`, and fixed joints no `<axis>`.
 
-use crate::chain::{Chain, JointSpec};
-use crate::joint::{JointKind, Limits, normalize_axis};
-use crate::rotation::Rpy;
-use crate::transform::Transform;
+use crate::model::chain::{Chain, JointSpec};
+use crate::model::joint::{JointKind, Limits};
+use crate::model::transform::Transform;
+use crate::orientation::Rpy;
+use crate::orientation::normalize_axis;
 use nalgebra::{Unit, Vector3};
 use std::fmt::Write as _;
 
@@ -78,12 +79,12 @@ fn triple(x: [f64; 3]) -> String {
     format!("{a} {b} {c}")
 }
 
-/// `text` for an attribute value ([`crate::xml::escape`]).
+/// `text` for an attribute value ([`crate::io::xml::escape`]).
 ///
 /// # Errors
 /// [`ConvertError::NotXml`] for a character that no XML 1.0 document can hold.
 fn escaped(text: &str) -> Result<String, ConvertError> {
-    crate::xml::escape(text).map_err(|character| ConvertError::NotXml {
+    crate::io::xml::escape(text).map_err(|character| ConvertError::NotXml {
         name: text.to_string(),
         character,
     })
@@ -94,7 +95,7 @@ fn screw(axis: [f64; 3], theta: f64, d: f64) -> Transform {
     let v = normalize_axis(axis).unwrap_or([0.0, 0.0, 1.0]);
     let u = Unit::new_unchecked(Vector3::from(v));
     Transform::from_parts(
-        &crate::rotation::rotation_matrix(&u, theta),
+        &crate::orientation::rotation_matrix(&u, theta),
         &(u.into_inner() * d),
     )
 }
@@ -147,7 +148,7 @@ impl Writer {
         origin: &Transform,
         axis: [f64; 3],
         limits: Option<Limits>,
-        mimic: Option<&crate::chain::MimicSpec>,
+        mimic: Option<&crate::model::chain::MimicSpec>,
     ) -> Result<(), ConvertError> {
         if !self.names.insert(format!("joint:{name}")) {
             return Err(ConvertError::NameClash { name });

@@ -2,9 +2,9 @@
 //! or an object keyed by joint name that names every independent joint exactly once
 //! (`{"j1": 0.1, "j5": [0.2, 0.05]}`; a cylindrical joint takes `[θ, d]`).
 
-use crate::chain::Chain;
 use crate::error::did_you_mean;
-use crate::joint::JointKind;
+use crate::model::chain::Chain;
+use crate::model::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
 use std::cell::RefCell;
@@ -221,7 +221,7 @@ fn independent_joint<'c>(
     chain: &'c Chain,
     name: &str,
     what: &'static str,
-) -> Result<(&'c crate::chain::Joint, usize), InputError> {
+) -> Result<(&'c crate::model::chain::Joint, usize), InputError> {
     let id = chain.joint_id(name).map_err(|e| InputError::UnknownJoint {
         what,
         name: name.to_string(),

@@ -13,9 +13,9 @@
 //! with the limits ignored): the geometry is laid out in units of a power of two near the largest
 //! coordinate, which scales every step exactly and keeps squares and spans within `f64`.
 
-use crate::chain::{Chain, LinkId};
-use crate::kinematics::Poses;
-use crate::xml::escape_shown;
+use crate::eval::kinematics::Poses;
+use crate::io::xml::escape_shown;
+use crate::model::chain::{Chain, LinkId};
 use nalgebra::{Point3, Vector3};
 use std::fmt::Write as _;
 
@@ -134,7 +134,7 @@ pub fn svg(chain: &Chain, poses: &Poses<'_>) -> Result<String, NotFinite> {
     }
     let mut axes: Vec<(String, Point3<f64>, Vector3<f64>)> = Vec::new();
     for (i, j) in chain.joints().iter().enumerate() {
-        if let Some((p, z)) = poses.joint_axis(crate::chain::JointId(i)) {
+        if let Some((p, z)) = poses.joint_axis(crate::model::chain::JointId(i)) {
             if p.iter().chain(z.iter()).any(|x| !x.is_finite()) {
                 return Err(NotFinite {
                     what: "axis",

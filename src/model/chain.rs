@@ -8,8 +8,9 @@
 //! at a constant offset, so a fixed joint costs nothing unless its link is asked for.
 
 use crate::error::{ModelError, NameError, StateError, closest_name};
-use crate::joint::{Axis, JointKind, Limits, Motion, Term, normalize_axis};
-use crate::transform::{NotRigid, Transform};
+use crate::model::joint::{Axis, JointKind, Limits, Motion, Term};
+use crate::model::transform::{NotRigid, Transform};
+use crate::orientation::normalize_axis;
 use nalgebra::{Matrix4, Unit, Vector3};
 use std::collections::HashMap;
 
@@ -314,19 +315,19 @@ impl JointScrew {
     /// `T` of eq. (2.119).
     #[must_use]
     pub fn transform(&self) -> Matrix4<f64> {
-        crate::joint::joint_transform(&self.axis, self.theta, self.d)
+        crate::model::joint::joint_transform(&self.axis, self.theta, self.d)
     }
 
     /// `Ṫ` of eq. (2.122).
     #[must_use]
     pub fn transform_dot(&self) -> Matrix4<f64> {
-        crate::joint::joint_transform_dot(&self.axis, self.theta, self.theta_dot, self.d_dot)
+        crate::model::joint::joint_transform_dot(&self.axis, self.theta, self.theta_dot, self.d_dot)
     }
 
     /// `T̈` of eq. (2.127).
     #[must_use]
     pub fn transform_ddot(&self) -> Matrix4<f64> {
-        crate::joint::joint_transform_ddot(
+        crate::model::joint::joint_transform_ddot(
             &self.axis,
             self.theta,
             self.theta_dot,
@@ -535,9 +536,9 @@ pub(crate) struct Body {
     pub(crate) pre_frame: Transform,
     /// The joint axis in the parent body frame, `R_pre v`.
     pub(crate) axis_in_parent: [f64; 3],
-    /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::padded`].
-    pub(crate) pre4: crate::padded::Stored,
-    pub(crate) axis4: crate::padded::C4,
+    /// `pre_frame` and `axis_in_parent` with padded columns, for [`crate::eval::padded`].
+    pub(crate) pre4: crate::eval::padded::Stored,
+    pub(crate) axis4: crate::eval::padded::C4,
     /// `pre` as shape codes when it is at most a translation and a rotation about x (DH rows,
     /// most URDF arms): the kernels take one jump instead of matching on its kind.
     pub(crate) pre_steps: Option<CheapPlacement>,
@@ -684,7 +685,7 @@ impl ZTail {
     }
 
     fn new(motion: &Motion, post: &Placement) -> Option<ZTail> {
-        if motion.axis != crate::joint::Axis::Z {
+        if motion.axis != crate::model::joint::Axis::Z {
             return None;
         }
         let kind = |t: &Term| match *t {
@@ -722,7 +723,7 @@ impl Body {
         let pre_frame = pre.to_transform();
         let axis_in_parent = pre_frame.apply(motion.axis.vector());
         let no_post = post == Placement::Identity;
-        let about_z = motion.axis == crate::joint::Axis::Z;
+        let about_z = motion.axis == crate::model::joint::Axis::Z;
         Body {
             parent,
             follows_previous: false,
@@ -731,7 +732,7 @@ impl Body {
             motion,
             post,
             joint,
-            pre4: crate::padded::stored(&pre_frame),
+            pre4: crate::eval::padded::stored(&pre_frame),
             axis4: [axis_in_parent[0], axis_in_parent[1], axis_in_parent[2], 0.0],
             pre_steps: CheapPlacement::new(&pre),
             z_tail: ZTail::new(&motion, &post),
@@ -748,13 +749,13 @@ impl Body {
     }
 }
 
-/// How to compute θ of [`LANES`](crate::kernel::LANES) consecutive bodies from `q`:
+/// How to compute θ of [`LANES`](crate::eval::kernel::LANES) consecutive bodies from `q`:
 /// `θ_i = scale_i · q[index_i] + offset_i` (scale 0 where θ is constant or past the last body).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ThetaGather {
-    pub(crate) index: [usize; crate::kernel::LANES],
-    pub(crate) scale: [f64; crate::kernel::LANES],
-    pub(crate) offset: [f64; crate::kernel::LANES],
+    pub(crate) index: [usize; crate::eval::kernel::LANES],
+    pub(crate) scale: [f64; crate::eval::kernel::LANES],
+    pub(crate) offset: [f64; crate::eval::kernel::LANES],
 }
 
 /// One entry of `q` and what it drives.
@@ -861,7 +862,7 @@ pub(crate) fn within(x: f64, (scale, offset, lower, upper): (f64, f64, f64, f64)
 ///
 /// Build one from a file with [`Chain::from_file`], from text with
 /// [`Chain::from_dh_yaml_str`] / [`Chain::from_urdf_str`], or programmatically with
-/// [`ChainBuilder`]. Evaluate it with the free functions of [`crate::kinematics`] into a
+/// [`ChainBuilder`]. Evaluate it with the free functions of [`crate::eval::kinematics`] into a
 /// [`Data`](crate::Data) buffer.
 #[derive(Clone, Debug)]
 pub struct Chain {
@@ -869,7 +870,7 @@ pub struct Chain {
     joints: Vec<Joint>,
     links: Vec<Link>,
     pub(crate) bodies: Vec<Body>,
-    /// θ of the bodies, [`LANES`](crate::kernel::LANES) at a time.
+    /// θ of the bodies, [`LANES`](crate::eval::kernel::LANES) at a time.
     pub(crate) theta_gather: Vec<ThetaGather>,
     /// Each body's entry in the sines and cosines `theta_gather` yields (0 for a constant θ).
     pub(crate) trig_slot: Vec<usize>,
@@ -1634,8 +1635,11 @@ fn assemble(
         let (theta, d) = joint_terms(js, first, mimic[j], q_index);
 
         if js.kind == JointKind::Fixed {
-            let motion =
-                crate::kinematics::constant_motion(&Motion::new(Axis::from_unit(axis), theta, d));
+            let motion = crate::eval::kinematics::constant_motion(&Motion::new(
+                Axis::from_unit(axis),
+                theta,
+                d,
+            ));
             let placement = compose(compose(compose(offset, origin), motion), post);
             link_carrier[child] = (carrier, placement);
             continue;
@@ -1796,12 +1800,12 @@ impl EvalTables {
             .find(|&k| n - k <= 4 && count - turning_before[k] <= 2)
             .unwrap_or(n);
         let theta_gather = turning
-            .chunks(crate::kernel::LANES)
+            .chunks(crate::eval::kernel::LANES)
             .map(|chunk| {
                 let mut g = ThetaGather {
-                    index: [0; crate::kernel::LANES],
-                    scale: [0.0; crate::kernel::LANES],
-                    offset: [0.0; crate::kernel::LANES],
+                    index: [0; crate::eval::kernel::LANES],
+                    scale: [0.0; crate::eval::kernel::LANES],
+                    offset: [0.0; crate::eval::kernel::LANES],
                 };
                 for (i, b) in chunk.iter().enumerate() {
                     if let Term::Var {
@@ -2094,7 +2098,10 @@ mod tests {
             };
             let base = crate::measure::configurations(chain, 1, 3).remove(0);
             assert_eq!(
-                crate::kinematics::admitted::<crate::arith::Separate>(&base, Some(limits)),
+                crate::eval::kinematics::admitted::<crate::eval::arith::Separate>(
+                    &base,
+                    Some(limits)
+                ),
                 slow(chain, &base)
             );
             for i in 0..chain.dof() {
@@ -2103,7 +2110,10 @@ mod tests {
                     q[i] = x;
                     let want = slow(chain, &q);
                     assert_eq!(
-                        crate::kinematics::admitted::<crate::arith::Separate>(&q, Some(limits)),
+                        crate::eval::kinematics::admitted::<crate::eval::arith::Separate>(
+                            &q,
+                            Some(limits)
+                        ),
                         want,
                         "{} q[{i}] = {x}",
                         chain.name()

@@ -3,15 +3,15 @@
 //! A frame is held as four columns of four `f64` (the rotation columns and the origin, each with a
 //! zero fourth entry), so that a column fits one 256-bit register and composing two frames is
 //! twelve vector multiply–adds. Every pose entry goes through the same operations, in the same
-//! order, as in the generic kernel of [`crate::kernel`] that the batch path runs: single and batch
+//! order, as in the generic kernel of [`crate::eval::kernel`] that the batch path runs: single and batch
 //! results are the same bit for bit (the tests below check it), only the instructions differ. The
 //! rate recursion (eqs. 2.120–2.127, 2.75) computes its cross products on the same columns.
 
-use crate::arith::{Arith, Col};
-use crate::chain::{Body, CheapPlacement, Placement, RateTerm, ZTail};
-use crate::joint::{Axis, Term};
-use crate::kernel::term_value;
-use crate::transform::Transform;
+use crate::eval::arith::{Arith, Col};
+use crate::eval::kernel::term_value;
+use crate::model::chain::{Body, CheapPlacement, Placement, RateTerm, ZTail};
+use crate::model::joint::{Axis, Term};
+use crate::model::transform::Transform;
 
 /// A column padded to four entries (the last one is zero), as stored.
 pub(crate) type C4 = [f64; 4];
@@ -143,7 +143,7 @@ pub(crate) fn link_pose_generic<A: Arith>(body: &[C4; 4], offset: &Placement) ->
     f.to_transform()
 }
 
-crate::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &[C4; 4], offset: &Placement) -> Transform => link_pose_generic);
+crate::eval::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &[C4; 4], offset: &Placement) -> Transform => link_pose_generic);
 
 /// [`link_pose_generic`] with the body frame's entries read one by one, `entry(c, i)` being row
 /// `i` of column `c` (a batch's frame, from the lanes of its chunk): each column is put
@@ -193,7 +193,7 @@ fn rotate_columns<A: Arith>(f: &mut [A::Col; 4], axis: &Axis, s: f64, c: f64) {
         Axis::NegY => plane(f, 2, 0, -s, c),
         Axis::NegZ => plane(f, 0, 1, -s, c),
         Axis::General(v) => {
-            let a = crate::kernel::rodrigues::<f64, A>(v, s, c);
+            let a = crate::eval::kernel::rodrigues::<f64, A>(v, s, c);
             let old = *f;
             for j in 0..3 {
                 let (a0, a1, a2) = (
@@ -274,7 +274,7 @@ fn z_tail<A: Arith>(
     q: &[f64],
     sin_cos: (f64, f64),
 ) {
-    crate::kernel::by_shape!(tail.motion, z_motion::<A>(f, body, q, sin_cos));
+    crate::eval::kernel::by_shape!(tail.motion, z_motion::<A>(f, body, q, sin_cos));
     cheap_place::<A>(f, &tail.post);
 }
 
@@ -303,7 +303,7 @@ fn z_motion<A: Arith, const MOTION: u8>(
 /// `kernel::cheap_place`).
 #[inline(always)]
 fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
-    crate::kernel::by_shape!(p.shape, cheap_steps::<A>(f, p));
+    crate::eval::kernel::by_shape!(p.shape, cheap_steps::<A>(f, p));
 }
 
 /// The steps of a [`CheapPlacement`] of shape `SHAPE` (see `kernel::cheap_steps`).
@@ -684,9 +684,9 @@ fn body_rates<A: Arith, const ACC: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::arith::{Fused, Separate};
-    use crate::joint::Motion;
-    use crate::kernel::Frame;
+    use crate::eval::arith::{Fused, Separate};
+    use crate::eval::kernel::Frame;
+    use crate::model::joint::Motion;
 
     fn bodies() -> Vec<Body> {
         let general = Transform::from_xyz_rpy([0.1, -0.4, 0.25], [0.3, -1.1, 2.0]);
@@ -777,9 +777,9 @@ mod tests {
         let generic_parent = Frame::splat(&parent);
         let padded_parent = Frame4::<A::Col>::load(&stored(&parent));
         for body in bodies() {
-            let sin_cos = crate::kernel::body_sin_cos::<f64, A>(&body, &q);
+            let sin_cos = crate::eval::kernel::body_sin_cos::<f64, A>(&body, &q);
             for has_parent in [true, false] {
-                let generic = crate::kernel::pose_step::<f64, A>(
+                let generic = crate::eval::kernel::pose_step::<f64, A>(
                     has_parent.then_some(&generic_parent),
                     &body,
                     &q,
@@ -835,7 +835,7 @@ mod tests {
     fn quarter_turns_are_the_plane_rotation_bit_for_bit() {
         assert_eq!(std::f64::consts::FRAC_PI_2.sin(), 1.0);
         check_quarter_turns::<Separate>();
-        if crate::arith::isa() != crate::arith::Isa::Baseline {
+        if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
             check_quarter_turns::<Fused>();
         }
     }
@@ -855,7 +855,7 @@ mod tests {
             out(Frame4::<<Separate as Arith>::Col>::load(&stored(&t)).to_transform()),
             out(t)
         );
-        if crate::arith::isa() != crate::arith::Isa::Baseline {
+        if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
             assert_eq!(
                 out(Frame4::<<Fused as Arith>::Col>::load(&stored(&t)).to_transform()),
                 out(t)
@@ -867,7 +867,7 @@ mod tests {
     #[test]
     fn padded_frames_are_the_generic_frames_bit_for_bit() {
         check::<Separate>();
-        if crate::arith::isa() != crate::arith::Isa::Baseline {
+        if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
             check::<Fused>();
         }
     }

@@ -10,7 +10,7 @@
 //! negates them. Arguments with `|x| ≥ 2¹⁹ π/2` (about 8.2·10⁵ rad) are left to the standard
 //! library, whose reduction covers the whole `f64` range.
 
-use crate::arith::Arith;
+use crate::eval::arith::Arith;
 
 use std::f64::consts::FRAC_2_PI;
 /// π/2 in three parts of 33 significant bits, and the remainder.
@@ -141,7 +141,7 @@ fn reduce_split(x: f64, k: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::arith::Separate;
+    use crate::eval::arith::Separate;
     use crate::measure::worse;
 
     /// Distance in ulps of the result (relative to max(|expected|, 2⁻¹⁰²²)), and absolute.
@@ -246,7 +246,7 @@ mod tests {
     fn agrees_with_the_standard_library_within_one_ulp() {
         check_against_the_standard_library::<Separate>();
         // Outside a function compiled for FMA, `Fused` calls the library's fma (slow, exact).
-        check_against_the_standard_library::<crate::arith::Fused>();
+        check_against_the_standard_library::<crate::eval::arith::Fused>();
     }
 
     #[test]
@@ -256,7 +256,7 @@ mod tests {
         assert_eq!(sin_cos::<Separate>(-0.0), (0.0, 1.0));
         for x in [1e-300, -5e-324, 1e-20] {
             assert_eq!(sin_cos::<Separate>(x), (x, 1.0));
-            assert_eq!(sin_cos::<crate::arith::Fused>(x), (x, 1.0));
+            assert_eq!(sin_cos::<crate::eval::arith::Fused>(x), (x, 1.0));
         }
         for x in [REDUCTION_LIMIT, -1e7, 1e300, f64::MAX] {
             assert_eq!(sin_cos::<Separate>(x), x.sin_cos());

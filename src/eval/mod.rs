@@ -1,0 +1,13 @@
+//! Evaluation: the [`Data`](data::Data) workspace, the single-configuration and batch kernels,
+//! arithmetic dispatch, `sin`/`cos`, and the public evaluation functions.
+//!
+//! This layer may use [`crate::model`] and [`crate::orientation`], never [`crate::io`] or the
+//! command line.
+
+pub(crate) mod arith;
+pub mod batch;
+pub mod data;
+pub(crate) mod kernel;
+pub mod kinematics;
+pub(crate) mod padded;
+pub(crate) mod trig;
