@@ -19,21 +19,21 @@ pub mod reference;
 pub use eval::arith::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};
 pub use nalgebra;
 
-pub use error::{FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
+pub use error::{Error, FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
 pub use eval::data::{Data, LimitPolicy};
 pub use eval::kinematics::{
     Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_incremental,
     forward_kinematics_to, forward_velocities,
 };
-pub use model::chain::{
-    Chain, ChainBuilder, Joint, JointId, JointScrew, JointSpec, Link, LinkId, Mimic, MimicSpec,
-};
+pub use eval::chain::Chain;
+pub use model::builder::{ChainBuilder, JointSpec, MimicSpec};
+pub use model::chain::{Joint, JointId, JointScrew, Link, LinkId, Mimic, Model};
 pub use model::joint::{JointKind, Limits};
 pub use model::transform::{NotRigid, Transform};
 
 /// The modules of earlier releases, by their old names.
 pub use eval::{batch, data, kinematics};
 pub use io::{convert, input, render};
-pub use model::{chain, joint, transform};
+pub use model::{joint, transform};
 pub use orientation as rotation;

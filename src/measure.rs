@@ -2,7 +2,7 @@
 //! benchmarks use, so that every figure they print is measured the same way (and so that a user
 //! timing their own code can do likewise).
 
-use crate::Chain;
+use crate::eval::chain::Chain;
 use std::f64::consts::{PI, TAU};
 use std::time::{Duration, Instant};
 
@@ -220,7 +220,8 @@ mod tests {
 
     #[test]
     fn configurations_fill_the_limits_and_a_turn_where_they_are_open() {
-        use crate::{ChainBuilder, JointKind, JointSpec};
+        use crate::model::builder::{ChainBuilder, JointSpec};
+        use crate::model::joint::JointKind;
         // Finite limits, none (a continuous joint), limits that are not both finite, and a
         // cylindrical joint's two entries.
         let mut b = ChainBuilder::new("five");
@@ -240,7 +241,7 @@ mod tests {
         let mut sleeve = joint("sleeve", JointKind::Cylindrical, "l4", "l5");
         sleeve.limits = [
             None,
-            Some(crate::Limits {
+            Some(crate::model::joint::Limits {
                 lower: 0.1,
                 upper: 0.3,
             }),
@@ -280,7 +281,8 @@ mod tests {
     /// entry was infinite, which `kinechain bench` then refused.)
     #[test]
     fn configurations_within_limits_too_far_apart_to_subtract() {
-        use crate::{ChainBuilder, JointKind, JointSpec};
+        use crate::model::builder::{ChainBuilder, JointSpec};
+        use crate::model::joint::JointKind;
         let mut b = ChainBuilder::new("far");
         b.link("l0").link("l1");
         b.joint(

@@ -8,7 +8,9 @@
 //! is not part of it (the 50-digit files of the reference data measure that too).
 
 use crate::measure::worse;
-use crate::model::chain::{Body, Chain, LinkId, Placement};
+use crate::eval::chain::Chain;
+use crate::eval::layout::{Body, Placement};
+use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;
 use dashu_float::FBig;
@@ -134,7 +136,7 @@ pub fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
     }
     (0..chain.links().len())
         .map(|i| {
-            let link = chain.link(LinkId(i));
+            let link = chain.carrier(LinkId(i));
             let offset = BigFrame::from_transform(&link.offset.to_transform());
             match link.body {
                 None => offset.to_transform(),
@@ -315,7 +317,7 @@ pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> V
     }
     (0..chain.links().len())
         .map(|i| {
-            let link = chain.link(LinkId(i));
+            let link = chain.carrier(LinkId(i));
             let offset = BigFrame::from_transform(&link.offset.to_transform());
             match link.body {
                 None => LinkMotion {

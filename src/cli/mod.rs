@@ -1,7 +1,9 @@
 //! The `kinechain` command line: argument parsing, library calls, output. `main.rs` only calls
 //! [`main`].
 
-use crate::error::{error_chain, escape_controls};
+use crate::error::error_chain;
+
+use crate::model::error::escape_controls;
 use crate::eval::batch::{BatchData, forward_kinematics_batch};
 use crate::eval::data::{Data, LimitPolicy};
 use crate::eval::kinematics::{
@@ -10,7 +12,8 @@ use crate::eval::kinematics::{
 };
 use crate::io::input::{InputError, joint_vector_from_str};
 use crate::measure::worse;
-use crate::model::chain::{Chain, LinkId};
+use crate::eval::chain::Chain;
+use crate::model::chain::LinkId;
 use crate::model::transform::Transform;
 use clap::{Parser, Subcommand, ValueEnum};
 use nalgebra::Vector3;
@@ -157,16 +160,16 @@ enum OutputFormat {
 pub enum CliError {
     /// The robot file could not be loaded.
     #[error(transparent)]
-    Load(#[from] crate::error::LoadError),
+    Load(#[from] crate::io::error::LoadError),
     /// A joint-space vector could not be read.
     #[error(transparent)]
     Input(#[from] InputError),
     /// A configuration cannot be evaluated.
     #[error(transparent)]
-    State(#[from] crate::error::StateError),
+    State(#[from] crate::eval::error::StateError),
     /// A link name is unknown.
     #[error(transparent)]
-    Name(#[from] crate::error::NameError),
+    Name(#[from] crate::model::error::NameError),
     /// The robot cannot be written as URDF.
     #[error(transparent)]
     Convert(#[from] crate::io::convert::ConvertError),
@@ -1885,10 +1888,10 @@ fn configuration_count(s: &str) -> Result<usize, String> {
 type Method<'a> = (String, Box<dyn FnMut() + 'a>, usize);
 
 /// The instruction set of the kernels, and for AVX-512 how single evaluations of at most eight
-/// angles compute their `sin`/`cos` ([`crate::narrow_trig`]).
+/// angles compute their `sin`/`cos` ([`crate::eval::arith::narrow_trig`]).
 fn kernels_name() -> String {
-    match crate::isa() {
-        crate::Isa::Avx512 if crate::narrow_trig() => {
+    match crate::eval::arith::isa() {
+        crate::eval::arith::Isa::Avx512 if crate::eval::arith::narrow_trig() => {
             "avx512 (single evaluations of up to 8 angles: sin/cos on 256 bits)".to_string()
         }
         isa => isa.name().to_string(),
@@ -1927,7 +1930,7 @@ fn bench(
     // The multi-threaded rows evaluate the configurations `copies` times over in one batch of
     // THREADED_ROWS_WORK joint evaluations on the end link's path.
     let mut end_path = Vec::new();
-    chain.body_path(chain.link(end).body, &mut end_path);
+    chain.body_path(chain.carrier(end).body, &mut end_path);
     let copies = THREADED_ROWS_WORK
         .div_ceil(qs.len().max(1) * end_path.len().max(1))
         .max(1);
@@ -2016,13 +2019,13 @@ impl<'a> Workload<'a> {
     /// Every link's pose of each configuration, on the kernels of `isa` (`None`: the machine's),
     /// with `wide` the `sin`/`cos` forced into one 512-bit register where `narrow_trig` would
     /// split them; the end link read after each.
-    fn all_links(&self, isa: Option<crate::Isa>, wide: bool) -> Box<dyn FnMut() + 'a> {
+    fn all_links(&self, isa: Option<crate::eval::arith::Isa>, wide: bool) -> Box<dyn FnMut() + 'a> {
         let Workload { chain, qs, end, .. } = *self;
         let mut d = self.data();
         Box::new(move || {
-            crate::force_isa(isa);
+            crate::eval::arith::force_isa(isa);
             if wide {
-                crate::force_narrow_trig(Some(false));
+                crate::eval::arith::force_narrow_trig(Some(false));
             }
             for q in qs {
                 black_box(
@@ -2031,9 +2034,9 @@ impl<'a> Workload<'a> {
                         .map(|p| p.world_from_link(end)),
                 );
             }
-            crate::force_isa(None);
+            crate::eval::arith::force_isa(None);
             if wide {
-                crate::force_narrow_trig(None);
+                crate::eval::arith::force_narrow_trig(None);
             }
         })
     }
@@ -2058,8 +2061,8 @@ impl<'a> Workload<'a> {
         methods.extend(self.batch_methods());
         // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
         // `kernel::all_sin_cos` makes), what it saves.
-        if crate::isa() == crate::Isa::Avx512
-            && crate::narrow_trig()
+        if crate::eval::arith::isa() == crate::eval::arith::Isa::Avx512
+            && crate::eval::arith::narrow_trig()
             && chain.theta_gather.len() == 1
         {
             methods.push((
@@ -2070,7 +2073,7 @@ impl<'a> Workload<'a> {
         }
         methods.push((
             "kinechain, baseline x86-64 path".into(),
-            self.all_links(Some(crate::Isa::Baseline), false),
+            self.all_links(Some(crate::eval::arith::Isa::Baseline), false),
             n,
         ));
         if let Some((label, k)) = k_method(path, chain, qs) {
@@ -2390,7 +2393,7 @@ const POSES_ONLY: &str = "kinechain, poses only";
 /// reads one (on an arm with a gripper and the tool as `link`, the arm's last joint, not the
 /// gripper's). `None` if no joint moves `link`.
 fn last_variable_to(chain: &Chain, link: LinkId) -> Option<usize> {
-    let mut body = chain.link(link).body;
+    let mut body = chain.carrier(link).body;
     while let Some(b) = body {
         if let Some(last) = chain.bodies[b].motion.variables().max() {
             return Some(last);

@@ -53,7 +53,7 @@ pub(crate) trait Col: Copy {
     fn yzx(self) -> Self;
     /// Entries `[2, 0, 1, 3]`.
     fn zxy(self) -> Self;
-    /// Whether every entry `x` is [`crate::model::chain::within`] the limits of the same entry of
+    /// Whether every entry `x` is [`crate::eval::layout::within`] the limits of the same entry of
     /// `(scale, offset, lower, upper)`.
     fn admitted(x: Self, limits: [Self; 4]) -> bool;
 }
@@ -128,7 +128,7 @@ impl<A: Arith> Col for Portable<A> {
     fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
         let mut ok = true;
         for i in 0..4 {
-            ok &= crate::model::chain::within(
+            ok &= crate::eval::layout::within(
                 x.0[i],
                 (scale.0[i], offset.0[i], lower.0[i], upper.0[i]),
             );
@@ -194,7 +194,7 @@ impl<A: Arith> Col for Portable<A> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx(std::arch::x86_64::__m256d);
 
-/// [`crate::model::chain::within`] for four values at once, each against the same entry of
+/// [`crate::eval::layout::within`] for four values at once, each against the same entry of
 /// `(scale, offset, lower, upper)`: the product and the sum rounded separately, then three
 /// compares. Used by [`Avx`] and the AVX2 batch lanes.
 #[cfg(target_arch = "x86_64")]

@@ -5,13 +5,15 @@
 //! `i`). Results are the same as [`forward_kinematics`](crate::forward_kinematics) gives for each
 //! configuration, to the last bit on the same instruction set.
 
-use crate::error::StateError;
+use crate::eval::error::StateError;
 use crate::eval::arith::{Arith, fma_dispatch};
 use crate::eval::data::LimitPolicy;
 use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num, by_shape};
 use crate::eval::kinematics::{all_valid, check_q};
 use crate::eval::padded;
-use crate::model::chain::{Body, Chain, CheapPlacement, DenseLimits, LinkId, Placement, ZTail};
+use crate::eval::chain::Chain;
+use crate::eval::layout::{Body, CheapPlacement, DenseLimits, Placement, ZTail};
+use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;
 use std::sync::{Mutex, PoisonError};
@@ -567,7 +569,7 @@ pub(crate) fn lane_pose(
     pose: impl FnOnce(usize, &Placement) -> Transform,
 ) -> Transform {
     assert!(index < len, "configuration {index} of {len}");
-    let l = chain.link(link);
+    let l = chain.carrier(link);
     let Some(b) = l.body else {
         return l.offset.to_transform();
     };
@@ -731,7 +733,7 @@ pub fn forward_kinematics_batch_to<'a>(
     link: LinkId,
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
-    chain.body_path(chain.link(link).body, &mut data.path);
+    chain.body_path(chain.carrier(link).body, &mut data.path);
     let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, !parallel && check.is_none())?;

@@ -2,7 +2,7 @@
 
 use crate::eval::kernel::{LANES, Lanes};
 use crate::eval::padded::Rates;
-use crate::model::chain::Chain;
+use crate::eval::chain::Chain;
 use crate::model::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.

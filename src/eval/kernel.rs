@@ -12,7 +12,7 @@
 
 use crate::eval::arith::Arith;
 use crate::eval::trig;
-use crate::model::chain::{Body, CheapPlacement, Placement, ZTail};
+use crate::eval::layout::{Body, CheapPlacement, Placement, ZTail};
 use crate::model::joint::{Axis, Term};
 use std::ops::{Add, Mul, Neg, Sub};
 
@@ -187,7 +187,7 @@ pub(crate) trait LaneNum: Num {
     fn stream(self, x: &mut Lanes) {
         self.put(x, 0);
     }
-    /// Whether every lane `x` is [`crate::model::chain::within`] `(scale, offset, lower, upper)`.
+    /// Whether every lane `x` is [`crate::eval::layout::within`] `(scale, offset, lower, upper)`.
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
     /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: entry `j` of
     /// rows `rows[0..8]`, in the layout [`LaneNum::cast`] reads.
@@ -226,7 +226,7 @@ impl LaneNum for Lanes {
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
         let mut ok = true;
         for x in x.0 {
-            ok &= crate::model::chain::within(x, (scale, offset, lower, upper));
+            ok &= crate::eval::layout::within(x, (scale, offset, lower, upper));
         }
         ok
     }
@@ -977,7 +977,7 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
 /// (a value assembled lane by lane in memory and read back as a vector would stall the load).
 #[inline(always)]
 pub(crate) fn all_sin_cos<A: Arith>(
-    gather: &[crate::model::chain::ThetaGather],
+    gather: &[crate::eval::layout::ThetaGather],
     q: &[f64],
     sin: &mut [f64],
     cos: &mut [f64],
@@ -1011,7 +1011,7 @@ pub(crate) fn all_sin_cos<A: Arith>(
 /// (`W` entries each), in one vector of `W` lanes.
 #[inline(always)]
 fn gathered_sin_cos<A: Arith, const W: usize>(
-    g: &crate::model::chain::ThetaGather,
+    g: &crate::eval::layout::ThetaGather,
     first: usize,
     q: &[f64],
     s_out: &mut [f64],

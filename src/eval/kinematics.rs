@@ -34,12 +34,14 @@
 //! ```
 //! (tangential, normal, Coriolis and local terms of eq. 2.75).
 
-use crate::error::StateError;
+use crate::eval::error::StateError;
 use crate::eval::arith::{Arith, Separate, fma_dispatch};
 use crate::eval::data::{Data, LimitPolicy};
 use crate::eval::kernel::{self, Lanes};
 use crate::eval::padded::{self, Frame4, Rates4};
-use crate::model::chain::{Body, Chain, DenseLimits, LinkId, Placement};
+use crate::eval::chain::Chain;
+use crate::eval::layout::{Body, DenseLimits, Placement};
+use crate::model::chain::LinkId;
 use crate::model::joint::{Motion, Term};
 use crate::model::transform::{Transform, add3, cross3, scale3, sub3};
 use nalgebra::Vector3;
@@ -133,7 +135,7 @@ impl<'a> Poses<'a> {
     #[must_use]
     #[inline]
     pub fn world_from_link(&self, link: LinkId) -> Transform {
-        let l = self.chain.link(link);
+        let l = self.chain.carrier(link);
         match l.body {
             None => l.offset.to_transform(),
             // (Also for an identity offset: `link_pose` writes the result in whole vectors.)
@@ -267,7 +269,7 @@ impl<'a> Poses<'a> {
         // entry.
         let entries = j.as_mut_slice();
         entries.fill(0.0);
-        let mut body = self.chain.link(link).body;
+        let mut body = self.chain.carrier(link).body;
         while let Some(b) = body {
             let bd = &self.chain.bodies[b];
             let (turning, sliding) = columns(bd);
@@ -288,7 +290,7 @@ impl<'a> Poses<'a> {
     /// origins, which would cancel and need the link's whole pose).
     #[inline]
     fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
-        let l = self.chain.link(link);
+        let l = self.chain.carrier(link);
         let b = l.body?;
         let r = match l.offset {
             Placement::Identity => [0.0; 3],
@@ -823,7 +825,7 @@ pub fn forward_kinematics_to(
     link: LinkId,
 ) -> Result<Transform, StateError> {
     data.assert_matches(chain);
-    let l = chain.link(link);
+    let l = chain.carrier(link);
     let Some(body) = l.body else {
         check_q(chain, q, data.limit_policy)?;
         return Ok(l.offset.to_transform());
@@ -936,7 +938,7 @@ fn kernel_check<'a>(
 }
 
 /// Whether `q` (of the chain's length) passes the check [`kernel_check`] chose: finiteness, or
-/// [`crate::model::chain::within`] the limits of each entry. Four entries per vector compare on the
+/// [`crate::eval::layout::within`] the limits of each entry. Four entries per vector compare on the
 /// AVX paths (a loop over single entries stays scalar, about 40 instructions more on a
 /// seven-joint arm), each against one contiguous block of limit columns.
 #[inline(always)]
@@ -1360,7 +1362,7 @@ mod tests {
         ] {
             let id = chain.link_id(link).expect("a Panda link");
             let mut path = Vec::new();
-            chain.body_path(chain.link(id).body, &mut path);
+            chain.body_path(chain.carrier(id).body, &mut path);
             assert_eq!(path.len(), path_len, "{link}");
             let mut data = unchecked(&chain);
             forward_kinematics(&chain, &mut data, &q0).expect("finite");

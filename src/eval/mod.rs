@@ -6,8 +6,11 @@
 
 pub(crate) mod arith;
 pub mod batch;
+pub mod chain;
 pub mod data;
+pub mod error;
 pub(crate) mod kernel;
 pub mod kinematics;
+pub(crate) mod layout;
 pub(crate) mod padded;
 pub(crate) mod trig;

@@ -9,7 +9,7 @@
 
 use crate::eval::arith::{Arith, Col};
 use crate::eval::kernel::term_value;
-use crate::model::chain::{Body, CheapPlacement, Placement, RateTerm, ZTail};
+use crate::eval::layout::{Body, CheapPlacement, Placement, RateTerm, ZTail};
 use crate::model::joint::{Axis, Term};
 use crate::model::transform::Transform;
 

@@ -14,7 +14,9 @@
 //! frame), and a `<limit>`'s required effort and velocity as 0, which a comment at the top of the
 //! file states. Fixed and continuous joints get no `<limit>`, and fixed joints no `<axis>`.
 
-use crate::model::chain::{Chain, JointSpec};
+use crate::eval::chain::Chain;
+
+use crate::model::builder::JointSpec;
 use crate::model::joint::{JointKind, Limits};
 use crate::model::transform::Transform;
 use crate::orientation::Rpy;
@@ -148,7 +150,7 @@ impl Writer {
         origin: &Transform,
         axis: [f64; 3],
         limits: Option<Limits>,
-        mimic: Option<&crate::model::chain::MimicSpec>,
+        mimic: Option<&crate::model::builder::MimicSpec>,
     ) -> Result<(), ConvertError> {
         if !self.names.insert(format!("joint:{name}")) {
             return Err(ConvertError::NameClash { name });

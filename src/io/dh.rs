@@ -11,8 +11,8 @@
 //!   - {name: j1, link: link1, type: revolute, a: 0, alpha: 1.5708, d: 0.6718, theta: 0, limits: [-2.79, 2.79]}
 //! ```
 
-use crate::error::{FieldProblem, LoadErrorKind};
-use crate::model::chain::{ChainBuilder, JointSpec};
+use crate::io::error::{FieldProblem, LoadErrorKind};
+use crate::model::builder::{ChainBuilder, JointSpec};
 use crate::model::joint::{JointKind, Limits};
 use crate::model::transform::Transform;
 use serde::Deserialize;

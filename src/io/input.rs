@@ -2,8 +2,8 @@
 //! or an object keyed by joint name that names every independent joint exactly once
 //! (`{"j1": 0.1, "j5": [0.2, 0.05]}`; a cylindrical joint takes `[θ, d]`).
 
-use crate::error::did_you_mean;
-use crate::model::chain::Chain;
+use crate::model::error::did_you_mean;
+use crate::eval::chain::Chain;
 use crate::model::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
@@ -76,7 +76,7 @@ pub enum InputError {
         /// The name given.
         name: String,
         /// The chain's joint whose name is closest, if it is close enough to be a likely typo
-        /// (see [`closest_name`](crate::error::closest_name)).
+        /// (see [`closest_name`](crate::model::error::closest_name)).
         suggestion: Option<String>,
     },
     /// An object names a joint that takes no entry of `q` (fixed or mimic).

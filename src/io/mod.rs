@@ -2,6 +2,7 @@
 
 pub mod convert;
 mod dh;
+pub mod error;
 pub mod input;
 pub mod render;
 mod urdf;
@@ -10,8 +11,8 @@ pub(crate) mod xml;
 #[cfg(feature = "cli")]
 pub(crate) use urdf::beyond_kinematics;
 
-use crate::error::{LoadError, LoadErrorKind};
-use crate::model::chain::Chain;
+use crate::io::error::{LoadError, LoadErrorKind};
+use crate::eval::chain::Chain;
 use std::io::Read;
 use std::path::Path;
 

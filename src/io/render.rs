@@ -15,7 +15,8 @@
 
 use crate::eval::kinematics::Poses;
 use crate::io::xml::escape_shown;
-use crate::model::chain::{Chain, LinkId};
+use crate::eval::chain::Chain;
+use crate::model::chain::LinkId;
 use nalgebra::{Point3, Vector3};
 use std::fmt::Write as _;
 

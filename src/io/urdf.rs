@@ -7,8 +7,8 @@
 //! change a pose: it is skipped, and what is malformed in it draws a warning, never a refusal.
 //! XML that is not well-formed is an error, stated as such.
 
-use crate::error::{FieldProblem, LoadErrorKind};
-use crate::model::chain::{ChainBuilder, JointSpec};
+use crate::io::error::{FieldProblem, LoadErrorKind};
+use crate::model::builder::{ChainBuilder, JointSpec};
 use crate::model::joint::{JointKind, Limits};
 use crate::model::transform::Transform;
 use roxmltree::{Document, Node, ParsingOptions};
@@ -71,7 +71,7 @@ impl Places {
             nth_named(&mut builder.links().iter().map(String::as_str), name, n)
                 .and_then(|i| self.links.get(i))
         };
-        use crate::error::ModelError as M;
+        use crate::model::error::ModelError as M;
         let offset = match &error {
             M::DuplicateJoint { name } => joint(name, 1),
             M::DuplicateLink { name } => link(name, 1),

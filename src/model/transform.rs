@@ -317,7 +317,12 @@ impl Transform {
         for i in 0..3 {
             for j in 0..3 {
                 let d = dot3(self.r[i], self.r[j]) - if i == j { 1.0 } else { 0.0 };
-                worst = crate::measure::worse(worst, d.abs());
+                // (NaN propagates: a matrix with a NaN entry is as far from rigid as can be.)
+                worst = if worst.is_nan() || d.is_nan() {
+                    f64::NAN
+                } else {
+                    worst.max(d.abs())
+                };
             }
         }
         worst

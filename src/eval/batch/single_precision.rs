@@ -45,7 +45,9 @@ use crate::eval::data::LimitPolicy;
 use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
 use crate::eval::padded;
 use crate::eval::trig;
-use crate::model::chain::{Body, Chain, LinkId, Placement};
+use crate::eval::chain::Chain;
+use crate::eval::layout::{Body, Placement};
+use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;
 use std::ops::{Add, Mul, Neg, Sub};
@@ -350,7 +352,7 @@ pub fn forward_kinematics_batch_to<'a>(
     link: LinkId,
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
-    chain.body_path(chain.link(link).body, &mut data.path);
+    chain.body_path(chain.carrier(link).body, &mut data.path);
     let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, check, parallel)?;

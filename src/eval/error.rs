@@ -1,0 +1,75 @@
+//! What an evaluation can fail with: a joint-space vector that cannot be evaluated.
+
+/// A joint-space vector (`q`, `q_dot`, `q_ddot`) cannot be evaluated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StateError {
+    /// The vector has the wrong number of entries.
+    #[error("{what} has {got} entries, the chain has {expected} degrees of freedom")]
+    WrongLength {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Entries expected (the chain's dof).
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// An entry is NaN or infinite.
+    #[error(
+        "{what}[{index}] (joint '{joint}'{}) is {value}, not a finite number",
+        component_suffix(component)
+    )]
+    NonFinite {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Index in the vector.
+        index: usize,
+        /// The joint this entry drives.
+        joint: String,
+        /// For a cylindrical joint, `theta` or `d`.
+        component: Option<&'static str>,
+        /// The value given.
+        value: f64,
+    },
+    /// A batch for a chain without moving joints: its configurations have no entries, so a flat
+    /// batch cannot say how many it holds. Evaluate such a chain once, with
+    /// [`forward_kinematics`](crate::forward_kinematics).
+    #[error(
+        "the chain has no moving joints, so a batch cannot tell how many configurations it holds \
+         (evaluate it once with forward_kinematics)"
+    )]
+    NoDegreesOfFreedom,
+    /// A joint value is outside the joint's limits.
+    #[error("joint '{joint}'{} = {value} is outside its limits [{lower}, {upper}]{}", component_suffix(component), hint(*value, *lower, *upper, *angular))]
+    OutOfLimits {
+        /// The joint.
+        joint: String,
+        /// For a cylindrical joint, `theta` or `d`.
+        component: Option<&'static str>,
+        /// Whether the coordinate is an angle (rad) rather than a length (m). Only an angle's
+        /// message suggests that the value may have been given in degrees.
+        angular: bool,
+        /// The value (for a mimic joint, the value implied by its primary joint).
+        value: f64,
+        /// Lower limit.
+        lower: f64,
+        /// Upper limit.
+        upper: f64,
+    },
+}
+
+fn component_suffix(c: &Option<&'static str>) -> String {
+    c.map(|c| format!(" {c}")).unwrap_or_default()
+}
+
+/// The degrees hint: for an angle beyond a full turn whose value read as degrees is within the
+/// limits.
+fn hint(value: f64, lower: f64, upper: f64, angular: bool) -> &'static str {
+    let deg = value.to_radians();
+    if angular && value.abs() > 2.0 * std::f64::consts::PI && deg >= lower && deg <= upper {
+        " (the value looks like degrees; angles are in radians)"
+    } else {
+        ""
+    }
+}
+
