@@ -4,7 +4,9 @@
 
 pub use crate::eval::error::StateError;
 pub use crate::io::error::{FieldProblem, LoadError, LoadErrorKind};
-pub use crate::model::error::{MAX_SUGGESTED_NAME, ModelError, NameError, closest_name, escape_controls};
+pub use crate::model::error::{
+    MAX_SUGGESTED_NAME, ModelError, NameError, closest_name, escape_controls,
+};
 
 /// An error and its sources on one line, `error: source: source…`, with any line breaks of
 /// their messages turned into spaces.
@@ -30,7 +32,6 @@ pub fn error_chain(e: &dyn std::error::Error) -> String {
     }
     escape_controls(&text.replace('\n', " ")).into_owned()
 }
-
 
 /// Any error of the crate, so that `?` works across loading, evaluating, batches, joint vectors
 /// read from text and writing URDF. Each variant holds the specific error, for those who match

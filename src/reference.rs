@@ -7,9 +7,9 @@
 //! kernels is their evaluation error; rounding made while loading a file (e.g. `rpy` to a matrix)
 //! is not part of it (the 50-digit files of the reference data measure that too).
 
-use crate::measure::worse;
 use crate::eval::chain::Chain;
 use crate::eval::layout::{Body, Placement};
+use crate::measure::worse;
 use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;

@@ -21,7 +21,15 @@ const ALLOWED: [(&str, &[&str]); 8] = [
     ("error", &["orientation", "model", "eval", "io"]),
     (
         "cli",
-        &["orientation", "model", "eval", "io", "measure", "reference", "error"],
+        &[
+            "orientation",
+            "model",
+            "eval",
+            "io",
+            "measure",
+            "reference",
+            "error",
+        ],
     ),
 ];
 
@@ -42,7 +50,12 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 /// The top-level module a file of `src/` belongs to (`None` for `lib.rs` and `main.rs`).
 fn layer(src: &Path, file: &Path) -> Option<String> {
     let relative = file.strip_prefix(src).unwrap();
-    let first = relative.components().next()?.as_os_str().to_str()?.to_string();
+    let first = relative
+        .components()
+        .next()?
+        .as_os_str()
+        .to_str()?
+        .to_string();
     match first.strip_suffix(".rs") {
         Some("lib" | "main") => None,
         Some(stem) => Some(stem.to_string()),

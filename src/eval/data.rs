@@ -1,8 +1,8 @@
 //! Preallocated evaluation buffers, sized once from a [`Chain`].
 
+use crate::eval::chain::Chain;
 use crate::eval::kernel::{LANES, Lanes};
 use crate::eval::padded::Rates;
-use crate::eval::chain::Chain;
 use crate::model::transform::Transform;
 
 /// Whether evaluation refuses joint values outside the joints' limits.

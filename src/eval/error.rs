@@ -72,4 +72,3 @@ fn hint(value: f64, lower: f64, upper: f64, angular: bool) -> &'static str {
         ""
     }
 }
-

@@ -11,6 +11,8 @@ pub mod data;
 pub mod error;
 pub(crate) mod kernel;
 pub mod kinematics;
+pub(crate) mod lanes;
 pub(crate) mod layout;
 pub(crate) mod padded;
+pub mod results;
 pub(crate) mod trig;

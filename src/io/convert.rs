@@ -263,7 +263,7 @@ const KINEMATICS_ONLY: &str = "  <!-- Kinematics only, as written by kinechain c
 /// `convert` prints it, so that the user knows what the written file leaves out.
 #[cfg(feature = "cli")]
 pub(crate) fn dropped_from_urdf(text: &str) -> Option<String> {
-    crate::io::beyond_kinematics(text)
+    beyond_kinematics(text)
 }
 
 fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
@@ -339,4 +339,99 @@ fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
         )?;
     }
     Ok(())
+}
+
+/// Counts what a URDF file holds beyond its kinematics (visual and collision elements, masses,
+/// materials, transmissions, Gazebo and other extension elements, joints' effort and velocity
+/// limits and their dynamics, calibration and safety data), as a phrase such as `"12 visual
+/// elements, 3 materials"`; `None` when it holds none of these or cannot be read.
+#[cfg(feature = "cli")]
+fn beyond_kinematics(source: &str) -> Option<String> {
+    use roxmltree::{Document, Node};
+    let doc = Document::parse(source).ok()?;
+    let robot = doc.root_element();
+    let count = |n: usize, what: &str| (n > 0).then(|| format!("{n} {what}"));
+    let children = |node: Node<'_, '_>, name: &str| {
+        node.children()
+            .filter(move |c| c.is_element() && c.tag_name().name() == name)
+            .count()
+    };
+    let elements = |name: &str| children(robot, name);
+    let links = || {
+        robot
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "link")
+    };
+    let joints = || {
+        robot
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "joint")
+    };
+    let parts: Vec<String> = [
+        count(
+            links().map(|l| children(l, "visual")).sum(),
+            "visual elements",
+        ),
+        count(
+            links().map(|l| children(l, "collision")).sum(),
+            "collision elements",
+        ),
+        count(
+            links()
+                .filter(|l| {
+                    // A link whose masses and inertias are all zero holds no data to drop.
+                    l.descendants().filter(Node::is_element).any(|e| {
+                        e.attributes().any(|a| {
+                            ["value", "ixx", "ixy", "ixz", "iyy", "iyz", "izz"].contains(&a.name())
+                                && e.ancestors().any(|p| p.tag_name().name() == "inertial")
+                                && a.value().trim().parse::<f64>() != Ok(0.0)
+                        })
+                    })
+                })
+                .count(),
+            "links' masses and inertias",
+        ),
+        count(
+            joints()
+                .filter(|j| {
+                    j.children().any(|c| {
+                        c.is_element()
+                            && c.tag_name().name() == "limit"
+                            && ["effort", "velocity"].iter().any(|a| {
+                                c.attribute(*a)
+                                    .is_some_and(|v| v.trim().parse::<f64>() != Ok(0.0))
+                            })
+                    })
+                })
+                .count(),
+            "joints' effort and velocity limits",
+        ),
+        count(
+            joints()
+                .filter(|j| {
+                    ["dynamics", "calibration", "safety_controller"]
+                        .iter()
+                        .any(|e| children(*j, e) > 0)
+                })
+                .count(),
+            "joints' dynamics, calibration or safety controller elements",
+        ),
+        count(elements("material"), "materials"),
+        count(elements("transmission"), "transmissions"),
+        count(
+            robot
+                .children()
+                .filter(|c| {
+                    c.is_element()
+                        && !["link", "joint", "material", "transmission"]
+                            .contains(&c.tag_name().name())
+                })
+                .count(),
+            "other elements (Gazebo, ros2_control and the like)",
+        ),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
 }

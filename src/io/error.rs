@@ -276,4 +276,3 @@ pub enum FieldProblem {
         owner: &'static str,
     },
 }
-

@@ -8,11 +8,8 @@ pub mod render;
 mod urdf;
 pub(crate) mod xml;
 
-#[cfg(feature = "cli")]
-pub(crate) use urdf::beyond_kinematics;
-
-use crate::io::error::{LoadError, LoadErrorKind};
 use crate::eval::chain::Chain;
+use crate::io::error::{LoadError, LoadErrorKind};
 use std::io::Read;
 use std::path::Path;
 

@@ -304,4 +304,3 @@ fn edit_distance(a: &[char], b: &str, row: &mut Vec<usize>) -> usize {
     }
     row[a.len()]
 }
-

@@ -41,12 +41,12 @@ use super::{
     par_chunks_checked, transpose_chunk, worth_parallel,
 };
 use crate::eval::arith::{Arith, fma_dispatch};
+use crate::eval::chain::Chain;
 use crate::eval::data::LimitPolicy;
 use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
+use crate::eval::layout::{Body, Placement};
 use crate::eval::padded;
 use crate::eval::trig;
-use crate::eval::chain::Chain;
-use crate::eval::layout::{Body, Placement};
 use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;

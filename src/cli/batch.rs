@@ -1,0 +1,357 @@
+//! `kinechain fk --batch`: one result per input line, pose-only lines through the batch kernel.
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// Pose-only lines of a batch file, evaluated together by the batch kernel.
+pub(super) struct PendingPoses {
+    /// Their configurations, row-major.
+    pub(super) qs: Vec<f64>,
+    /// The 1-based line number of each.
+    pub(super) lines: Vec<usize>,
+    pub(super) batch: BatchData,
+    /// One line of output (JSON or a table), reused.
+    pub(super) text: Vec<u8>,
+}
+
+impl PendingPoses {
+    /// Lines held before they are evaluated.
+    const MAX: usize = 256;
+
+    /// Writes the pending configurations' results and forgets them; returns how many failed
+    /// (written as error lines under `--keep-going`; without it, the first failure is the
+    /// error).
+    fn flush(
+        &mut self,
+        chain: &Chain,
+        args: &FkArgs,
+        path: &Path,
+        out: &mut dyn Write,
+    ) -> Result<usize, CliError> {
+        if self.qs.is_empty() {
+            return Ok(0);
+        }
+        let lines = &self.lines;
+        let poses = forward_kinematics_batch(chain, &mut self.batch, &self.qs).map_err(|e| {
+            // (Each line was checked as it was read, so this is not expected.)
+            let line = lines.get(e.index).or(lines.last()).copied().unwrap_or(0);
+            at_line(path, line, CliError::State(e.source))
+        })?;
+        let mut failed = 0;
+        // One buffer for every line's link results.
+        let mut results: Vec<LinkResult> = Vec::with_capacity(chain.links().len());
+        for (i, &line) in lines.iter().enumerate() {
+            results.clear();
+            results.extend(
+                (0..chain.links().len())
+                    .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None)),
+            );
+            match check_finite(chain, &results, &[], &[]) {
+                Ok(()) => match args.format {
+                    OutputFormat::Json => {
+                        let value = ResultsJson {
+                            line: Some(line),
+                            chain,
+                            results: &results,
+                            orientation: args.orientation,
+                            points: &[],
+                            point_results: &[],
+                            jacobians: &[],
+                        };
+                        write_json_line(out, &mut self.text, &value)?;
+                    }
+                    OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
+                        line_heading(Some(line), buf);
+                        results_table(chain, &results, args.orientation, buf);
+                        Ok(())
+                    })?,
+                },
+                Err(e) if args.keep_going => {
+                    failed += 1;
+                    write_line(out, &failed_line(args.format, line, &e))?;
+                }
+                Err(e) => return Err(at_line(path, line, e)),
+            }
+        }
+        self.qs.clear();
+        self.lines.clear();
+        Ok(failed)
+    }
+}
+
+/// How errors name standard input, the batch file `-`.
+pub(super) const STANDARD_INPUT: &str = "standard input";
+
+/// `fk --batch`: the lines of the file at `path`, or of standard input for `-`, through
+/// [`fk_batch`].
+pub(super) fn fk_batch_file(
+    chain: &Chain,
+    args: &FkArgs,
+    data: &mut Data,
+    request: &mut Request,
+    path: &Path,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    // Blocks of 64 KiB hold an arm's 256 lines of poses (about 100 bytes each) a few times
+    // over: the results go out when the lines held fill a batch, not at every block's end.
+    const BLOCK: usize = 1 << 16;
+    if path == Path::new("-") {
+        let mut reader = std::io::BufReader::with_capacity(BLOCK, std::io::stdin());
+        let name = Path::new(STANDARD_INPUT);
+        return fk_batch(chain, args, data, request, name, &mut reader, out);
+    }
+    let file = std::fs::File::open(path).map_err(|source| CliError::Io {
+        context: format!("cannot open batch file {}", path.display()),
+        source,
+    })?;
+    let mut reader = std::io::BufReader::with_capacity(BLOCK, file);
+    fk_batch(chain, args, data, request, path, &mut reader, out)
+}
+
+/// What [`fk_batch`] makes of a line that reads without error.
+pub(super) enum Row {
+    /// Nothing to write now: a blank line, a header row, or a configuration held for the batch
+    /// kernel.
+    Held,
+    /// A configuration evaluated on its own (rates, or a request the batch kernel does not serve).
+    Single(Configuration),
+    /// A header row of names that cannot be read: the end of the run.
+    BadHeader(CliError),
+}
+
+/// One result per line of `reader` (`path` names it in errors), in line order. Pose-only lines
+/// (the common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with
+/// rates, or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before
+/// a bad line is written before its error. Whenever the input read is used up, the results held
+/// are written and the output flushed: reading more may wait for a program that writes a line
+/// at a time and waits for its result.
+pub(super) fn fk_batch<R: std::io::Read>(
+    chain: &Chain,
+    args: &FkArgs,
+    data: &mut Data,
+    request: &mut Request,
+    path: &Path,
+    reader: &mut std::io::BufReader<R>,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let batchable = request.poses_only(chain);
+    let mut pending = PendingPoses {
+        qs: Vec::new(),
+        lines: Vec::new(),
+        batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
+        text: Vec::new(),
+    };
+    let mut failed_lines = 0usize;
+    let limit = batch_line_limit(chain.dof());
+    let mut bytes = Vec::new();
+    // The first line that is not blank may be a header row of joint names (`csv_header`).
+    let mut first = true;
+    let mut header = None;
+    for i in 0.. {
+        if reader.buffer().is_empty() {
+            failed_lines += pending.flush(chain, args, path, out)?;
+            out.flush().map_err(output_error)?;
+        }
+        // Without --keep-going a line past the cap ends the run, so nothing of it is skipped;
+        // with it, a line is skipped up to 64 times the cap before reading gives up.
+        let skip = if args.keep_going {
+            limit.saturating_mul(64)
+        } else {
+            0
+        };
+        let result = match read_capped_line(reader, &mut bytes, limit, skip) {
+            Ok(CappedLine::End) => break,
+            Ok(CappedLine::Unended) if args.keep_going => {
+                pending.flush(chain, args, path, out)?;
+                return Err(at_line(
+                    path,
+                    i + 1,
+                    CliError::Unended {
+                        limit: limit.saturating_add(skip),
+                    },
+                ));
+            }
+            Ok(CappedLine::Unended) => Err(CliError::LineTooLong { limit }),
+            Ok(CappedLine::Line) => std::str::from_utf8(&bytes).map_err(|e| CliError::NotUtf8 {
+                byte: e.valid_up_to() + 1,
+            }),
+            Ok(CappedLine::TooLong) => Err(CliError::LineTooLong { limit }),
+            Err(source) => Err(CliError::Io {
+                context: "cannot read line".into(),
+                source,
+            }),
+        };
+        let result = result.and_then(|line| {
+            // A byte order mark, which spreadsheet programs put at the start of the CSV files
+            // they write, is not part of the first line.
+            let line = match i {
+                0 => line.strip_prefix('\u{feff}').unwrap_or(line),
+                _ => line,
+            };
+            if line.trim().is_empty() {
+                return Ok(Row::Held);
+            }
+            if std::mem::take(&mut first)
+                && let Some(order) = crate::io::input::csv_header(chain, line)
+            {
+                return Ok(match order {
+                    Ok(order) => {
+                        header = Some(order);
+                        Row::Held
+                    }
+                    Err(e) => Row::BadHeader(e.into()),
+                });
+            }
+            let c = batch_configuration(chain, line, header.as_ref())?;
+            if batchable && c.qd.is_none() && c.qdd.is_none() {
+                check_q(chain, &c.q, data.limit_policy())?;
+                pending.qs.extend_from_slice(&c.q);
+                pending.lines.push(i + 1);
+                return Ok(Row::Held);
+            }
+            Ok(Row::Single(c))
+        });
+        match result {
+            Ok(Row::Held) => {
+                if pending.lines.len() >= PendingPoses::MAX {
+                    failed_lines += pending.flush(chain, args, path, out)?;
+                }
+            }
+            // A header that cannot be read stops the run even under `--keep-going`: the rows
+            // below it would be read in another order than the file's. (Nothing is pending: a
+            // header is the first line that is not blank.)
+            Ok(Row::BadHeader(e)) => return Err(at_line(path, i + 1, e)),
+            Ok(Row::Single(c)) => {
+                failed_lines += pending.flush(chain, args, path, out)?;
+                match request.emit(chain, args, data, &c, Some(i + 1), out) {
+                    Ok(()) => {}
+                    Err(e @ CliError::Io { .. }) => return Err(e),
+                    Err(e) if args.keep_going => {
+                        failed_lines += 1;
+                        write_line(out, &failed_line(args.format, i + 1, &e))?;
+                    }
+                    Err(e) => return Err(at_line(path, i + 1, e)),
+                }
+            }
+            Err(e) => {
+                failed_lines += pending.flush(chain, args, path, out)?;
+                if !args.keep_going {
+                    return Err(at_line(path, i + 1, e));
+                }
+                failed_lines += 1;
+                write_line(out, &failed_line(args.format, i + 1, &e))?;
+            }
+        }
+    }
+    failed_lines += pending.flush(chain, args, path, out)?;
+    if failed_lines > 0 {
+        return Err(CliError::BatchFailures {
+            path: path.to_path_buf(),
+            count: failed_lines,
+        });
+    }
+    Ok(())
+}
+
+/// The longest batch line read, in bytes: 1 MiB, plus 1 KiB per degree of freedom (a line names
+/// at most three numbers per joint, or three members named after it).
+pub(super) fn batch_line_limit(dof: usize) -> usize {
+    (1 << 20) + dof.saturating_mul(1 << 10)
+}
+
+/// What [`read_capped_line`] read.
+#[derive(Debug)]
+pub(super) enum CappedLine {
+    /// A line (without its end) is in the buffer.
+    Line,
+    /// The line was longer than the cap; the rest of it was skipped.
+    TooLong,
+    /// The line was longer than the cap, and more than the bytes allowed to skip followed
+    /// without a line end (`/dev/zero`, a stream that never sends one): reading stopped.
+    Unended,
+    /// The input is exhausted.
+    End,
+}
+
+/// Reads one line of at most `limit` bytes into `buf` (cleared first; `\n` and a `\r` before it
+/// dropped). A longer line is skipped to its end without being kept, so one huge line costs no
+/// more memory than the cap, unless more than `skip` bytes past the cap come without a line end.
+pub(super) fn read_capped_line(
+    reader: &mut impl BufRead,
+    buf: &mut Vec<u8>,
+    limit: usize,
+    skip: usize,
+) -> std::io::Result<CappedLine> {
+    buf.clear();
+    let mut too_long = false;
+    let mut skipped = 0usize;
+    let mut any = false;
+    loop {
+        let available = match reader.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if available.is_empty() {
+            break;
+        }
+        any = true;
+        let (chunk, done) = match available.iter().position(|&b| b == b'\n') {
+            Some(end) => (&available[..end], Some(end + 1)),
+            None => (available, None),
+        };
+        if !too_long {
+            if buf.len() + chunk.len() > limit {
+                too_long = true;
+                buf.clear();
+            } else {
+                buf.extend_from_slice(chunk);
+            }
+        }
+        if too_long {
+            skipped = skipped.saturating_add(chunk.len());
+            if done.is_none() && skipped > skip {
+                return Ok(CappedLine::Unended);
+            }
+        }
+        let used = done.unwrap_or(chunk.len());
+        reader.consume(used);
+        if done.is_some() {
+            break;
+        }
+    }
+    if too_long {
+        return Ok(CappedLine::TooLong);
+    }
+    if !any {
+        return Ok(CappedLine::End);
+    }
+    if buf.last() == Some(&b'\r') {
+        buf.pop();
+    }
+    Ok(CappedLine::Line)
+}
+
+/// The output line standing in for a failed batch line under `--keep-going`: an object
+/// `{"line": N, "error": ".."}` in JSON output, `line N: error: ..` in a table.
+pub(super) fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
+    match format {
+        OutputFormat::Json => json!({ "line": line, "error": error_chain(e) }).to_string(),
+        OutputFormat::Table => format!("line {line}: error: {}", error_chain(e)),
+    }
+}
+
+/// One batch line through [`crate::io::input::parse_batch_row`] (rows of numbers in the order of
+/// `header`).
+pub(super) fn batch_configuration(
+    chain: &Chain,
+    line: &str,
+    header: Option<&crate::io::input::CsvHeader>,
+) -> Result<Configuration, CliError> {
+    let l = crate::io::input::parse_batch_row(chain, line, header)?;
+    Ok(Configuration {
+        q: l.q,
+        qd: l.q_dot,
+        qdd: l.q_ddot,
+    })
+}

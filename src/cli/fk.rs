@@ -1,0 +1,416 @@
+//! `kinechain fk`: one configuration's poses, rates, points and Jacobians.
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+/// One configuration to evaluate.
+pub(super) struct Configuration {
+    pub(super) q: Vec<f64>,
+    pub(super) qd: Option<Vec<f64>>,
+    pub(super) qdd: Option<Vec<f64>>,
+}
+
+/// Per link: pose, and velocity/acceleration when asked for.
+pub(super) type LinkResult = (
+    LinkId,
+    Transform,
+    Option<LinkVelocity>,
+    Option<LinkAcceleration>,
+);
+
+/// A point fixed on a link.
+pub(super) struct Point {
+    pub(super) link: LinkId,
+    pub(super) u: Vector3<f64>,
+}
+
+/// Per point: position, velocity, acceleration and its parts, as far as asked for.
+pub(super) struct PointResult {
+    pub(super) position: Vector3<f64>,
+    pub(super) velocity: Option<Vector3<f64>>,
+    pub(super) acceleration: Option<(Vector3<f64>, AccelerationParts)>,
+}
+
+impl Point {
+    /// `point LINK (x, y, z)`, the coordinates as given: for errors, and written straight into
+    /// each table line.
+    pub(super) fn label<'a>(&'a self, chain: &'a Chain) -> PointLabel<'a> {
+        PointLabel {
+            link: chain.link(self.link).name(),
+            u: &self.u,
+        }
+    }
+}
+
+/// [`Point::label`].
+pub(super) struct PointLabel<'a> {
+    pub(super) link: &'a str,
+    pub(super) u: &'a Vector3<f64>,
+}
+
+impl std::fmt::Display for PointLabel<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let u = self.u;
+        write!(f, "point {} ({:?}, {:?}, {:?})", self.link, u.x, u.y, u.z)
+    }
+}
+
+pub(super) fn parse_point(chain: &Chain, text: &str) -> Result<Point, CliError> {
+    let bad = || CliError::Point(text.to_string());
+    let (link, coords) = text.rsplit_once(':').ok_or_else(bad)?;
+    let values: Vec<f64> = coords
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    if values.len() != 3 || values.iter().any(|v| !v.is_finite()) {
+        return Err(bad());
+    }
+    Ok(Point {
+        link: chain.link_id(link)?,
+        u: Vector3::new(values[0], values[1], values[2]),
+    })
+}
+
+/// What `fk` computes for one configuration, in buffers reused from one to the next.
+pub(super) struct Outputs {
+    /// Per link printed: pose and the rates asked for.
+    pub(super) links: Vec<LinkResult>,
+    /// Per `--point`.
+    pub(super) points: Vec<PointResult>,
+    /// Per `--jacobian` link.
+    pub(super) jacobians: Vec<JacobianResult>,
+}
+
+/// One `--jacobian` link's matrices, in buffers reused from one configuration to the next.
+pub(super) struct JacobianResult {
+    pub(super) link: LinkId,
+    pub(super) j: nalgebra::Matrix6xX<f64>,
+    /// `J̇`, current when `with_rate` (the configuration has `qd`).
+    pub(super) j_dot: nalgebra::Matrix6xX<f64>,
+    pub(super) with_rate: bool,
+}
+
+/// Writes each Jacobian of `jacobians` from `poses`, and its time derivative from `velocities`
+/// when given; an entry too large for `f64` is an error.
+pub(super) fn jacobians_from(
+    chain: &Chain,
+    poses: &Poses,
+    velocities: Option<&Velocities>,
+    jacobians: &mut [JacobianResult],
+) -> Result<(), CliError> {
+    for r in jacobians {
+        let place = || format!("link '{}'", chain.link(r.link).name());
+        poses.jacobian_into(r.link, &mut r.j);
+        if !r.j.iter().all(|x| x.is_finite()) {
+            return Err(CliError::NotFinite {
+                what: "jacobian",
+                place: place(),
+            });
+        }
+        r.with_rate = velocities.is_some();
+        if let Some(v) = velocities {
+            v.jacobian_dot_into(r.link, &mut r.j_dot);
+            if !r.j_dot.iter().all(|x| x.is_finite()) {
+                return Err(CliError::NotFinite {
+                    what: "jacobian rate",
+                    place: place(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+pub(super) fn evaluate(
+    chain: &Chain,
+    data: &mut Data,
+    c: &Configuration,
+    links: &[LinkId],
+    points: &[Point],
+    out: &mut Outputs,
+) -> Result<(), CliError> {
+    let Outputs {
+        links: results,
+        points: point_results,
+        jacobians,
+    } = out;
+    results.clear();
+    point_results.clear();
+    let all: Vec<LinkId>;
+    let wanted = if links.is_empty() {
+        all = (0..chain.links().len()).map(LinkId).collect();
+        &all[..]
+    } else {
+        links
+    };
+    match (&c.qd, &c.qdd) {
+        (None, Some(_)) => return Err(CliError::QddWithoutQd),
+        // Only the paths to the links asked for, unless a point or a Jacobian needs the poses
+        // view of a whole evaluation.
+        (None, None) if !links.is_empty() && points.is_empty() && jacobians.is_empty() => {
+            for &l in wanted {
+                let pose = forward_kinematics_to(chain, data, &c.q, l)?;
+                results.push((l, pose, None, None));
+            }
+        }
+        (None, None) => {
+            let poses = forward_kinematics(chain, data, &c.q)?;
+            jacobians_from(chain, &poses, None, jacobians)?;
+            results.extend(
+                wanted
+                    .iter()
+                    .map(|&l| (l, poses.world_from_link(l), None, None)),
+            );
+            point_results.extend(points.iter().map(|p| {
+                PointResult {
+                    position: poses
+                        .world_from_link(p.link)
+                        .transform_point(&p.u.into())
+                        .coords,
+                    velocity: None,
+                    acceleration: None,
+                }
+            }));
+        }
+        (Some(qd), None) => {
+            let v = forward_velocities(chain, data, &c.q, qd)?;
+            jacobians_from(chain, &v.poses(), Some(&v), jacobians)?;
+            results.extend(
+                wanted
+                    .iter()
+                    .map(|&l| (l, v.world_from_link(l), Some(v.velocity(l)), None)),
+            );
+            point_results.extend(points.iter().map(|p| {
+                let m = v.point(p.link, &p.u);
+                PointResult {
+                    position: m.position,
+                    velocity: Some(m.velocity),
+                    acceleration: None,
+                }
+            }));
+        }
+        (Some(qd), Some(qdd)) => {
+            let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
+            jacobians_from(chain, &a.poses(), Some(&a.velocities()), jacobians)?;
+            results.extend(wanted.iter().map(|&l| {
+                (
+                    l,
+                    a.world_from_link(l),
+                    Some(a.velocity(l)),
+                    Some(a.acceleration(l)),
+                )
+            }));
+            point_results.extend(points.iter().map(|p| {
+                let m = a.point(p.link, &p.u);
+                PointResult {
+                    position: m.position,
+                    velocity: Some(m.velocity),
+                    acceleration: Some((m.acceleration, m.parts)),
+                }
+            }));
+        }
+    }
+    Ok(())
+}
+
+/// `fk --format table`: appends a line per point (each starting with a newline): its position,
+/// then its rates.
+pub(super) fn points_table(
+    chain: &Chain,
+    points: &[Point],
+    results: &[PointResult],
+    buf: &mut Vec<u8>,
+) {
+    let v3 = |buf: &mut Vec<u8>, label: &str, v: &Vector3<f64>| {
+        let _ = write!(buf, "{label}(");
+        push_cells(buf, [v.x, v.y, v.z], b", ", 0);
+        buf.push(b')');
+    };
+    for (p, r) in points.iter().zip(results) {
+        let _ = write!(buf, "\n{}: ", p.label(chain));
+        v3(buf, "position ", &r.position);
+        if let Some(v) = &r.velocity {
+            v3(buf, ", velocity ", v);
+        }
+        if let Some((a, _)) = &r.acceleration {
+            v3(buf, ", acceleration ", a);
+        }
+    }
+}
+
+/// `fk --format table`: appends each Jacobian (and `J̇`, with rates) under a heading naming its
+/// link, one row per twist component (each line starting with a newline).
+pub(super) fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult], buf: &mut Vec<u8>) {
+    let block = |buf: &mut Vec<u8>, m: &nalgebra::Matrix6xX<f64>| {
+        for (name, row) in ["v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z"]
+            .iter()
+            .zip(m.row_iter())
+        {
+            let _ = write!(buf, "\n{name:<8}");
+            push_cells(buf, row.iter().copied(), b" ", 12);
+        }
+    };
+    for r in jacobians {
+        let link = chain.link(r.link).name();
+        let _ = write!(
+            buf,
+            "\njacobian of {link} ([v; omega] = J qd, columns in q order)"
+        );
+        block(buf, &r.j);
+        if r.with_rate {
+            let _ = write!(
+                buf,
+                "\njacobian rate of {link} ([a; alpha] = J qdd + Jdot qd)"
+            );
+            block(buf, &r.j_dot);
+        }
+    }
+}
+
+pub(super) fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let chain = load(&args.robot)?;
+    let mut data = Data::new(&chain);
+    if args.ignore_limits {
+        data.set_limit_policy(LimitPolicy::Ignore);
+    }
+    let mut request = Request::new(&chain, args)?;
+    if let Some(path) = &args.batch {
+        return fk_batch_file(&chain, args, &mut data, &mut request, path, out);
+    }
+    let q = args.q.as_deref().unwrap_or_default();
+    let c = Configuration {
+        q: joint_vector_from_str(&chain, q, "q")?,
+        qd: args
+            .qd
+            .as_deref()
+            .map(|t| joint_vector_from_str(&chain, t, "qd"))
+            .transpose()?,
+        qdd: args
+            .qdd
+            .as_deref()
+            .map(|t| joint_vector_from_str(&chain, t, "qdd"))
+            .transpose()?,
+    };
+    request.emit(&chain, args, &mut data, &c, None, out)
+}
+
+/// What `fk` prints for each configuration (`--link`, `--point`, `--jacobian`), with the
+/// buffers of the results.
+pub(super) struct Request {
+    pub(super) links: Vec<LinkId>,
+    pub(super) points: Vec<Point>,
+    pub(super) outputs: Outputs,
+    /// One line of output (JSON or a table), reused.
+    pub(super) text: Vec<u8>,
+}
+
+impl Request {
+    fn new(chain: &Chain, args: &FkArgs) -> Result<Request, CliError> {
+        // A link named twice in `--link` or `--jacobian` is printed once (a JSON object cannot
+        // hold its name twice), where it was first named.
+        let unique = |names: &[String]| -> Result<Vec<LinkId>, CliError> {
+            let mut ids = Vec::with_capacity(names.len());
+            for name in names {
+                let id = chain.link_id(name)?;
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+            }
+            Ok(ids)
+        };
+        let links = unique(&args.links)?;
+        let points = args
+            .points
+            .iter()
+            .map(|p| parse_point(chain, p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let outputs = Outputs {
+            links: Vec::with_capacity(chain.links().len()),
+            points: Vec::with_capacity(points.len()),
+            jacobians: unique(&args.jacobians)?
+                .into_iter()
+                .map(|link| JacobianResult {
+                    link,
+                    j: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    j_dot: nalgebra::Matrix6xX::zeros(chain.dof()),
+                    with_rate: false,
+                })
+                .collect(),
+        };
+        Ok(Request {
+            links,
+            points,
+            outputs,
+            text: Vec::new(),
+        })
+    }
+
+    /// Whether the request is every link's pose and nothing else, which the batch kernel can
+    /// evaluate (a chain without moving joints has empty configurations, which a flat batch
+    /// cannot count).
+    pub(super) fn poses_only(&self, chain: &Chain) -> bool {
+        self.links.is_empty()
+            && self.points.is_empty()
+            && self.outputs.jacobians.is_empty()
+            && chain.dof() > 0
+    }
+
+    /// Evaluates `c` and writes its results in the format `args` asks for, headed by the batch
+    /// line `line` they are for, if any.
+    pub(super) fn emit(
+        &mut self,
+        chain: &Chain,
+        args: &FkArgs,
+        data: &mut Data,
+        c: &Configuration,
+        line: Option<usize>,
+        out: &mut dyn Write,
+    ) -> Result<(), CliError> {
+        evaluate(chain, data, c, &self.links, &self.points, &mut self.outputs)?;
+        let Outputs {
+            links: results,
+            points: point_results,
+            jacobians,
+        } = &self.outputs;
+        let points = &self.points;
+        check_finite(chain, results, points, point_results)?;
+        match args.format {
+            OutputFormat::Json => {
+                let value = ResultsJson {
+                    line,
+                    chain,
+                    results,
+                    orientation: args.orientation,
+                    points,
+                    point_results,
+                    jacobians,
+                };
+                write_json_line(out, &mut self.text, &value)
+            }
+            OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
+                line_heading(line, buf);
+                results_table(chain, results, args.orientation, buf);
+                points_table(chain, points, point_results, buf);
+                jacobians_table(chain, jacobians, buf);
+                Ok(())
+            }),
+        }
+    }
+}
+
+/// The heading of a batch line's table, `line N:` on a line of its own.
+pub(super) fn line_heading(line: Option<usize>, buf: &mut Vec<u8>) {
+    if let Some(line) = line {
+        buf.extend_from_slice(format!("line {line}:\n").as_bytes());
+    }
+}
+
+/// The error of line `line` of the batch file `path`.
+pub(super) fn at_line(path: &Path, line: usize, source: CliError) -> CliError {
+    CliError::BatchLine {
+        path: path.to_path_buf(),
+        line,
+        source: Box::new(source),
+    }
+}

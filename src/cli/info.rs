@@ -1,0 +1,126 @@
+//! `kinechain info`: the joints in `q` order, their limits, and the links.
+
+#[allow(clippy::wildcard_imports)]
+use super::*;
+
+pub(super) fn limits_json(joint: &crate::model::chain::Joint) -> Value {
+    let one = |l: &Option<crate::model::joint::Limits>| match l {
+        Some(l) => json!([l.lower, l.upper]),
+        None => Value::Null,
+    };
+    match joint.limits() {
+        [l] => one(l),
+        [theta, d] => json!({"theta": one(theta), "d": one(d)}),
+        _ => Value::Null,
+    }
+}
+
+/// The limits column of `info --format table`: `[lower, upper]` or `none`, a cylindrical
+/// joint's as `theta [..], d [..]`.
+pub(super) fn limits_text(joint: &crate::model::chain::Joint) -> String {
+    let one = |l: &Option<crate::model::joint::Limits>| match l {
+        Some(l) => format!("[{}, {}]", l.lower, l.upper),
+        None => "none".to_string(),
+    };
+    match joint.limits() {
+        [l] => one(l),
+        [theta, d] => format!("theta {}, d {}", one(theta), one(d)),
+        _ => String::new(),
+    }
+}
+
+pub(super) fn info(
+    chain: &Chain,
+    format: OutputFormat,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let independent = chain.joints().iter().filter(|j| j.dof() > 0);
+    let passive = chain.joints().iter().filter(|j| j.dof() == 0);
+    match format {
+        OutputFormat::Json => {
+            let joints: Vec<Value> = independent
+                .map(|j| {
+                    json!({
+                        "name": j.name(),
+                        "type": j.kind().as_str(),
+                        "dof": j.dof(),
+                        "limits": limits_json(j),
+                    })
+                })
+                .collect();
+            let passive: Vec<Value> = passive
+                .map(|j| {
+                    let mut m = Map::new();
+                    m.insert("name".into(), json!(j.name()));
+                    m.insert("type".into(), json!(j.kind().as_str()));
+                    if let Some(mimic) = j.mimic() {
+                        m.insert(
+                            "mimic".into(),
+                            json!({
+                                "joint": chain.joint(mimic.primary).name(),
+                                "multiplier": mimic.multiplier,
+                                "offset": mimic.offset,
+                            }),
+                        );
+                    }
+                    Value::Object(m)
+                })
+                .collect();
+            let links: Vec<&str> = chain.links().iter().map(|l| l.name()).collect();
+            let value = json!({
+                "name": chain.name(),
+                "dof": chain.dof(),
+                "joints": joints,
+                "passive_joints": passive,
+                "links": links,
+            });
+            write_line(out, &value.to_string())
+        }
+        OutputFormat::Table => {
+            let mut text = format!(
+                "{}: {} degree{} of freedom\n",
+                chain.name(),
+                chain.dof(),
+                if chain.dof() == 1 { "" } else { "s" }
+            );
+            text.push_str(&format!(
+                "{:>4}  {:<28} {:<12} {}\n",
+                "q", "joint", "type", "limits"
+            ));
+            for j in independent {
+                let limits = limits_text(j);
+                text.push_str(&format!(
+                    "{:>4}  {:<28} {:<12} {}\n",
+                    j.q_index().unwrap_or(0),
+                    j.name(),
+                    j.kind().as_str(),
+                    limits
+                ));
+            }
+            for j in passive {
+                let note = match j.mimic() {
+                    Some(m) => format!(
+                        "mimics {} (x{} {:+})",
+                        chain.joint(m.primary).name(),
+                        m.multiplier,
+                        m.offset
+                    ),
+                    None => String::new(),
+                };
+                text.push_str(&format!(
+                    "{:>4}  {:<28} {:<12} {}\n",
+                    "-",
+                    j.name(),
+                    j.kind().as_str(),
+                    note
+                ));
+            }
+            text.push_str("links:");
+            for l in chain.links() {
+                text.push(' ');
+                text.push_str(l.name());
+            }
+            write_line(out, &text)
+        }
+    }
+}

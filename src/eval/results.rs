@@ -1,0 +1,560 @@
+//! What the evaluation functions return: views of a [`Data`] buffer filled by one evaluation,
+//! giving each link's pose ([`Poses`]), velocity ([`Velocities`]) and acceleration
+//! ([`Accelerations`]), points fixed on links, and geometric Jacobians and their rates.
+//!
+//! Every quantity is in the world (base) frame; `v` is the velocity of the link-frame origin and
+//! `a` its classical acceleration (see [`crate::eval::kinematics`]).
+
+use crate::eval::chain::Chain;
+use crate::eval::data::Data;
+use crate::eval::layout::{Body, Placement};
+use crate::eval::padded;
+use crate::model::chain::LinkId;
+use crate::model::transform::{Transform, add3, cross3, scale3, sub3};
+use nalgebra::Vector3;
+
+/// Angular velocity and linear velocity of a link-frame origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkVelocity {
+    /// Angular velocity ω (rad/s).
+    pub omega: Vector3<f64>,
+    /// Velocity of the link-frame origin (m/s).
+    pub v: Vector3<f64>,
+}
+
+/// Angular acceleration and classical linear acceleration of a link-frame origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkAcceleration {
+    /// Angular acceleration α = dω/dt (rad/s²).
+    pub alpha: Vector3<f64>,
+    /// Classical acceleration of the link-frame origin, d²p/dt² (m/s²).
+    pub a: Vector3<f64>,
+}
+
+/// Position and velocity of a point of a link (world frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointVelocity {
+    /// Position `r = R + A ū` (eq. 2.52).
+    pub position: Vector3<f64>,
+    /// Velocity `ṙ = Ṙ + ω × u (+ A dū/dt for a moving point)` (eq. 2.55), `u = A ū`.
+    pub velocity: Vector3<f64>,
+}
+
+/// The parts of a point's acceleration (eq. 2.75), world frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelerationParts {
+    /// Classical acceleration of the link-frame origin, `R̈`.
+    pub origin: Vector3<f64>,
+    /// Tangential part `α × u`.
+    pub tangential: Vector3<f64>,
+    /// Normal (centripetal) part `ω × (ω × u)`.
+    pub normal: Vector3<f64>,
+    /// Coriolis part `2 ω × (A dū/dt)` (zero for a point fixed on the link).
+    pub coriolis: Vector3<f64>,
+    /// Local part `A d²ū/dt²`, the point's acceleration relative to the link (zero for a fixed point).
+    pub local: Vector3<f64>,
+}
+
+/// Position, velocity and acceleration of a point of a link (world frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointMotion {
+    /// Position `r = R + A ū` (eq. 2.52).
+    pub position: Vector3<f64>,
+    /// Velocity (eq. 2.55, plus `A dū/dt` for a moving point).
+    pub velocity: Vector3<f64>,
+    /// Classical acceleration, the sum of [`PointMotion::parts`] (eq. 2.75).
+    pub acceleration: Vector3<f64>,
+    /// The acceleration's parts.
+    pub parts: AccelerationParts,
+}
+
+/// Poses of every link after [`forward_kinematics`] or [`forward_kinematics_incremental`].
+#[derive(Clone, Copy, Debug)]
+pub struct Poses<'a> {
+    pub(crate) chain: &'a Chain,
+    pub(crate) data: &'a Data,
+}
+
+/// Poses and velocities of every link after [`forward_velocities`].
+#[derive(Clone, Copy, Debug)]
+pub struct Velocities<'a> {
+    pub(crate) poses: Poses<'a>,
+}
+
+/// Poses, velocities and accelerations of every link after [`forward_accelerations`].
+#[derive(Clone, Copy, Debug)]
+pub struct Accelerations<'a> {
+    pub(crate) poses: Poses<'a>,
+}
+
+impl<'a> Poses<'a> {
+    /// The chain evaluated.
+    #[must_use]
+    pub fn chain(&self) -> &'a Chain {
+        self.chain
+    }
+
+    /// Pose of `link` in the world frame.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    #[must_use]
+    #[inline]
+    pub fn world_from_link(&self, link: LinkId) -> Transform {
+        let l = self.chain.carrier(link);
+        match l.body {
+            None => l.offset.to_transform(),
+            // (Also for an identity offset: `link_pose` writes the result in whole vectors.)
+            Some(b) => padded::link_pose(&self.data.world_from_body[b], &l.offset),
+        }
+    }
+
+    /// A moving joint's axis in the world frame: a point on it (the joint-frame origin) and its
+    /// unit direction; `None` for a fixed joint.
+    ///
+    /// # Panics
+    /// If `joint` comes from another chain with more joints.
+    #[must_use]
+    pub fn joint_axis(
+        &self,
+        joint: crate::model::chain::JointId,
+    ) -> Option<(nalgebra::Point3<f64>, Vector3<f64>)> {
+        let _ = self.chain.joint(joint);
+        let body = self
+            .chain
+            .bodies
+            .iter()
+            .find(|b| b.joint == joint.index())?;
+        Some(self.axis_of(body))
+    }
+
+    /// A body's joint axis in the world frame: the joint-frame origin and the unit direction.
+    #[inline]
+    fn axis_of(&self, body: &Body) -> (nalgebra::Point3<f64>, Vector3<f64>) {
+        let (origin, z) = self.axis_entries(body);
+        (origin.into(), z.into())
+    }
+
+    /// [`Poses::axis_of`] on plain arrays, read from the parent's stored frame in place.
+    #[inline(always)]
+    fn axis_entries(&self, body: &Body) -> ([f64; 3], [f64; 3]) {
+        let (parent_origin, offset, z) = self.axis_parts(body);
+        (add3(parent_origin, offset), z)
+    }
+
+    /// The parts of a body's joint axis in the world frame: the origin of the frame before the
+    /// joint (the parent body's, or the world's), the joint-frame origin's offset from it in
+    /// world axes, and the unit direction.
+    #[inline(always)]
+    fn axis_parts(&self, body: &Body) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        match body.parent {
+            Some(p) => {
+                let parent = &self.data.world_from_body[p];
+                let r = Transform {
+                    r: [
+                        padded::cut(&parent[0]),
+                        padded::cut(&parent[1]),
+                        padded::cut(&parent[2]),
+                    ],
+                    p: [0.0; 3],
+                };
+                (
+                    padded::cut(&parent[3]),
+                    r.apply(body.pre_frame.p),
+                    r.apply(body.axis_in_parent),
+                )
+            }
+            None => ([0.0; 3], body.pre_frame.p, body.axis_in_parent),
+        }
+    }
+
+    /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`]
+    /// matrix `J` with `[v; ω] = J q̇`, where `v` is the velocity of the link-frame origin and `ω`
+    /// the link's angular velocity, both in the world frame (the same quantities as
+    /// [`Velocities::velocity`], in the row order Pinocchio and KDL use: linear rows first).
+    ///
+    /// Column `i` is what entry `i` of `q̇` contributes (eqs. 2.120, 2.121): for a turning joint
+    /// with world axis `z` through `p_j`, `[z × (p − p_j); z]`; for a sliding one `[z; 0]`; a
+    /// cylindrical joint fills two columns, a mimic joint adds its multiplier times its own
+    /// column to its primary's, and joints not between the base and the link leave zeros.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, Data, forward_kinematics, forward_velocities, nalgebra::DVector};
+    /// let chain = Chain::from_file("robots/puma560.yaml")?;
+    /// let mut data = Data::new(&chain);
+    /// let (q, qd) = ([0.1, -0.5, 0.3, 0.2, 0.4, 0.0], [0.3, 0.1, -0.2, 0.5, 0.0, 1.0]);
+    /// let tool = chain.link_id("tool")?;
+    /// let j = forward_kinematics(&chain, &mut data, &q)?.jacobian(tool);
+    /// let twist = j * DVector::from_row_slice(&qd);
+    /// let v = forward_velocities(&chain, &mut data, &q, &qd)?.velocity(tool);
+    /// approx::assert_relative_eq!(twist.fixed_rows::<3>(0).into_owned(), v.v, epsilon = 1e-14);
+    /// approx::assert_relative_eq!(twist.fixed_rows::<3>(3).into_owned(), v.omega, epsilon = 1e-14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn jacobian(&self, link: LinkId) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain.dof());
+        self.jacobian_into(link, &mut j);
+        j
+    }
+
+    /// [`Poses::jacobian`] written into `j`, which is resized to 6 × [`Chain::dof`] if it has
+    /// another shape (so a reused matrix allocates nothing).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
+        let p = self.world_from_link(link).p;
+        self.path_columns(link, j, |bd| {
+            let (origin, z) = self.axis_entries(bd);
+            let turning = cross3(z, sub3(p, origin));
+            (join(turning, z), join(z, [0.0; 3]))
+        });
+    }
+
+    /// `j` (resized to 6 × [`Chain::dof`] if it has another shape) ← the sum, over the bodies
+    /// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
+    /// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
+    /// joint's two), and entries of joints off the path stay zero.
+    #[inline(always)]
+    fn path_columns(
+        &self,
+        link: LinkId,
+        j: &mut nalgebra::Matrix6xX<f64>,
+        mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
+    ) {
+        let dof = self.chain.dof();
+        if j.ncols() != dof {
+            *j = nalgebra::Matrix6xX::zeros(dof);
+        }
+        // Column-major: column i is entries 6i..6i + 6, zeroed whole, then added to entry by
+        // entry.
+        let entries = j.as_mut_slice();
+        entries.fill(0.0);
+        let mut body = self.chain.carrier(link).body;
+        while let Some(b) = body {
+            let bd = &self.chain.bodies[b];
+            let (turning, sliding) = columns(bd);
+            for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
+                if rate.scale != 0.0 {
+                    let column = &mut entries[6 * rate.index..6 * rate.index + 6];
+                    for (c, x) in column.iter_mut().zip(terms) {
+                        *c += x * rate.scale;
+                    }
+                }
+            }
+            body = bd.parent;
+        }
+    }
+
+    /// The frame a link's motion is computed for, and the link's offset from it in world axes:
+    /// the body's rotation applied to the offset's translation (not the difference of the two
+    /// origins, which would cancel and need the link's whole pose).
+    #[inline]
+    fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
+        let l = self.chain.carrier(link);
+        let b = l.body?;
+        let r = match l.offset {
+            Placement::Identity => [0.0; 3],
+            offset => {
+                padded::transform(&self.data.world_from_body[b]).apply(offset.to_transform().p)
+            }
+        };
+        Some((b, r))
+    }
+
+    #[inline]
+    fn velocity(&self, link: LinkId) -> LinkVelocity {
+        let (omega, v) = match self.carrier(link) {
+            None => ([0.0; 3], [0.0; 3]),
+            Some((b, r)) => {
+                let body = &self.data.rates[b];
+                let omega = padded::cut(&body.omega);
+                (omega, add3(padded::cut(&body.v), cross3(omega, r)))
+            }
+        };
+        LinkVelocity {
+            omega: omega.into(),
+            v: v.into(),
+        }
+    }
+
+    /// Link pose, ω, and `u = A ū` for a point `u_bar` of the link.
+    fn point_frame(&self, link: LinkId, u_bar: &Vector3<f64>) -> (Transform, [f64; 3]) {
+        let pose = self.world_from_link(link);
+        let u = pose.apply((*u_bar).into());
+        (pose, u)
+    }
+
+    fn point_velocity(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+    ) -> PointVelocity {
+        let (pose, u) = self.point_frame(link, u_bar);
+        let v = self.velocity(link);
+        let relative = pose.apply((*u_bar_dot).into());
+        PointVelocity {
+            position: Vector3::from(add3(pose.p, u)),
+            velocity: Vector3::from(add3(add3(v.v.into(), cross3(v.omega.into(), u)), relative)),
+        }
+    }
+
+    fn point_motion(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+        u_bar_ddot: &Vector3<f64>,
+    ) -> PointMotion {
+        let (pose, u) = self.point_frame(link, u_bar);
+        let pv = self.point_velocity(link, u_bar, u_bar_dot);
+        let w: [f64; 3] = self.velocity(link).omega.into();
+        let acc = self.acceleration(link);
+        let v_rel = pose.apply((*u_bar_dot).into());
+        // eq. (2.75): local, Coriolis, tangential and normal terms, plus the origin's acceleration.
+        let parts = AccelerationParts {
+            origin: acc.a,
+            tangential: Vector3::from(cross3(acc.alpha.into(), u)),
+            normal: Vector3::from(cross3(w, cross3(w, u))),
+            coriolis: Vector3::from(scale3(2.0, cross3(w, v_rel))),
+            local: Vector3::from(pose.apply((*u_bar_ddot).into())),
+        };
+        PointMotion {
+            position: pv.position,
+            velocity: pv.velocity,
+            acceleration: parts.origin
+                + parts.tangential
+                + parts.normal
+                + parts.coriolis
+                + parts.local,
+            parts,
+        }
+    }
+
+    #[inline]
+    fn acceleration(&self, link: LinkId) -> LinkAcceleration {
+        let (alpha, a) = match self.carrier(link) {
+            None => ([0.0; 3], [0.0; 3]),
+            Some((b, r)) => {
+                let body = &self.data.rates[b];
+                let (w, al) = (padded::cut(&body.omega), padded::cut(&body.alpha));
+                let a = add3(
+                    padded::cut(&body.a),
+                    add3(cross3(al, r), cross3(w, cross3(w, r))),
+                );
+                (al, a)
+            }
+        };
+        LinkAcceleration {
+            alpha: alpha.into(),
+            a: a.into(),
+        }
+    }
+}
+
+impl<'a> Velocities<'a> {
+    /// The chain evaluated.
+    #[must_use]
+    pub fn chain(&self) -> &'a Chain {
+        self.poses.chain
+    }
+
+    /// The poses of the same evaluation.
+    #[must_use]
+    pub fn poses(&self) -> Poses<'a> {
+        self.poses
+    }
+
+    /// Pose of `link` in the world frame.
+    #[must_use]
+    #[inline]
+    pub fn world_from_link(&self, link: LinkId) -> Transform {
+        self.poses.world_from_link(link)
+    }
+
+    /// Angular velocity of `link` and linear velocity of its origin, world frame.
+    #[must_use]
+    #[inline]
+    pub fn velocity(&self, link: LinkId) -> LinkVelocity {
+        self.poses.velocity(link)
+    }
+
+    /// The same as [`Velocities::velocity`] with components in the link's own frame:
+    /// `ω̄ = Aᵀ ω` (eq. 2.41) and `v̄ = Aᵀ v`.
+    #[must_use]
+    pub fn velocity_local(&self, link: LinkId) -> LinkVelocity {
+        let pose = self.world_from_link(link);
+        let v = self.velocity(link);
+        LinkVelocity {
+            omega: pose.rotation().transpose() * v.omega,
+            v: pose.rotation().transpose() * v.v,
+        }
+    }
+
+    /// Position and velocity of the point with link coordinates `u_bar` (eqs. 2.52, 2.55).
+    #[must_use]
+    pub fn point(&self, link: LinkId, u_bar: &Vector3<f64>) -> PointVelocity {
+        self.poses.point_velocity(link, u_bar, &Vector3::zeros())
+    }
+
+    /// The time derivative `J̇` of [`Poses::jacobian`] at the evaluated state, so that the
+    /// link's angular acceleration and the classical acceleration of its origin are
+    /// `[a; α] = J q̈ + J̇ q̇` (eqs. 2.122–2.127); `J̇ q̇` is the part of
+    /// [`Accelerations::acceleration`] that does not come from `q̈`.
+    ///
+    /// Each joint axis is fixed in the frame before its joint, which turns with that frame's
+    /// angular velocity `ω_j`: a turning column `[z × (p − p_j); z]` changes at
+    /// `[ż × (p − p_j) + z × (ṗ − ṗ_j); ż]` with `ż = ω_j × z` (eq. 2.120 for `ṗ_j`, the
+    /// velocity of the axis point), a sliding column `[z; 0]` at `[ż; 0]`.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, Data, forward_accelerations, forward_velocities, nalgebra::DVector};
+    /// let chain = Chain::from_file("robots/stanford.yaml")?; // joint 3 slides
+    /// let mut data = Data::new(&chain);
+    /// let q = [0.1, -0.5, 0.6, 0.2, 0.4, 0.0];
+    /// let (qd, qdd) = ([0.3, 0.1, -0.2, 0.5, 0.0, 1.0], [0.2, -0.4, 0.1, 0.0, 0.3, -0.1]);
+    /// let tool = chain.link_id("tool")?;
+    /// let vel = forward_velocities(&chain, &mut data, &q, &qd)?;
+    /// let (j, j_dot) = (vel.poses().jacobian(tool), vel.jacobian_dot(tool));
+    /// let motion = j * DVector::from_row_slice(&qdd) + j_dot * DVector::from_row_slice(&qd);
+    /// let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd)?.acceleration(tool);
+    /// approx::assert_relative_eq!(motion.fixed_rows::<3>(0).into_owned(), acc.a, epsilon = 1e-14);
+    /// approx::assert_relative_eq!(motion.fixed_rows::<3>(3).into_owned(), acc.alpha, epsilon = 1e-14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn jacobian_dot(&self, link: LinkId) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain().dof());
+        self.jacobian_dot_into(link, &mut j);
+        j
+    }
+
+    /// [`Velocities::jacobian_dot`] written into `j`, which is resized to 6 × [`Chain::dof`] if
+    /// it has another shape (so a reused matrix allocates nothing).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_dot_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
+        let poses = &self.poses;
+        let p = poses.world_from_link(link).p;
+        let p_dot: [f64; 3] = self.velocity(link).v.into();
+        poses.path_columns(link, j, |bd| {
+            let (parent_origin, offset, z) = poses.axis_parts(bd);
+            let origin = add3(parent_origin, offset);
+            // The frame before the joint turns at ω and its origin moves at v; the axis point
+            // at v + ω × offset (the offset in world axes, not a difference of origins).
+            let (omega, origin_dot) = match bd.parent {
+                Some(parent) => {
+                    let rates = &poses.data.rates[parent];
+                    let (omega, v) = (padded::cut(&rates.omega), padded::cut(&rates.v));
+                    (omega, add3(v, cross3(omega, offset)))
+                }
+                None => ([0.0; 3], [0.0; 3]),
+            };
+            let z_dot = cross3(omega, z);
+            let turning = add3(
+                cross3(z_dot, sub3(p, origin)),
+                cross3(z, sub3(p_dot, origin_dot)),
+            );
+            (join(turning, z_dot), join(z_dot, [0.0; 3]))
+        });
+    }
+}
+
+impl<'a> Accelerations<'a> {
+    /// The chain evaluated.
+    #[must_use]
+    pub fn chain(&self) -> &'a Chain {
+        self.poses.chain
+    }
+
+    /// The poses of the same evaluation.
+    #[must_use]
+    pub fn poses(&self) -> Poses<'a> {
+        self.poses
+    }
+
+    /// The velocities of the same evaluation.
+    #[must_use]
+    pub fn velocities(&self) -> Velocities<'a> {
+        Velocities { poses: self.poses }
+    }
+
+    /// Pose of `link` in the world frame.
+    #[must_use]
+    #[inline]
+    pub fn world_from_link(&self, link: LinkId) -> Transform {
+        self.poses.world_from_link(link)
+    }
+
+    /// Angular velocity of `link` and linear velocity of its origin, world frame.
+    #[must_use]
+    #[inline]
+    pub fn velocity(&self, link: LinkId) -> LinkVelocity {
+        self.poses.velocity(link)
+    }
+
+    /// Angular acceleration of `link` and classical acceleration of its origin, world frame.
+    #[must_use]
+    #[inline]
+    pub fn acceleration(&self, link: LinkId) -> LinkAcceleration {
+        self.poses.acceleration(link)
+    }
+
+    /// The same as [`Accelerations::velocity`] with components in the link's own frame.
+    #[must_use]
+    pub fn velocity_local(&self, link: LinkId) -> LinkVelocity {
+        self.velocities().velocity_local(link)
+    }
+
+    /// The same as [`Accelerations::acceleration`] with components in the link's own frame:
+    /// `ᾱ = Aᵀ α`, `ā = Aᵀ a`.
+    #[must_use]
+    pub fn acceleration_local(&self, link: LinkId) -> LinkAcceleration {
+        let rt = self.world_from_link(link).rotation().transpose();
+        let a = self.acceleration(link);
+        LinkAcceleration {
+            alpha: rt * a.alpha,
+            a: rt * a.a,
+        }
+    }
+
+    /// Position, velocity and acceleration of the point fixed at link coordinates `u_bar`:
+    /// `r̈ = R̈ + α × u + ω × (ω × u)` with `u = A ū` (eqs. 2.52, 2.55 and the fixed-point case
+    /// of 2.75).
+    #[must_use]
+    pub fn point(&self, link: LinkId, u_bar: &Vector3<f64>) -> PointMotion {
+        let zero = Vector3::zeros();
+        self.poses.point_motion(link, u_bar, &zero, &zero)
+    }
+
+    /// A point moving in the link frame, at `u_bar` with velocity `u_bar_dot` and acceleration
+    /// `u_bar_ddot` relative to the link (link coordinates): eq. (2.75),
+    /// `r̈ = R̈ + A ü + 2 ω × (A u̇) + α × u + ω × (ω × u)`.
+    #[must_use]
+    pub fn moving_point(
+        &self,
+        link: LinkId,
+        u_bar: &Vector3<f64>,
+        u_bar_dot: &Vector3<f64>,
+        u_bar_ddot: &Vector3<f64>,
+    ) -> PointMotion {
+        self.poses.point_motion(link, u_bar, u_bar_dot, u_bar_ddot)
+    }
+}
+
+/// Six entries: `a` then `b`.
+#[inline(always)]
+fn join(a: [f64; 3], b: [f64; 3]) -> [f64; 6] {
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
+}
