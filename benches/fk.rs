@@ -168,7 +168,7 @@ fn k_baseline(c: &mut Criterion) {
 
 /// The textbook method: multiply eq. (2.129)-style 4×4 matrices with `nalgebra::Matrix4`.
 fn naive_baseline(c: &mut Criterion) {
-    use kinechain::joint::{DhConvention, dh_transform};
+    use kinechain::model::joint::{DhConvention, dh_transform};
     use kinechain::nalgebra::Matrix4;
     // The Panda arm's modified DH table (robots/panda_mdh.yaml): (a, alpha, d).
     let rows: [(f64, f64, f64); 7] = [
@@ -233,7 +233,7 @@ fn batches(c: &mut Criterion) {
 /// One thread and the pool, all links and the end link only, for `n` configurations of `chain`.
 fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
-    use kinechain::batch::{
+    use kinechain::eval::batch::{
         BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_fold,
         forward_kinematics_batch_par, forward_kinematics_batch_to, single_precision,
     };

@@ -14,7 +14,7 @@
 mod common;
 
 use common::*;
-use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision};
+use kinechain::eval::batch::{BatchData, forward_kinematics_batch, single_precision};
 use kinechain::measure::Interleaved;
 use kinechain::{Data, Isa, LimitPolicy, LinkId, Transform, force_isa, forward_kinematics, isa};
 use plotters::prelude::*;
@@ -245,7 +245,7 @@ fn k_method<'a>(
     // joints, so k's joint names are looked up in the written model). Not for a model URDF
     // cannot express (a prismatic joint without limits).
     let text = (reference["model"]["kind"] != "urdf")
-        .then(|| kinechain::convert::to_urdf(chain).ok())
+        .then(|| kinechain::io::convert::to_urdf(chain).ok())
         .flatten();
     let written = text.map(|text| {
         let file = std::env::temp_dir().join(format!(

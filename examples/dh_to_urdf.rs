@@ -10,7 +10,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .unwrap_or_else(|| "robots/stanford.yaml".into());
     let dh = Chain::from_file(&path)?;
-    let text = kinechain::convert::to_urdf(&dh)?;
+    let text = kinechain::io::convert::to_urdf(&dh)?;
     let urdf = Chain::from_urdf_str(&text)?;
 
     // The same configuration through both models: every link of the DH model, same pose.

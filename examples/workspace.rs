@@ -4,7 +4,7 @@
 //!
 //! Run with `cargo run --release --example workspace`.
 
-use kinechain::batch::forward_kinematics_batch_fold;
+use kinechain::eval::batch::forward_kinematics_batch_fold;
 use kinechain::{Chain, LimitPolicy};
 
 /// The box spanned by the tool positions seen, and the largest distance from the base.

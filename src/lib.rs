@@ -6,16 +6,19 @@
 )]
 
 #[cfg(feature = "cli")]
+#[doc(hidden)]
 pub mod cli;
 pub mod error;
 pub mod eval;
 pub mod io;
+#[doc(hidden)]
 pub mod measure;
 pub mod model;
 pub mod orientation;
 #[cfg(feature = "reference")]
 pub mod reference;
 
+#[doc(hidden)]
 pub use eval::arith::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};
 pub use nalgebra;
 
@@ -31,9 +34,3 @@ pub use model::builder::{ChainBuilder, JointSpec, MimicSpec};
 pub use model::chain::{Joint, JointId, JointScrew, Link, LinkId, Mimic, Model};
 pub use model::joint::{JointKind, Limits};
 pub use model::transform::{NotRigid, Transform};
-
-/// The modules of earlier releases, by their old names.
-pub use eval::{batch, data, kinematics};
-pub use io::{convert, input, render};
-pub use model::{joint, transform};
-pub use orientation as rotation;

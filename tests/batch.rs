@@ -3,7 +3,7 @@
 mod common;
 
 use common::*;
-use kinechain::batch::{
+use kinechain::eval::batch::{
     BatchData, BatchError, BatchPoses, fold_block_len, forward_kinematics_batch,
     forward_kinematics_batch_fold, forward_kinematics_batch_par, forward_kinematics_batch_to,
     single_precision as sp,
@@ -362,14 +362,18 @@ fn batches_of_a_chain_without_moving_joints_are_refused() {
     assert_eq!(chain.dof(), 0);
     let tool = chain.link_id("tool").unwrap();
     let mut batch = BatchData::new(&chain);
-    let mut batch32 = kinechain::batch::single_precision::BatchData::new(&chain);
+    let mut batch32 = kinechain::eval::batch::single_precision::BatchData::new(&chain);
     for qs in [&[][..], &[0.0][..]] {
         let errors = [
             forward_kinematics_batch(&chain, &mut batch, qs).map(|_| ()),
             forward_kinematics_batch_par(&chain, &mut batch, qs).map(|_| ()),
             forward_kinematics_batch_to(&chain, &mut batch, qs, tool, false).map(|_| ()),
-            kinechain::batch::single_precision::forward_kinematics_batch(&chain, &mut batch32, qs)
-                .map(|_| ()),
+            kinechain::eval::batch::single_precision::forward_kinematics_batch(
+                &chain,
+                &mut batch32,
+                qs,
+            )
+            .map(|_| ()),
         ];
         for e in errors {
             let e = e.unwrap_err();

@@ -510,7 +510,10 @@ fn bench_prints_times_ratios_and_errors() {
         .and_then(|s| s.split(',').next())
         .and_then(|s| s.parse().ok())
         .unwrap();
-    assert!(size * 8 >= 2 * kinechain::batch::PARALLEL_WORK, "{text}");
+    assert!(
+        size * 8 >= 2 * kinechain::eval::batch::PARALLEL_WORK,
+        "{text}"
+    );
     assert_eq!(size % 4, 0, "whole copies of the 4 configurations: {text}");
     // Each two-thread row stands beside its one-thread row with a time of its own. (How the two
     // compare is a measurement, left to the benchmarks: on this shared 2-core host a thread of
@@ -1203,7 +1206,7 @@ fn tables_print_the_orientation_asked_for() {
 #[test]
 fn orientation_kinds_recompose_on_the_reference_robots() {
     use kinechain::nalgebra::{Matrix3, Unit, Vector3};
-    use kinechain::rotation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
+    use kinechain::orientation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
     let dir = Scratch::new("cli-orient");
     let f = |v: &Value, k: &str| v[k].as_f64().unwrap();
     let v3 = |v: &Value| {

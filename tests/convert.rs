@@ -11,7 +11,7 @@ use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 /// `dir` whose path it returns.
 fn converted(dir: &Scratch, name: &str) -> (Chain, Chain, String) {
     let original = Chain::from_file(robots_dir().join(name)).unwrap();
-    let text = kinechain::convert::to_urdf(&original).unwrap();
+    let text = kinechain::io::convert::to_urdf(&original).unwrap();
     let path = dir.write(&name.replace(".yaml", ".urdf"), &text);
     let urdf = Chain::from_file(&path)
         .unwrap_or_else(|e| panic!("{name}: {}\n{text}", kinechain::error::error_chain(&e)));
@@ -108,8 +108,8 @@ fn prismatic_joints_without_limits_are_refused() {
     )
     .unwrap();
     assert!(matches!(
-        kinechain::convert::to_urdf(&chain),
-        Err(kinechain::convert::ConvertError::UnlimitedPrismatic { .. })
+        kinechain::io::convert::to_urdf(&chain),
+        Err(kinechain::io::convert::ConvertError::UnlimitedPrismatic { .. })
     ));
 }
 
@@ -124,7 +124,7 @@ fn limits_and_axes_are_written_only_where_they_apply() {
          - {name: flange, type: fixed, a: 0, alpha: 0, d: 0.2, theta: 0}\n",
     )
     .unwrap();
-    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let text = kinechain::io::convert::to_urdf(&chain).unwrap();
     // The file says itself that its zero efforts and velocities are not data.
     assert!(
         text.lines().nth(1).is_some_and(
@@ -174,7 +174,7 @@ fn a_joint_locked_at_zero_survives_the_round_trip() {
          - {name: free, type: prismatic, a: 0, alpha: 0, d: 0, theta: 0, limits: [0, 0.5]}\n",
     )
     .unwrap();
-    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let text = kinechain::io::convert::to_urdf(&chain).unwrap();
     let locked_limit = "<limit lower=\"0\" upper=\"0\" effort=\"0\" velocity=\"0\"/>";
     assert!(text.contains(locked_limit), "{text}");
     let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
@@ -207,7 +207,7 @@ fn names_with_markup_characters_survive_the_round_trip() {
          - {name: 'shoulder & elbow', link: 'upper\"arm', type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}\n",
     )
     .unwrap();
-    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let text = kinechain::io::convert::to_urdf(&chain).unwrap();
     let urdf = Chain::from_urdf_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
     assert_eq!(urdf.name(), "R&D \"arm\" <2>");
     let links: Vec<&str> = urdf.links().iter().map(|l| l.name()).collect();
@@ -220,7 +220,7 @@ fn names_with_markup_characters_survive_the_round_trip() {
          - {name: j, type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}\n",
     )
     .unwrap();
-    let text = kinechain::convert::to_urdf(&tabbed).unwrap();
+    let text = kinechain::io::convert::to_urdf(&tabbed).unwrap();
     assert_eq!(Chain::from_urdf_str(&text).unwrap().name(), "a\tb\nc");
     let control = Chain::from_dh_yaml_str(
         "name: \"a\\x01b\"\nconvention: modified\njoints:\n  \
@@ -228,8 +228,8 @@ fn names_with_markup_characters_survive_the_round_trip() {
     )
     .unwrap();
     assert_eq!(
-        kinechain::convert::to_urdf(&control),
-        Err(kinechain::convert::ConvertError::NotXml {
+        kinechain::io::convert::to_urdf(&control),
+        Err(kinechain::io::convert::ConvertError::NotXml {
             name: "a\u{1}b".into(),
             character: '\u{1}'
         })
@@ -272,7 +272,7 @@ fn gimbal_locked_origins_survive_the_round_trip() {
         matrix(down)
     );
     let chain = Chain::from_dh_yaml_str(&yaml).unwrap_or_else(|e| panic!("{e}\n{yaml}"));
-    let text = kinechain::convert::to_urdf(&chain).unwrap();
+    let text = kinechain::io::convert::to_urdf(&chain).unwrap();
     let rpy = |joint: &str| -> [f64; 3] {
         let start = text.find(&format!("<joint name=\"{joint}\"")).unwrap();
         let from = start + text[start..].find("rpy=\"").unwrap() + 5;

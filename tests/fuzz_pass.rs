@@ -173,7 +173,7 @@ fn joint_vector_parser() {
     let chains = chains();
     run("joint_vector", 3000, |text| {
         for chain in &chains {
-            if let Ok(q) = kinechain::input::joint_vector_from_str(chain, text, "q") {
+            if let Ok(q) = kinechain::io::input::joint_vector_from_str(chain, text, "q") {
                 checks::evaluate(chain, &q);
             }
         }
@@ -185,7 +185,7 @@ fn batch_line_parser() {
     let chains = chains();
     run("batch_line", 3000, |text| {
         for chain in &chains {
-            if let Ok(line) = kinechain::input::parse_batch_line(chain, text) {
+            if let Ok(line) = kinechain::io::input::parse_batch_line(chain, text) {
                 checks::evaluate(chain, &line.q);
             }
             checks::header_and_row(chain, text);

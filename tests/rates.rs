@@ -248,8 +248,8 @@ fn joint_4x4_forms_equal_the_vector_forms_and_differentiate_t() {
         let u = Vector3::new(u[0], u[1], u[2]);
         let s = chain.joint_screw(joint, &q, &qd, &qdd).unwrap();
         let v = s.axis.into_inner();
-        let a = kinechain::rotation::rotation_matrix(&s.axis, s.theta);
-        let k = kinechain::rotation::skew(&v);
+        let a = kinechain::orientation::rotation_matrix(&s.axis, s.theta);
+        let k = kinechain::orientation::skew(&v);
         let uh = Vector4::new(u.x, u.y, u.z, 1.0);
         let r = v * s.d + a * u; // eq. (2.118)
         let r_dot = v * s.d_dot + k * a * u * s.theta_dot; // eq. (2.120)
@@ -270,7 +270,7 @@ fn joint_4x4_forms_equal_the_vector_forms_and_differentiate_t() {
         let t_at = |t: f64| {
             let th = s.theta + s.theta_dot * t + 0.5 * s.theta_ddot * t * t;
             let d = s.d + s.d_dot * t + 0.5 * s.d_ddot * t * t;
-            kinechain::joint::joint_transform(&s.axis, th, d)
+            kinechain::model::joint::joint_transform(&s.axis, th, d)
         };
         let dt = (t_at(h) - t_at(-h)) / (2.0 * h);
         let ddt = (t_at(h) - 2.0 * t_at(0.0) + t_at(-h)) / (h * h);

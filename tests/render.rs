@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use kinechain::render::{View, svg};
+use kinechain::io::render::{View, svg};
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
 #[test]

@@ -1,9 +1,9 @@
-//! Orientation coordinates (`kinechain::rotation`): the book's worked examples and problems
+//! Orientation coordinates (`kinechain::orientation`): the book's worked examples and problems
 //! through every representation, and property tests over random rotations and rotations near
 //! each singularity.
 
 use kinechain::nalgebra::{Matrix3, Unit, Vector3, Vector4};
-use kinechain::rotation::*;
+use kinechain::orientation::*;
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 

@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use kinechain::batch::{self, single_precision as sp};
+use kinechain::eval::batch::{self, single_precision as sp};
 use kinechain::{Chain, Isa, LimitPolicy, StateError, force_isa, isa};
 use std::sync::Mutex;
 

@@ -4,7 +4,7 @@
 mod common;
 
 use common::limit_probes;
-use kinechain::input::{
+use kinechain::io::input::{
     BatchLine, InputError, csv_header, joint_vector_from_json, joint_vector_from_str,
     parse_batch_line, parse_batch_row,
 };
@@ -290,7 +290,7 @@ fn mimic_joints_are_checked_against_their_own_limits() {
 /// `f32`.
 #[test]
 fn a_mimic_of_an_unlimited_joint_bounds_its_primarys_entry() {
-    use kinechain::batch::{BatchData, forward_kinematics_batch, single_precision as sp};
+    use kinechain::eval::batch::{BatchData, forward_kinematics_batch, single_precision as sp};
     use kinechain::{ChainBuilder, JointKind, JointSpec};
     let mut b = ChainBuilder::new("mimic");
     b.link("a").link("b").link("c");
@@ -710,8 +710,8 @@ fn data_of_another_chain_is_a_programming_error() {
 fn batch_data_of_another_chain_is_a_programming_error() {
     let puma = robot("puma560.yaml");
     let planar = robot("planar3.yaml");
-    let mut data = kinechain::batch::BatchData::new(&planar);
-    let _ = kinechain::batch::forward_kinematics_batch(&puma, &mut data, &[0.0; 6]);
+    let mut data = kinechain::eval::batch::BatchData::new(&planar);
+    let _ = kinechain::eval::batch::forward_kinematics_batch(&puma, &mut data, &[0.0; 6]);
 }
 
 #[test]
@@ -719,7 +719,7 @@ fn batch_data_of_another_chain_is_a_programming_error() {
     expected = "single_precision::BatchData was created for another chain (3 moving joints, dof 3), not 'puma560' (6 moving joints, dof 6)"
 )]
 fn single_precision_data_of_another_chain_is_a_programming_error() {
-    use kinechain::batch::single_precision::{BatchData, forward_kinematics_batch};
+    use kinechain::eval::batch::single_precision::{BatchData, forward_kinematics_batch};
     let puma = robot("puma560.yaml");
     let planar = robot("planar3.yaml");
     let mut data = BatchData::new(&planar);

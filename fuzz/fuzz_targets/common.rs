@@ -6,8 +6,8 @@
 // Each target uses part of this module.
 #![allow(dead_code)]
 
-use kinechain::batch::{BatchData, forward_kinematics_batch};
-use kinechain::input::{csv_header, parse_batch_line, parse_batch_row};
+use kinechain::eval::batch::{BatchData, forward_kinematics_batch};
+use kinechain::io::input::{csv_header, parse_batch_line, parse_batch_row};
 use kinechain::{
     Chain, Data, LimitPolicy, LinkId, Transform, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to,
@@ -44,7 +44,7 @@ pub fn evaluate(chain: &Chain, q: &[f64]) {
         let j = poses.jacobian(id);
         assert!(!moderate || !j.iter().any(|x| x.is_nan()), "NaN Jacobian");
     }
-    let _ = kinechain::render::svg(chain, &poses);
+    let _ = kinechain::io::render::svg(chain, &poses);
 
     // One link at a time.
     let mut other = Data::new(chain);
@@ -98,7 +98,7 @@ pub fn evaluate(chain: &Chain, q: &[f64]) {
 /// What the loader targets check beyond [`evaluate`]: a chain that converts to URDF loads back
 /// with the same joint vector.
 pub fn convert(chain: &Chain) {
-    if let Ok(text) = kinechain::convert::to_urdf(chain) {
+    if let Ok(text) = kinechain::io::convert::to_urdf(chain) {
         let back = Chain::from_urdf_str(&text).expect("a converted chain loads back");
         assert_eq!(back.dof(), chain.dof(), "converted joint vector");
     }

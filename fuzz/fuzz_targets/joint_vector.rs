@@ -7,7 +7,7 @@ fn main() {
     afl::fuzz!(|data: &[u8]| {
         if let Ok(text) = std::str::from_utf8(data) {
             for chain in &chains {
-                if let Ok(q) = kinechain::input::joint_vector_from_str(chain, text, "q") {
+                if let Ok(q) = kinechain::io::input::joint_vector_from_str(chain, text, "q") {
                     common::evaluate(chain, &q);
                 }
             }

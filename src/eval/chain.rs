@@ -97,6 +97,75 @@ impl Chain {
         self.reach
     }
 
+    /// The smallest value of each entry of `q` that the limit checks admit (`-∞` where none
+    /// bounds it from below): the intersection of the joint's own limits and, mapped back
+    /// through `θ = scale · q + offset`, those of every mimic joint that follows it. `dof`
+    /// entries, in `q` order.
+    #[must_use]
+    pub fn lower(&self) -> Vec<f64> {
+        self.admitted_ranges().into_iter().map(|r| r.0).collect()
+    }
+
+    /// The largest value of each entry of `q` that the limit checks admit (`+∞` where none
+    /// bounds it from above); see [`Chain::lower`].
+    #[must_use]
+    pub fn upper(&self) -> Vec<f64> {
+        self.admitted_ranges().into_iter().map(|r| r.1).collect()
+    }
+
+    /// A configuration inside the limits: each entry is 0 where 0 is admitted, otherwise the
+    /// middle of its admitted range (the finite bound where the other is infinite). An entry
+    /// whose range is empty (a mimic joint's limits that its primary's cannot reach) is the
+    /// middle of the empty range, which [`crate::check_q`] then refuses, naming the joint.
+    #[must_use]
+    pub fn neutral(&self) -> Vec<f64> {
+        self.admitted_ranges()
+            .into_iter()
+            .map(|(lo, hi)| {
+                if lo <= 0.0 && 0.0 <= hi {
+                    0.0
+                } else if lo.is_finite() && hi.is_finite() {
+                    lo + 0.5 * (hi - lo)
+                } else if lo.is_finite() {
+                    lo
+                } else {
+                    hi
+                }
+            })
+            .collect()
+    }
+
+    /// `[lower, upper]` of each entry of `q`, bounds that pass the checks' own arithmetic.
+    fn admitted_ranges(&self) -> Vec<(f64, f64)> {
+        let mut ranges = vec![(f64::NEG_INFINITY, f64::INFINITY); self.dof()];
+        for c in &self.limit_checks {
+            let range = &mut ranges[c.index];
+            if c.scale == 0.0 {
+                if !c.limits.contains(c.offset) {
+                    *range = (f64::INFINITY, f64::NEG_INFINITY);
+                }
+                continue;
+            }
+            let (a, b) = (
+                (c.limits.lower - c.offset) / c.scale,
+                (c.limits.upper - c.offset) / c.scale,
+            );
+            let (mut lo, mut hi) = if c.scale > 0.0 { (a, b) } else { (b, a) };
+            // The division rounds: step inwards until the check itself admits the bound.
+            for _ in 0..4 {
+                if lo.is_finite() && !c.limits.contains(c.value(lo)) {
+                    lo = lo.next_up();
+                }
+                if hi.is_finite() && !c.limits.contains(c.value(hi)) {
+                    hi = hi.next_down();
+                }
+            }
+            range.0 = range.0.max(lo);
+            range.1 = range.1.min(hi);
+        }
+        ranges
+    }
+
     /// Number of moving joints after folding fixed joints away.
     #[must_use]
     pub fn moving_joint_count(&self) -> usize {

@@ -192,7 +192,7 @@ pub enum DhConvention {
 /// within rounding.
 ///
 /// ```
-/// use kinechain::joint::{DhConvention, dh_transform};
+/// use kinechain::model::joint::{DhConvention, dh_transform};
 /// // Modified DH: the x-axis twist and offset come first, so θ turns about the new z.
 /// let t = dh_transform(DhConvention::Modified, 0.5, std::f64::consts::FRAC_PI_2, 0.2, 0.0);
 /// approx::assert_relative_eq!(t.fixed_view::<3, 1>(0, 3).into_owned(),

@@ -4,7 +4,11 @@
 //! frame: `x_world = R x_link + p`. Composition follows the frame names:
 //! `world_from_tool = world_from_link * link_from_tool`.
 
-use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
+use crate::orientation::EulerParameters;
+use nalgebra::{
+    Isometry3, IsometryMatrix3, Matrix3, Matrix4, Point3, Rotation3, Translation3, UnitQuaternion,
+    Vector3,
+};
 use std::ops::Mul;
 
 /// A rigid transform `[[R, p], [0, 1]]` (Shabana eq. 2.109): a rotation matrix and a translation.
@@ -337,6 +341,64 @@ impl Transform {
             r[0][1] * u[0] + r[1][1] * u[1] + r[2][1] * u[2],
             r[0][2] * u[0] + r[1][2] * u[1] + r[2][2] * u[2],
         ]
+    }
+}
+
+/// The homogeneous matrix `[[R, p], [0, 1]]` (exact).
+impl From<Transform> for Matrix4<f64> {
+    fn from(t: Transform) -> Self {
+        t.to_homogeneous()
+    }
+}
+
+/// Checked: the matrix must be a rigid transform ([`Transform::try_from_homogeneous`]).
+impl TryFrom<Matrix4<f64>> for Transform {
+    type Error = NotRigid;
+    fn try_from(m: Matrix4<f64>) -> Result<Self, NotRigid> {
+        Transform::try_from_homogeneous(&m)
+    }
+}
+
+/// nalgebra's isometry with a rotation matrix: the same numbers, exactly.
+impl From<Transform> for IsometryMatrix3<f64> {
+    fn from(t: Transform) -> Self {
+        IsometryMatrix3::from_parts(
+            Translation3::from(t.translation()),
+            Rotation3::from_matrix_unchecked(t.rotation()),
+        )
+    }
+}
+
+/// The same numbers, exactly (the rotation is taken as it is, as nalgebra holds it).
+impl From<IsometryMatrix3<f64>> for Transform {
+    fn from(iso: IsometryMatrix3<f64>) -> Self {
+        Transform::from_parts(iso.rotation.matrix(), &iso.translation.vector)
+    }
+}
+
+/// nalgebra's isometry with a unit quaternion: the rotation's Euler parameters by Shepperd's
+/// method ([`EulerParameters::from_matrix`]), within a few ulps of the matrix.
+impl From<Transform> for Isometry3<f64> {
+    fn from(t: Transform) -> Self {
+        Isometry3::from_parts(
+            Translation3::from(t.translation()),
+            EulerParameters::from_matrix(&t.rotation()).into(),
+        )
+    }
+}
+
+/// The quaternion's rotation matrix (eq. 2.39 of its Euler parameters), within a few ulps.
+impl From<Isometry3<f64>> for Transform {
+    fn from(iso: Isometry3<f64>) -> Self {
+        let e = EulerParameters::from(iso.rotation);
+        Transform::from_parts(&e.to_matrix(), &iso.translation.vector)
+    }
+}
+
+/// Only the rotation of a [`UnitQuaternion`].
+impl From<UnitQuaternion<f64>> for Transform {
+    fn from(q: UnitQuaternion<f64>) -> Self {
+        Transform::from(Isometry3::from_parts(Translation3::identity(), q))
     }
 }
 

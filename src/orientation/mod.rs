@@ -15,7 +15,7 @@
 //! the input matrix to ~1e-15. At a singularity the representation is undefined and a
 //! [`Singular`] error is returned; no function returns NaN for a finite rotation.
 
-use nalgebra::{Matrix3, Matrix3x4, Matrix4, Unit, Vector3, Vector4};
+use nalgebra::{Matrix3, Matrix3x4, Matrix4, Quaternion, Unit, UnitQuaternion, Vector3, Vector4};
 
 mod angles;
 #[cfg(test)]
@@ -257,6 +257,32 @@ impl EulerParameters {
     #[must_use]
     pub fn rates_from_local(&self, omega_local: &Vector3<f64>) -> Vector4<f64> {
         0.5 * self.e_bar_matrix().transpose() * omega_local
+    }
+}
+
+/// `e₀ + e₁i + e₂j + e₃k`: nalgebra's unit quaternion is the same rotation (`q.to_rotation_matrix()`
+/// equals [`EulerParameters::to_matrix`]). Taken as it is when its norm is 1 to rounding (a few
+/// ulps), otherwise normalised.
+impl From<EulerParameters> for UnitQuaternion<f64> {
+    fn from(e: EulerParameters) -> Self {
+        let q = Quaternion::new(e.e0, e.e1, e.e2, e.e3);
+        if (q.norm_squared() - 1.0).abs() <= 8.0 * f64::EPSILON {
+            Unit::new_unchecked(q)
+        } else {
+            Unit::new_normalize(q)
+        }
+    }
+}
+
+/// `e₀ = w`, `(e₁, e₂, e₃) = (i, j, k)`, exactly.
+impl From<UnitQuaternion<f64>> for EulerParameters {
+    fn from(q: UnitQuaternion<f64>) -> Self {
+        EulerParameters {
+            e0: q.w,
+            e1: q.i,
+            e2: q.j,
+            e3: q.k,
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! (see its README), turned into chains and joint vectors.
 #![allow(dead_code)]
 
-use kinechain::joint::{DhConvention, dh_transform};
+use kinechain::model::joint::{DhConvention, dh_transform};
 use kinechain::nalgebra::Matrix4;
 use kinechain::{
     Chain, ChainBuilder, Data, JointKind, JointSpec, LimitPolicy, Transform, forward_accelerations,
@@ -183,7 +183,7 @@ pub fn matrix4(v: &Value) -> [[f64; 4]; 4] {
 }
 
 /// A reference `dh` model as the textbook evaluates it: one eq. 2.129 matrix per row
-/// ([`kinechain::joint::dh_transform`], standard or modified), multiplied with
+/// ([`kinechain::model::joint::dh_transform`], standard or modified), multiplied with
 /// `nalgebra::Matrix4`, between the model's base and tool transforms.
 pub struct DhProduct {
     convention: DhConvention,
@@ -358,7 +358,7 @@ pub fn reference_chain(path: &Path, reference: &Value) -> Chain {
 
 /// A `{joint: value}` map of a sample (`q`, `qd` or `qdd`) in the chain's `q` order.
 pub fn joint_vector(chain: &Chain, map: &Value) -> Vec<f64> {
-    kinechain::input::joint_vector_from_json(chain, map, "q").unwrap()
+    kinechain::io::input::joint_vector_from_json(chain, map, "q").unwrap()
 }
 
 /// Largest absolute difference between the top three rows of two poses.
@@ -513,7 +513,7 @@ pub fn link_ids(chain: &Chain) -> Vec<kinechain::LinkId> {
 /// configurations of each robot file give, configuration by configuration and bit for bit, what
 /// single evaluations give: four full chunks of eight and a partial one.
 pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
-    use kinechain::batch::{
+    use kinechain::eval::batch::{
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to,
     };
@@ -572,7 +572,7 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
 /// every lane and chunk position, at and one ulp past the limits, and for non-finite values, a
 /// batch is accepted exactly when every configuration passes `check_q`, by all three entry points.
 pub fn assert_lane_checks_decide_as_check_q_does() {
-    use kinechain::batch::{
+    use kinechain::eval::batch::{
         BatchData, forward_kinematics_batch, forward_kinematics_batch_par,
         forward_kinematics_batch_to,
     };

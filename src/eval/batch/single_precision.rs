@@ -22,7 +22,7 @@
 //! # Examples
 //! ```
 //! use kinechain::Chain;
-//! use kinechain::batch::single_precision::{BatchData, forward_kinematics_batch_to};
+//! use kinechain::eval::batch::single_precision::{BatchData, forward_kinematics_batch_to};
 //! let chain = Chain::from_file("robots/planar3.yaml")?;
 //! let mut data = BatchData::new(&chain);
 //! let tip = chain.link_id("link3")?;
