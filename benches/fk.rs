@@ -235,7 +235,8 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     use criterion::Throughput;
     use kinechain::eval::batch::{
         BatchData, BatchError, BatchPoses, forward_kinematics_batch, forward_kinematics_batch_fold,
-        forward_kinematics_batch_par, forward_kinematics_batch_to, single_precision,
+        forward_kinematics_batch_fold_par, forward_kinematics_batch_par,
+        forward_kinematics_batch_to, forward_kinematics_batch_to_par, single_precision,
     };
     let qs: Vec<f64> = configurations(chain, n, 2).concat();
     let mut data = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
@@ -258,30 +259,33 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
     // Every link's poses, folded block by block while in cache (the fold only counts them), in
     // f64 and in f32.
     macro_rules! fold_benches {
-        ($prefix:literal, $fold:path, $poses:ty) => {
+        ($prefix:literal, $fold:path, $fold_par:path, $poses:ty) => {
             for (id, parallel) in [("fold_1_thread", false), ("fold_all_threads", true)] {
                 group.bench_function(format!("{}{id}", $prefix), |b| {
                     b.iter(|| {
                         let count = |n: usize, _, poses: $poses| n + poses.len();
-                        $fold(
-                            chain,
-                            black_box(&qs),
-                            LimitPolicy::Ignore,
-                            parallel,
-                            || 0,
-                            count,
-                            |a, b| a + b,
-                        )
+                        let qs = black_box(&qs);
+                        if parallel {
+                            $fold_par(chain, qs, LimitPolicy::Ignore, || 0, count, |a, b| a + b)
+                        } else {
+                            $fold(chain, qs, LimitPolicy::Ignore, || 0, count, |a, b| a + b)
+                        }
                         .unwrap()
                     })
                 });
             }
         };
     }
-    fold_benches!("", forward_kinematics_batch_fold, BatchPoses<'_>);
+    fold_benches!(
+        "",
+        forward_kinematics_batch_fold,
+        forward_kinematics_batch_fold_par,
+        BatchPoses<'_>
+    );
     fold_benches!(
         "f32_",
         single_precision::forward_kinematics_batch_fold,
+        single_precision::forward_kinematics_batch_fold_par,
         single_precision::BatchPoses<'_>
     );
     // Reading every link's pose of every configuration of an evaluated batch (no evaluation).
@@ -307,9 +311,13 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
         group.bench_function(id, |b| {
             b.iter(|| {
                 black_box(
-                    forward_kinematics_batch_to(chain, &mut data, black_box(&qs), end, parallel)
-                        .unwrap()
-                        .len(),
+                    (if parallel {
+                        forward_kinematics_batch_to_par(chain, &mut data, black_box(&qs), end)
+                    } else {
+                        forward_kinematics_batch_to(chain, &mut data, black_box(&qs), end)
+                    })
+                    .unwrap()
+                    .len(),
                 )
             })
         });
@@ -342,7 +350,6 @@ fn batch_group(c: &mut Criterion, group_id: &str, chain: &Chain, n: usize) {
                     &mut data32,
                     black_box(&qs),
                     end,
-                    false,
                 )
                 .unwrap()
                 .len(),

@@ -5,10 +5,21 @@
 
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// Runs the example; an error is printed with its causes, as the command line prints it.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
         .nth(1)
-        .unwrap_or_else(|| "robots/stanford.yaml".into());
+        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/robots/stanford.yaml").into());
     let dh = Chain::from_file(&path)?;
     let text = kinechain::io::convert::to_urdf(&dh)?;
     let urdf = Chain::from_urdf_str(&text)?;

@@ -34,8 +34,22 @@ fn limits_of_q(chain: &Chain) -> Vec<Option<Limits>> {
     limits
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file("robots/panda_mdh.yaml")?;
+/// Runs the example; an error is printed with its causes, as the command line prints it.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let chain = Chain::from_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/robots/panda_mdh.yaml"
+    ))?;
     let tcp = chain.link_id("tcp")?;
     let limits = limits_of_q(&chain);
     let mut data = Data::new(&chain);

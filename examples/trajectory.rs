@@ -19,8 +19,19 @@ fn blend(tau: f64) -> (f64, f64, f64) {
     )
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file("robots/ur5.yaml")?;
+/// Runs the example; an error is printed with its causes, as the command line prints it.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let chain = Chain::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/robots/ur5.yaml"))?;
     let tool = chain.link_id("tool0")?;
     let mut data = Data::new(&chain);
     let start = [0.0, -1.6, 1.4, -1.4, -1.57, 0.0];

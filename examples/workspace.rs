@@ -4,7 +4,7 @@
 //!
 //! Run with `cargo run --release --example workspace`.
 
-use kinechain::eval::batch::forward_kinematics_batch_fold;
+use kinechain::eval::batch::forward_kinematics_batch_fold_par;
 use kinechain::{Chain, LimitPolicy};
 
 /// The box spanned by the tool positions seen, and the largest distance from the base.
@@ -31,8 +31,22 @@ impl Reach {
     }
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file("robots/panda_mdh.yaml")?;
+/// Runs the example; an error is printed with its causes, as the command line prints it.
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let chain = Chain::from_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/robots/panda_mdh.yaml"
+    ))?;
     let tcp = chain.link_id("tcp")?;
     let n = 1_000_000;
     // Uniform within the joint limits, seeded (row-major: one configuration after another).
@@ -40,11 +54,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = std::time::Instant::now();
     // Each block's poses are read while they are still in cache, on the thread that computed
     // them; keeping all million would take ~0.7 GB.
-    let reach = forward_kinematics_batch_fold(
+    let reach = forward_kinematics_batch_fold_par(
         &chain,
         &qs,
         LimitPolicy::Enforce,
-        true,
         || Reach::EMPTY,
         |reach, _first, poses| {
             (0..poses.len()).fold(reach, |r, i| {

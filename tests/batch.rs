@@ -5,8 +5,8 @@ mod common;
 use common::*;
 use kinechain::eval::batch::{
     BatchData, BatchError, BatchPoses, fold_block_len, forward_kinematics_batch,
-    forward_kinematics_batch_fold, forward_kinematics_batch_par, forward_kinematics_batch_to,
-    single_precision as sp,
+    forward_kinematics_batch_fold, forward_kinematics_batch_fold_par, forward_kinematics_batch_par,
+    forward_kinematics_batch_to, forward_kinematics_batch_to_par, single_precision as sp,
 };
 use kinechain::{Chain, LimitPolicy, LinkId, StateError, Transform};
 
@@ -128,7 +128,7 @@ fn parallel_batches_in_a_pool_and_in_its_tasks_equal_the_single_threaded_batch()
             .map(|_| {
                 let mut data = unchecked();
                 let all = tool_poses(forward_kinematics_batch_par(&chain, &mut data, &qs).unwrap());
-                let one = forward_kinematics_batch_to(&chain, &mut data, &qs, tool, true).unwrap();
+                let one = forward_kinematics_batch_to_par(&chain, &mut data, &qs, tool).unwrap();
                 let one = (0..one.len()).map(|i| one.world_from_link(i)).collect();
                 (all, one)
             })
@@ -160,8 +160,12 @@ fn one_link_batches_equal_the_full_batch() {
         for link in chain.links() {
             let id = chain.link_id(link.name()).unwrap();
             for parallel in [false, true] {
-                let poses =
-                    forward_kinematics_batch_to(&chain, &mut one, &qs, id, parallel).unwrap();
+                let poses = (if parallel {
+                    forward_kinematics_batch_to_par(&chain, &mut one, &qs, id)
+                } else {
+                    forward_kinematics_batch_to(&chain, &mut one, &qs, id)
+                })
+                .unwrap();
                 assert_eq!(poses.len(), all.len());
                 for i in (0..all.len()).step_by(11).chain([all.len() - 1]) {
                     assert_eq!(
@@ -201,7 +205,7 @@ fn small_batches_of_a_long_chain_run_in_parallel_with_the_same_results() {
         }
     }
     let tip = chain.link_id("link300").unwrap();
-    let poses = forward_kinematics_batch_to(&chain, path, &qs, tip, true).unwrap();
+    let poses = forward_kinematics_batch_to_par(&chain, path, &qs, tip).unwrap();
     assert_eq!(poses.len(), 69);
     for i in 0..69 {
         assert_eq!(
@@ -221,7 +225,12 @@ fn one_link_batches_name_the_first_bad_configuration() {
     qs[6 * 4500 + 1] = f64::NAN;
     qs[6 * 3001 + 4] = -10.0;
     for parallel in [false, true] {
-        let e = forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, parallel).unwrap_err();
+        let e = (if parallel {
+            forward_kinematics_batch_to_par(&chain, &mut batch, &qs, tool)
+        } else {
+            forward_kinematics_batch_to(&chain, &mut batch, &qs, tool)
+        })
+        .unwrap_err();
         assert_eq!(e.index, 3001);
         assert!(matches!(e.source, StateError::OutOfLimits { .. }));
     }
@@ -277,14 +286,12 @@ fn batches_decide_as_check_q_does_when_lanes_cannot() {
                     let got = [
                         forward_kinematics_batch(&chain, &mut batch, &qs).err(),
                         forward_kinematics_batch_par(&chain, &mut batch, &qs).err(),
-                        forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, false).err(),
-                        forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, true).err(),
+                        forward_kinematics_batch_to(&chain, &mut batch, &qs, tool).err(),
+                        forward_kinematics_batch_to_par(&chain, &mut batch, &qs, tool).err(),
                         sp::forward_kinematics_batch(&chain, &mut batch32, &qs).err(),
                         sp::forward_kinematics_batch_par(&chain, &mut batch32, &qs).err(),
-                        sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, tool, false)
-                            .err(),
-                        sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, tool, true)
-                            .err(),
+                        sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, tool).err(),
+                        sp::forward_kinematics_batch_to_par(&chain, &mut batch32, &qs, tool).err(),
                     ];
                     for (i, e) in got.into_iter().enumerate() {
                         let e = e.map(|e| e.index);
@@ -332,9 +339,9 @@ fn parallel_batches_checked_apart_from_the_kernels_evaluate_every_part() {
         }
     }
     let mut serial = BatchData::new(&chain);
-    let want = forward_kinematics_batch_to(&chain, &mut serial, &qs, tool, false).unwrap();
+    let want = forward_kinematics_batch_to(&chain, &mut serial, &qs, tool).unwrap();
     let mut fresh = BatchData::new(&chain);
-    let got = forward_kinematics_batch_to(&chain, &mut fresh, &qs, tool, true).unwrap();
+    let got = forward_kinematics_batch_to_par(&chain, &mut fresh, &qs, tool).unwrap();
     for i in 0..n as usize {
         assert_eq!(got.world_from_link(i), want.world_from_link(i), "{i}");
     }
@@ -367,7 +374,7 @@ fn batches_of_a_chain_without_moving_joints_are_refused() {
         let errors = [
             forward_kinematics_batch(&chain, &mut batch, qs).map(|_| ()),
             forward_kinematics_batch_par(&chain, &mut batch, qs).map(|_| ()),
-            forward_kinematics_batch_to(&chain, &mut batch, qs, tool, false).map(|_| ()),
+            forward_kinematics_batch_to(&chain, &mut batch, qs, tool).map(|_| ()),
             kinechain::eval::batch::single_precision::forward_kinematics_batch(
                 &chain,
                 &mut batch32,
@@ -404,27 +411,35 @@ fn every_pose(
 /// `$fold` (the `f64` or `f32` batch's `forward_kinematics_batch_fold`) collecting every pose,
 /// block by block.
 macro_rules! folded {
-    ($fold:path) => {
+    ($fold:path, $fold_par:path) => {
         |chain: &Chain, qs: &[f64], parallel: bool| -> Result<Blocks, BatchError> {
             let links = link_ids(chain);
-            $fold(
-                chain,
-                qs,
-                LimitPolicy::Ignore,
-                parallel,
-                Vec::new,
-                |mut blocks: Blocks, first, poses| {
-                    blocks.push((
-                        first,
-                        every_pose(poses.len(), &links, |i, l| poses.world_from_link(i, l)),
-                    ));
-                    blocks
-                },
-                |mut a, b| {
-                    a.extend(b);
-                    a
-                },
-            )
+            macro_rules! run {
+                ($f:path) => {
+                    $f(
+                        chain,
+                        qs,
+                        LimitPolicy::Ignore,
+                        Vec::new,
+                        |mut blocks: Blocks, first, poses| {
+                            blocks.push((
+                                first,
+                                every_pose(poses.len(), &links, |i, l| poses.world_from_link(i, l)),
+                            ));
+                            blocks
+                        },
+                        |mut a, b| {
+                            a.extend(b);
+                            a
+                        },
+                    )
+                };
+            }
+            if parallel {
+                run!($fold_par)
+            } else {
+                run!($fold)
+            }
         }
     };
 }
@@ -453,7 +468,10 @@ const PRECISIONS: [Precision; 2] = [
                 poses.world_from_link(i, l)
             })
         },
-        folded: folded!(forward_kinematics_batch_fold),
+        folded: folded!(
+            forward_kinematics_batch_fold,
+            forward_kinematics_batch_fold_par
+        ),
     },
     Precision {
         name: "f32",
@@ -466,7 +484,10 @@ const PRECISIONS: [Precision; 2] = [
                 poses.world_from_link(i, l)
             })
         },
-        folded: folded!(sp::forward_kinematics_batch_fold),
+        folded: folded!(
+            sp::forward_kinematics_batch_fold,
+            sp::forward_kinematics_batch_fold_par
+        ),
     },
 ];
 
@@ -576,15 +597,14 @@ fn evaluations_fit_a_small_thread_stack() {
             let mut batch32 = sp::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
             forward_kinematics_batch(&chain, &mut batch, &qs).unwrap();
             forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap();
-            forward_kinematics_batch_to(&chain, &mut batch, &qs, end, false).unwrap();
+            forward_kinematics_batch_to(&chain, &mut batch, &qs, end).unwrap();
             sp::forward_kinematics_batch(&chain, &mut batch32, &qs).unwrap();
-            sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, end, false).unwrap();
+            sp::forward_kinematics_batch_to(&chain, &mut batch32, &qs, end).unwrap();
             let count = |n: usize, _: usize, poses: BatchPoses<'_>| n + poses.len();
             let folded = forward_kinematics_batch_fold(
                 &chain,
                 &qs,
                 LimitPolicy::Ignore,
-                false,
                 || 0,
                 count,
                 |a, b| a + b,

@@ -32,7 +32,7 @@ fn errors(path: &std::path::Path) -> (f64, f64) {
     let all = sp::forward_kinematics_batch(&chain, &mut data, &qs).unwrap();
     for name in samples[0]["links"].as_object().unwrap().keys() {
         let link = chain.link_id(name).unwrap();
-        let alone = sp::forward_kinematics_batch_to(&chain, &mut one, &qs, link, false).unwrap();
+        let alone = sp::forward_kinematics_batch_to(&chain, &mut one, &qs, link).unwrap();
         for (i, sample) in samples.iter().enumerate() {
             let got = all.world_from_link(i, link);
             // The one-link path does the same operations on the path's bodies.
@@ -104,8 +104,7 @@ fn checks_decide_as_the_f64_batch_does() {
                     text(sp::forward_kinematics_batch(&chain, &mut data, &qs).map(|p| p.len()));
                 assert_eq!(all, want, "{n} configurations, bad {bad}, {value}");
                 let one = text(
-                    sp::forward_kinematics_batch_to(&chain, &mut data, &qs, tool, false)
-                        .map(|p| p.len()),
+                    sp::forward_kinematics_batch_to(&chain, &mut data, &qs, tool).map(|p| p.len()),
                 );
                 assert_eq!(one, want, "{n} configurations, bad {bad}, {value}");
             }
@@ -239,10 +238,8 @@ fn parallel_batches_equal_the_single_threaded_batch() {
         }
     }
     let mut tool_one = sp::BatchData::new(&chain);
-    let serial_tool =
-        sp::forward_kinematics_batch_to(&chain, &mut tool_one, &qs, tool, false).unwrap();
-    let parallel_tool =
-        sp::forward_kinematics_batch_to(&chain, &mut many, &qs, tool, true).unwrap();
+    let serial_tool = sp::forward_kinematics_batch_to(&chain, &mut tool_one, &qs, tool).unwrap();
+    let parallel_tool = sp::forward_kinematics_batch_to_par(&chain, &mut many, &qs, tool).unwrap();
     for i in 0..n {
         assert_eq!(
             parallel_tool.world_from_link(i),
@@ -254,7 +251,7 @@ fn parallel_batches_equal_the_single_threaded_batch() {
     bad[6 * 3001 + 4] = -10.0;
     for e in [
         sp::forward_kinematics_batch_par(&chain, &mut many, &bad).unwrap_err(),
-        sp::forward_kinematics_batch_to(&chain, &mut many, &bad, tool, true).unwrap_err(),
+        sp::forward_kinematics_batch_to_par(&chain, &mut many, &bad, tool).unwrap_err(),
     ] {
         assert_eq!(e.index, 3001);
         assert!(matches!(e.source, StateError::OutOfLimits { .. }));

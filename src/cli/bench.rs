@@ -235,7 +235,7 @@ impl<'a> Workload<'a> {
     fn batch_methods(&self) -> Vec<Method<'a>> {
         use crate::eval::batch::{
             forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
-            single_precision,
+            forward_kinematics_batch_to_par, single_precision,
         };
         let Workload {
             chain,
@@ -303,9 +303,13 @@ impl<'a> Workload<'a> {
                 label,
                 Box::new(move || {
                     black_box(
-                        forward_kinematics_batch_to(chain, &mut b, black_box(qs), end, parallel)
-                            .ok()
-                            .map(|b| b.len()),
+                        (if parallel {
+                            forward_kinematics_batch_to_par(chain, &mut b, black_box(qs), end)
+                        } else {
+                            forward_kinematics_batch_to(chain, &mut b, black_box(qs), end)
+                        })
+                        .ok()
+                        .map(|b| b.len()),
                     );
                 }),
                 count,

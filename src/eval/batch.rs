@@ -99,7 +99,7 @@ pub mod single_precision;
 #[allow(clippy::wildcard_imports)]
 use blocks::*;
 pub(crate) use fold::{BlockEval, block_len, fold_blocks};
-pub use fold::{fold_block_len, forward_kinematics_batch_fold};
+pub use fold::{fold_block_len, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par};
 
 batch_len!(BatchPoses, BatchLinkPoses);
 
@@ -321,7 +321,7 @@ impl BatchPoses<'_> {
 ///
 /// # Examples
 /// ```
-/// use kinechain::{Chain, batch::{BatchData, forward_kinematics_batch}};
+/// use kinechain::{Chain, eval::batch::{BatchData, forward_kinematics_batch}};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
 /// let mut data = BatchData::new(&chain);
 /// let qs = [0.0, 0.0, 0.0, 1.5707963267948966, 0.0, 0.0]; // two configurations
@@ -563,10 +563,9 @@ impl BatchLinkPoses<'_> {
 /// The pose of one link for each configuration of `qs` (row-major): only the joints between
 /// the base and that link are evaluated, and only that link's pose is kept (one frame per
 /// configuration written to memory instead of one per joint, which is what bounds a large
-/// batch of all poses). On the calling thread, or with `parallel` on it and rayon's pool, as
-/// [`forward_kinematics_batch_par`] shares a batch (batches of fewer than [`PARALLEL_WORK`]
-/// joint evaluations always run on the calling thread). The poses are the
-/// same, bit for bit, as [`forward_kinematics_batch`] gives for the link.
+/// batch of all poses), on the calling thread ([`forward_kinematics_batch_to_par`] shares the
+/// batch with rayon's pool). The poses are the same, bit for bit, as [`forward_kinematics_batch`]
+/// gives for the link.
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`].
@@ -576,16 +575,44 @@ impl BatchLinkPoses<'_> {
 ///
 /// # Examples
 /// ```
-/// use kinechain::{Chain, batch::{BatchData, forward_kinematics_batch_to}};
+/// use kinechain::{Chain, eval::batch::{BatchData, forward_kinematics_batch_to}};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
 /// let mut data = BatchData::new(&chain);
 /// let tip = chain.link_id("link3")?;
 /// let qs = [0.0, 0.0, 0.0, 1.5707963267948966, 0.0, 0.0];
-/// let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip, false)?;
+/// let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip)?;
 /// approx::assert_relative_eq!(poses.world_from_link(1).translation().y, 9.0);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn forward_kinematics_batch_to<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    link: LinkId,
+) -> Result<BatchLinkPoses<'a>, BatchError> {
+    batch_to(chain, data, qs, link, false)
+}
+
+/// As [`forward_kinematics_batch_to`], the batch shared between the calling thread and rayon's
+/// pool as [`forward_kinematics_batch_par`] shares one (batches of fewer than
+/// [`PARALLEL_WORK`] joint evaluations run on the calling thread). The poses are the same, bit
+/// for bit.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`].
+///
+/// # Panics
+/// As [`forward_kinematics_batch_to`].
+pub fn forward_kinematics_batch_to_par<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    link: LinkId,
+) -> Result<BatchLinkPoses<'a>, BatchError> {
+    batch_to(chain, data, qs, link, true)
+}
+
+fn batch_to<'a>(
     chain: &'a Chain,
     data: &'a mut BatchData,
     qs: &[f64],

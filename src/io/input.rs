@@ -311,7 +311,7 @@ impl CsvHeader {
 /// joint's, a joint named twice, or one left out.
 ///
 /// ```
-/// # use kinechain::{Chain, input::{csv_header, parse_batch_row}};
+/// # use kinechain::{Chain, io::input::{csv_header, parse_batch_row}};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
 /// let header = csv_header(&chain, "j3,j1,j2").expect("a row of names")?;
 /// assert_eq!(header.columns(), [2, 0, 1]);

@@ -557,7 +557,7 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
         }
         let end = chain.end_link();
         let end_index = links.iter().position(|&l| l == end).unwrap();
-        let one = forward_kinematics_batch_to(&chain, &mut batch, &qs, end, false).unwrap();
+        let one = forward_kinematics_batch_to(&chain, &mut batch, &qs, end).unwrap();
         for (i, want) in expected.iter().enumerate() {
             assert_eq!(
                 one.world_from_link(i),
@@ -593,7 +593,7 @@ pub fn assert_lane_checks_decide_as_check_q_does() {
                     .position(|q| kinechain::check_q(&chain, q, policy).is_err());
                 let got = [
                     forward_kinematics_batch(&chain, &mut batch, &qs).err(),
-                    forward_kinematics_batch_to(&chain, &mut batch, &qs, tool, false).err(),
+                    forward_kinematics_batch_to(&chain, &mut batch, &qs, tool).err(),
                     forward_kinematics_batch_par(&chain, &mut batch, &qs).err(),
                 ];
                 for e in got {

@@ -49,12 +49,8 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 /// Poses of every link for each configuration of `qs` (row-major), folded block by block into a
 /// result while each block's frames are still in cache: `fold(acc, first, poses)` receives the
 /// poses of configurations `first .. first + poses.len()` ([`fold_block_len`] per block, fewer
-/// in the last). With `parallel` the blocks are shared between the calling thread and rayon's
-/// pool, as [`forward_kinematics_batch_par`] shares chunks, in runs of consecutive blocks (about
-/// 32 runs per thread), each thread evaluating into buffers of its own; each run is folded from
-/// `identity()`, and the runs' results are combined with `reduce` in the order of their blocks
-/// (so `reduce` must be associative, and `identity()` neutral for it). Batches of fewer than
-/// [`PARALLEL_WORK`] joint evaluations stay on the calling thread.
+/// in the last), on the calling thread ([`forward_kinematics_batch_fold_par`] shares the blocks
+/// with rayon's pool).
 ///
 /// For large batches this is the fast way to use every link's pose: [`forward_kinematics_batch`]
 /// keeps every frame of the batch (96 bytes per body and configuration), and beyond a few
@@ -63,21 +59,20 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 /// bit. [`single_precision::forward_kinematics_batch_fold`] is the same in `f32`.
 ///
 /// # Errors
-/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it, and
-/// with `parallel` some after it, may have been folded; their result is dropped.
+/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it may
+/// have been folded; their result is dropped.
 ///
 /// # Examples
 /// ```
-/// use kinechain::{Chain, LimitPolicy, batch::forward_kinematics_batch_fold};
+/// use kinechain::{Chain, LimitPolicy, eval::batch::forward_kinematics_batch_fold_par};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
 /// let tip = chain.link_id("link3")?;
 /// let qs: Vec<f64> = (0..1000).flat_map(|i| [0.001 * i as f64, 0.0, 0.0]).collect();
 /// // The highest point the tip reaches.
-/// let highest = forward_kinematics_batch_fold(
+/// let highest = forward_kinematics_batch_fold_par(
 ///     &chain,
 ///     &qs,
 ///     LimitPolicy::Enforce,
-///     true,
 ///     || f64::NEG_INFINITY,
 ///     |top, _first, poses| {
 ///         (0..poses.len()).fold(top, |top, i| top.max(poses.world_from_link(i, tip).translation().y))
@@ -91,12 +86,32 @@ pub fn forward_kinematics_batch_fold<T: Send>(
     chain: &Chain,
     qs: &[f64],
     policy: LimitPolicy,
-    parallel: bool,
     identity: impl Fn() -> T + Sync + Send,
     fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
     reduce: impl Fn(T, T) -> T + Sync + Send,
 ) -> Result<T, BatchError> {
-    fold_blocks::<Double, T>(chain, qs, policy, parallel, identity, fold, reduce)
+    fold_blocks::<Double, T>(chain, qs, policy, false, identity, fold, reduce)
+}
+
+/// As [`forward_kinematics_batch_fold`], the blocks shared between the calling thread and
+/// rayon's pool in runs of consecutive blocks (about 32 runs per thread), each thread evaluating
+/// into buffers of its own; each run is folded from `identity()`, and the runs' results are
+/// combined with `reduce` in the order of their blocks (so `reduce` must be associative, and
+/// `identity()` neutral for it). Batches of fewer than [`PARALLEL_WORK`] joint evaluations stay
+/// on the calling thread.
+///
+/// # Errors
+/// As [`forward_kinematics_batch_fold`]; blocks after the bad configuration may have been
+/// folded too, and their result is dropped.
+pub fn forward_kinematics_batch_fold_par<T: Send>(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    identity: impl Fn() -> T + Sync + Send,
+    fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
+    reduce: impl Fn(T, T) -> T + Sync + Send,
+) -> Result<T, BatchError> {
+    fold_blocks::<Double, T>(chain, qs, policy, true, identity, fold, reduce)
 }
 
 /// [`forward_kinematics_batch_fold`] with the batches of `E`, in blocks of [`block_len`].

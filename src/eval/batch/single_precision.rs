@@ -27,7 +27,7 @@
 //! let mut data = BatchData::new(&chain);
 //! let tip = chain.link_id("link3")?;
 //! let qs = [0.0, 0.0, 0.0, 1.5707963267948966, 0.0, 0.0]; // two configurations
-//! let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip, false)?;
+//! let poses = forward_kinematics_batch_to(&chain, &mut data, &qs, tip)?;
 //! let y = poses.world_from_link(1).translation().y;
 //! assert!((y - 9.0).abs() < 1e-5);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -337,8 +337,7 @@ fn all_links<'a>(
 
 /// The pose of one link for each configuration of `qs` (row-major), computed in `f32`: only the
 /// joints between the base and that link are evaluated, and only that link's pose is kept. On
-/// the calling thread, or with `parallel` on it and rayon's pool (batches of fewer than
-/// [`super::PARALLEL_WORK`] joint evaluations always run on the calling thread).
+/// the calling thread ([`forward_kinematics_batch_to_par`] shares the batch with rayon's pool).
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`].
@@ -346,6 +345,34 @@ fn all_links<'a>(
 /// # Panics
 /// If `data` was created for another chain, or `link` comes from another chain with more links.
 pub fn forward_kinematics_batch_to<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    link: LinkId,
+) -> Result<BatchLinkPoses<'a>, BatchError> {
+    batch_to(chain, data, qs, link, false)
+}
+
+/// As [`forward_kinematics_batch_to`], the batch shared between the calling thread and rayon's
+/// pool as [`forward_kinematics_batch_par`] shares one (batches of fewer than
+/// [`super::PARALLEL_WORK`] joint evaluations run on the calling thread). The poses are the same, bit
+/// for bit.
+///
+/// # Errors
+/// As [`forward_kinematics_batch`].
+///
+/// # Panics
+/// As [`forward_kinematics_batch_to`].
+pub fn forward_kinematics_batch_to_par<'a>(
+    chain: &'a Chain,
+    data: &'a mut BatchData,
+    qs: &[f64],
+    link: LinkId,
+) -> Result<BatchLinkPoses<'a>, BatchError> {
+    batch_to(chain, data, qs, link, true)
+}
+
+fn batch_to<'a>(
     chain: &'a Chain,
     data: &'a mut BatchData,
     qs: &[f64],
@@ -397,27 +424,25 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 
 /// As [`super::forward_kinematics_batch_fold`], in `f32`: every link's poses, block by block
 /// ([`fold_block_len`] configurations per block, fewer in the last), are folded with
-/// `fold(acc, first, poses)` while the block's frames are in cache; with `parallel`, runs of
-/// blocks are shared between the calling thread and rayon's pool, and their results combined
-/// with `reduce` in block order. The poses are those of [`forward_kinematics_batch`], bit for
+/// `fold(acc, first, poses)` while the block's frames are in cache, on the calling thread
+/// ([`forward_kinematics_batch_fold_par`] shares runs of blocks with rayon's pool). The poses are those of [`forward_kinematics_batch`], bit for
 /// bit.
 ///
 /// # Errors
-/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it, and
-/// with `parallel` some after it, may have been folded; their result is dropped.
+/// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it may
+/// have been folded; their result is dropped.
 ///
 /// # Examples
 /// ```
-/// use kinechain::{Chain, LimitPolicy, batch::single_precision::forward_kinematics_batch_fold};
+/// use kinechain::{Chain, LimitPolicy, eval::batch::single_precision::forward_kinematics_batch_fold_par};
 /// let chain = Chain::from_file("robots/planar3.yaml")?;
 /// let tip = chain.link_id("link3")?;
 /// let qs: Vec<f64> = (0..1000).flat_map(|i| [0.001 * i as f64, 0.0, 0.0]).collect();
 /// // How many configurations put the tip above y = 4.
-/// let above = forward_kinematics_batch_fold(
+/// let above = forward_kinematics_batch_fold_par(
 ///     &chain,
 ///     &qs,
 ///     LimitPolicy::Enforce,
-///     true,
 ///     || 0,
 ///     |n, _first, poses| {
 ///         n + (0..poses.len()).filter(|&i| poses.world_from_link(i, tip).translation().y > 4.0).count()
@@ -432,12 +457,32 @@ pub fn forward_kinematics_batch_fold<T: Send>(
     chain: &Chain,
     qs: &[f64],
     policy: LimitPolicy,
-    parallel: bool,
     identity: impl Fn() -> T + Sync + Send,
     fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
     reduce: impl Fn(T, T) -> T + Sync + Send,
 ) -> Result<T, BatchError> {
-    fold_blocks::<Single, T>(chain, qs, policy, parallel, identity, fold, reduce)
+    fold_blocks::<Single, T>(chain, qs, policy, false, identity, fold, reduce)
+}
+
+/// As [`forward_kinematics_batch_fold`], the blocks shared between the calling thread and
+/// rayon's pool in runs of consecutive blocks (about 32 runs per thread), each thread evaluating
+/// into buffers of its own; each run is folded from `identity()`, and the runs' results are
+/// combined with `reduce` in the order of their blocks (so `reduce` must be associative, and
+/// `identity()` neutral for it). Batches of fewer than [`super::PARALLEL_WORK`] joint evaluations stay
+/// on the calling thread.
+///
+/// # Errors
+/// As [`forward_kinematics_batch_fold`]; blocks after the bad configuration may have been
+/// folded too, and their result is dropped.
+pub fn forward_kinematics_batch_fold_par<T: Send>(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    identity: impl Fn() -> T + Sync + Send,
+    fold: impl Fn(T, usize, BatchPoses<'_>) -> T + Sync + Send,
+    reduce: impl Fn(T, T) -> T + Sync + Send,
+) -> Result<T, BatchError> {
+    fold_blocks::<Single, T>(chain, qs, policy, true, identity, fold, reduce)
 }
 
 /// Runs `eval(check, scratch, c, out)` for every chunk `c` of sixteen configurations of `qs`,
