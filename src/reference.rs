@@ -117,11 +117,11 @@ fn local(body: &Body, q: &[f64]) -> BigFrame {
     pre.compose(&motion).compose(&post)
 }
 
-/// Link poses at `q` (in [`Chain::links`] order), evaluated with [`PRECISION_BITS`]-bit
+/// Link poses at `q` (in [`Chain::links`](crate::Model::links) order), evaluated with [`PRECISION_BITS`]-bit
 /// mantissas and rounded to `f64`.
 ///
 /// # Panics
-/// If `q` does not have [`Chain::dof`] entries (this is a measuring tool; check `q` first).
+/// If `q` does not have [`Chain::dof`](crate::Model::dof) entries (this is a measuring tool; check `q` first).
 #[must_use]
 pub fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
     assert_eq!(q.len(), chain.dof(), "q has the wrong length");
@@ -245,11 +245,11 @@ struct BigMotion {
     a: [F; 3],
 }
 
-/// Link poses, velocities and accelerations at `(q, q_dot, q_ddot)` (in [`Chain::links`]
+/// Link poses, velocities and accelerations at `(q, q_dot, q_ddot)` (in [`Chain::links`](crate::Model::links)
 /// order), by the recursion of [`crate::eval::kinematics`] in [`PRECISION_BITS`]-bit arithmetic.
 ///
 /// # Panics
-/// If a vector does not have [`Chain::dof`] entries.
+/// If a vector does not have [`Chain::dof`](crate::Model::dof) entries.
 #[must_use]
 pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> Vec<LinkMotion> {
     assert!(

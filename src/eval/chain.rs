@@ -1,5 +1,5 @@
 //! The chain as the kernels evaluate it: a validated [`Model`] and its kernel-ready form
-//! ([`layout`](crate::eval::layout)). [`ChainBuilder::build`] makes one.
+//! (`eval::layout`). [`ChainBuilder::build`] makes one.
 
 use crate::eval::error::StateError;
 use crate::eval::layout::{
@@ -177,7 +177,7 @@ impl Chain {
     /// and d; a mimic joint follows its primary.
     ///
     /// # Errors
-    /// [`StateError::WrongLength`] if a vector does not have [`Chain::dof`] entries.
+    /// [`StateError::WrongLength`] if a vector does not have [`Chain::dof`](crate::Model::dof) entries.
     ///
     /// # Panics
     /// If `joint` comes from another chain with more joints.

@@ -68,20 +68,20 @@ pub struct PointMotion {
     pub parts: AccelerationParts,
 }
 
-/// Poses of every link after [`forward_kinematics`] or [`forward_kinematics_incremental`].
+/// Poses of every link after [`forward_kinematics`](crate::forward_kinematics) or [`forward_kinematics_incremental`](crate::forward_kinematics_incremental).
 #[derive(Clone, Copy, Debug)]
 pub struct Poses<'a> {
     pub(crate) chain: &'a Chain,
     pub(crate) data: &'a Data,
 }
 
-/// Poses and velocities of every link after [`forward_velocities`].
+/// Poses and velocities of every link after [`forward_velocities`](crate::forward_velocities).
 #[derive(Clone, Copy, Debug)]
 pub struct Velocities<'a> {
     pub(crate) poses: Poses<'a>,
 }
 
-/// Poses, velocities and accelerations of every link after [`forward_accelerations`].
+/// Poses, velocities and accelerations of every link after [`forward_accelerations`](crate::forward_accelerations).
 #[derive(Clone, Copy, Debug)]
 pub struct Accelerations<'a> {
     pub(crate) poses: Poses<'a>,
@@ -168,7 +168,7 @@ impl<'a> Poses<'a> {
         }
     }
 
-    /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`]
+    /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`](crate::Model::dof)
     /// matrix `J` with `[v; ω] = J q̇`, where `v` is the velocity of the link-frame origin and `ω`
     /// the link's angular velocity, both in the world frame (the same quantities as
     /// [`Velocities::velocity`], in the row order Pinocchio and KDL use: linear rows first).
@@ -202,7 +202,7 @@ impl<'a> Poses<'a> {
         j
     }
 
-    /// [`Poses::jacobian`] written into `j`, which is resized to 6 × [`Chain::dof`] if it has
+    /// [`Poses::jacobian`] written into `j`, which is resized to 6 × [`Chain::dof`](crate::Model::dof) if it has
     /// another shape (so a reused matrix allocates nothing).
     ///
     /// # Panics
@@ -216,7 +216,7 @@ impl<'a> Poses<'a> {
         });
     }
 
-    /// `j` (resized to 6 × [`Chain::dof`] if it has another shape) ← the sum, over the bodies
+    /// `j` (resized to 6 × [`Chain::dof`](crate::Model::dof) if it has another shape) ← the sum, over the bodies
     /// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
     /// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
     /// joint's two), and entries of joints off the path stay zero.
@@ -439,7 +439,7 @@ impl<'a> Velocities<'a> {
         j
     }
 
-    /// [`Velocities::jacobian_dot`] written into `j`, which is resized to 6 × [`Chain::dof`] if
+    /// [`Velocities::jacobian_dot`] written into `j`, which is resized to 6 × [`Chain::dof`](crate::Model::dof) if
     /// it has another shape (so a reused matrix allocates nothing).
     ///
     /// # Panics

@@ -1,6 +1,6 @@
 //! The immutable model a description becomes once validated: joints and links in depth-first
 //! order, the layout of `q`, mimic joints resolved to independent ones, limits and names.
-//! [`validate`] is the one place where a description is checked; it hands the evaluation layer
+//! `validate` is the one place where a description is checked; it hands the evaluation layer
 //! what it needs to lay the model out for the kernels.
 
 use crate::model::builder::ChainBuilder;
