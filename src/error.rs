@@ -73,4 +73,7 @@ pub enum Error {
     /// The chain cannot be written as URDF.
     #[error(transparent)]
     Convert(#[from] crate::io::convert::ConvertError),
+    /// A regression record, verification or comparison could not be made.
+    #[error(transparent)]
+    Regression(#[from] crate::regression::RegressionError),
 }

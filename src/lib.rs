@@ -53,6 +53,7 @@ pub mod orientation;
 #[cfg(feature = "reference")]
 #[doc(hidden)]
 pub mod reference;
+pub mod regression;
 
 #[doc(hidden)]
 pub use eval::arith::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};

@@ -7,11 +7,11 @@ use std::f64::consts::{PI, TAU};
 use std::time::{Duration, Instant};
 
 /// SplitMix64: a small, fast, seedable generator (reproducible across platforms).
-struct SplitMix(u64);
+pub(crate) struct SplitMix(pub(crate) u64);
 
 impl SplitMix {
     /// Uniform in `[0, 1)`.
-    fn unit(&mut self) -> f64 {
+    pub(crate) fn unit(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -59,7 +59,7 @@ pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
 
 /// The point a fraction `u` of the way from `lo` to `hi`. When `hi − lo` overflows (limits such
 /// as ±10³⁰⁸), as a weighted mean, which stays within the two; otherwise `lo + (hi − lo) u`.
-fn between(lo: f64, hi: f64, u: f64) -> f64 {
+pub(crate) fn between(lo: f64, hi: f64, u: f64) -> f64 {
     let span = hi - lo;
     if span.is_finite() {
         lo + span * u

@@ -11,14 +11,28 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// Each top-level module and the modules it may use.
-const ALLOWED: [(&str, &[&str]); 8] = [
+const ALLOWED: [(&str, &[&str]); 9] = [
     ("orientation", &[]),
     ("model", &["orientation"]),
     ("eval", &["orientation", "model"]),
     ("io", &["orientation", "model", "eval"]),
     ("measure", &["orientation", "model", "eval"]),
     ("reference", &["orientation", "model", "eval", "measure"]),
-    ("error", &["orientation", "model", "eval", "io"]),
+    (
+        "regression",
+        &["orientation", "model", "eval", "io", "measure"],
+    ),
+    (
+        "error",
+        &[
+            "orientation",
+            "model",
+            "eval",
+            "io",
+            "measure",
+            "regression",
+        ],
+    ),
     (
         "cli",
         &[
@@ -28,6 +42,7 @@ const ALLOWED: [(&str, &[&str]); 8] = [
             "io",
             "measure",
             "reference",
+            "regression",
             "error",
         ],
     ),

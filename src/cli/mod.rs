@@ -29,9 +29,10 @@ mod bench;
 mod fk;
 mod format;
 mod info;
+mod regression;
 
 #[allow(clippy::wildcard_imports)]
-use self::{batch::*, bench::*, fk::*, format::*, info::*};
+use self::{batch::*, bench::*, fk::*, format::*, info::*, regression::*};
 
 /// Forward kinematics of robot chains from DH YAML or URDF files.
 #[derive(Debug, Parser)]
@@ -94,6 +95,46 @@ enum Command {
         /// the link farthest from the base).
         #[arg(long, value_name = "NAME")]
         link: Option<String>,
+    },
+    /// Record every link's pose (and rates) at seeded configurations into a golden file (JSON
+    /// lines), for `verify` to check a robot against later.
+    Record {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// Output file (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        sampling: SampleArgs,
+    },
+    /// Check a robot against a golden file: per link, the largest position, rotation and rate
+    /// differences and where they occur. Joints are matched by name. Exit status 0 when every
+    /// link is within the tolerances, 1 when a link moved beyond them, 2 on any error.
+    Verify {
+        /// Robot file (.yaml/.yml DH table or .urdf).
+        robot: PathBuf,
+        /// Golden file written by `record`.
+        golden: PathBuf,
+        #[command(flatten)]
+        tolerances: TolArgs,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
+        format: OutputFormat,
+    },
+    /// Compare two robot files at seeded configurations of the first, over the joints and links
+    /// they share by name; lists what only one has. Exit status as for `verify`.
+    Compare {
+        /// The first robot file.
+        robot_a: PathBuf,
+        /// The second robot file.
+        robot_b: PathBuf,
+        #[command(flatten)]
+        sampling: SampleArgs,
+        #[command(flatten)]
+        tolerances: TolArgs,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
+        format: OutputFormat,
     },
 }
 
@@ -268,6 +309,15 @@ pub enum CliError {
         /// The robot file.
         input: PathBuf,
     },
+    /// A regression record, verification or comparison could not be made.
+    #[error(transparent)]
+    Regression(#[from] crate::regression::RegressionError),
+    /// `verify` or `compare`: a link moved beyond the tolerances (the report says which).
+    #[error("link '{}' moved beyond the tolerances", escape_controls(link))]
+    Moved {
+        /// The first such link along the chain.
+        link: String,
+    },
     /// Reading input or writing output failed.
     #[error("{context}")]
     Io {
@@ -320,17 +370,29 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
         } | Command::Render {
             output: Some(_),
             ..
+        } | Command::Record {
+            output: Some(_),
+            ..
         }
     );
     if writes_stdout && stdout_closed {
         eprintln!("error: standard output is closed: the results would be lost");
         return ExitCode::FAILURE;
     }
+    // `verify` and `compare` tell a moved link (1) from an error (2).
+    let verdicts = matches!(
+        &cli.command,
+        Command::Verify { .. } | Command::Compare { .. }
+    );
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
     let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(output_error));
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(CliError::Moved { .. }) => match out.flush() {
+            Ok(()) => ExitCode::FAILURE,
+            Err(_) => ExitCode::from(2),
+        },
         // The reader went away (`kinechain fk … | head`): stop quietly, as a shell tool does.
         Err(CliError::Io { source, .. }) if source.kind() == std::io::ErrorKind::BrokenPipe => {
             ExitCode::SUCCESS
@@ -338,7 +400,11 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
         Err(e) => {
             let _ = out.flush();
             eprintln!("error: {}", error_chain(&e));
-            ExitCode::FAILURE
+            if verdicts {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }
@@ -502,6 +568,24 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
                 })?;
             write_output(output.as_ref(), &robot, &drawing, out)
         }
+        Command::Record {
+            robot,
+            output,
+            sampling,
+        } => record(&robot, output.as_ref(), &sampling, out),
+        Command::Verify {
+            robot,
+            golden,
+            tolerances,
+            format,
+        } => verify(&robot, &golden, &tolerances, format, out),
+        Command::Compare {
+            robot_a,
+            robot_b,
+            sampling,
+            tolerances,
+            format,
+        } => compare([&robot_a, &robot_b], &sampling, &tolerances, format, out),
     }
 }
 

@@ -1,0 +1,579 @@
+//! Regression tests on link kinematics: [`record`] a robot's link poses (and rates) at seeded
+//! configurations into a [`Golden`] record, [`verify`] a robot against one, [`compare`] two robots
+//! over the joints and links they share by name. Each gives a [`Report`]: per link, the largest
+//! position, rotation and rate differences and the sample where each occurs, and the verdict
+//! against [`Tolerances`].
+//!
+//! Joints are matched by name (a cylindrical joint's entries as `NAME.theta` and `NAME.d`), so a
+//! robot whose `q` order changed still verifies. Evaluations run with the limits ignored: a
+//! recorded configuration outside the verified robot's limits is still compared (the report
+//! counts them), since a change of limits is not a change of kinematics.
+//!
+//! The golden file is JSON lines: a header (robot, dof, joint and link names, kinechain version,
+//! seed, sample count, level), then one line per sample. Numbers are written so that they read
+//! back to the same `f64`, and the same inputs give the same bytes.
+//!
+//! This layer may use [`crate::model`], [`crate::eval`], [`crate::io`] and [`crate::measure`].
+
+mod golden;
+mod report;
+
+pub use golden::{Golden, Header, LinkState, Sample, read_golden, write_golden};
+pub use report::{LinkReport, Names, Report, Worst};
+
+use crate::eval::chain::Chain;
+use crate::eval::data::{Data, LimitPolicy};
+use crate::eval::error::StateError;
+use crate::eval::kinematics::{
+    check_q, forward_accelerations, forward_kinematics, forward_velocities,
+};
+use crate::measure::{SplitMix, between};
+use crate::model::chain::LinkId;
+use crate::model::error::NameError;
+use crate::model::transform::Transform;
+use std::f64::consts::PI;
+
+/// What a record holds for each link: poses, poses and velocities (ω, v), or poses, velocities
+/// and accelerations (α, classical a).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Level {
+    /// Poses.
+    Pose,
+    /// Poses, ω and v.
+    Vel,
+    /// Poses, ω, v, α and a.
+    Acc,
+}
+
+impl Level {
+    /// `pose`, `vel` or `acc`, as written in a golden file and on the command line.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Level::Pose => "pose",
+            Level::Vel => "vel",
+            Level::Acc => "acc",
+        }
+    }
+}
+
+impl std::fmt::Display for Level {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// How configurations are drawn and which links are recorded.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Random configurations, drawn uniformly within the limits (entries without limits from
+    /// `[−π, π]`), besides the zero configuration and the two limit corners where the limits
+    /// admit them.
+    pub samples: usize,
+    /// Seed of the draw: the same seed gives the same configurations.
+    pub seed: u64,
+    /// What is recorded.
+    pub level: Level,
+    /// The links recorded, by name; empty: every link.
+    pub links: Vec<String>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            samples: 100,
+            seed: 1,
+            level: Level::Pose,
+            links: Vec::new(),
+        }
+    }
+}
+
+/// The largest differences a link may show and still pass.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Tolerances {
+    /// Distance between the two positions of a link origin (m).
+    pub position: f64,
+    /// Angle of the rotation between the two orientations of a link (rad).
+    pub rotation: f64,
+    /// Norm of the difference of ω, v, α or a (rad/s, m/s, rad/s², m/s²).
+    pub rates: f64,
+}
+
+impl Default for Tolerances {
+    /// 1e-9 m, 1e-9 rad, 1e-9 for the rates.
+    fn default() -> Self {
+        Tolerances {
+            position: 1e-9,
+            rotation: 1e-9,
+            rates: 1e-9,
+        }
+    }
+}
+
+/// Why a record, a verification or a comparison could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RegressionError {
+    /// A golden file is not what [`write_golden`] writes.
+    #[error("{file}:{line}: {problem}")]
+    Golden {
+        /// The file as named by the caller.
+        file: String,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong there.
+        problem: String,
+    },
+    /// The robot lacks joints the record has, or has joints the record lacks.
+    #[error("{}", names_problem("joints", missing, extra))]
+    Joints {
+        /// Recorded joint entries the robot does not have.
+        missing: Vec<String>,
+        /// The robot's joint entries the record does not have.
+        extra: Vec<String>,
+    },
+    /// The robot lacks links the record has (or that were asked for).
+    #[error("{}", names_problem("links", missing, &[]))]
+    Links {
+        /// The link names missing.
+        missing: Vec<String>,
+    },
+    /// A link name asked for is not in the robot.
+    #[error(transparent)]
+    Name(#[from] NameError),
+    /// A configuration could not be evaluated.
+    #[error("sample {sample}")]
+    State {
+        /// The sample.
+        sample: usize,
+        /// Why.
+        #[source]
+        source: StateError,
+    },
+    /// A recorded or evaluated quantity is not finite (limits so wide that poses overflow).
+    #[error("sample {sample}: the {what} of link '{link}' is not finite")]
+    NotFinite {
+        /// The sample.
+        sample: usize,
+        /// The link.
+        link: String,
+        /// `pose`, `omega`, `v`, `alpha` or `a`.
+        what: &'static str,
+    },
+    /// A chain without joints to move, or a record without samples.
+    #[error("{0}")]
+    Empty(&'static str),
+}
+
+fn names_problem(what: &str, missing: &[String], extra: &[String]) -> String {
+    let list = |v: &[String]| {
+        v.iter()
+            .map(|n| format!("'{}'", crate::model::error::escape_controls(n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match (missing.is_empty(), extra.is_empty()) {
+        (false, true) => format!(
+            "{what} of the record missing from the robot: {}",
+            list(missing)
+        ),
+        (true, false) => format!(
+            "{what} of the robot missing from the record: {}",
+            list(extra)
+        ),
+        _ => format!(
+            "{what} of the record missing from the robot: {}; {what} of the robot missing from the record: {}",
+            list(missing),
+            list(extra)
+        ),
+    }
+}
+
+/// The name of each entry of `q`: the joint's, or `NAME.theta` / `NAME.d` for a cylindrical
+/// joint's two.
+#[must_use]
+pub fn variable_names(chain: &Chain) -> Vec<String> {
+    chain
+        .variables()
+        .map(|(j, component)| {
+            let name = chain.joint(j).name();
+            component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
+        })
+        .collect()
+}
+
+/// The configurations a record is made at: zero, the lower and the upper corner of the limits
+/// (each where the limits admit it; an entry without a finite bound takes its neutral value),
+/// then `samples` drawn uniformly within [`Chain::lower`] and [`Chain::upper`] (`[−π, π]` where
+/// unbounded, or the 2π beside a single bound). With `level` above poses each gets `q̇` and `q̈`
+/// (as the level needs) drawn uniformly from `[−1, 1]`.
+fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let (lower, upper, neutral) = (chain.lower(), chain.upper(), chain.neutral());
+    let dof = chain.dof();
+    let admitted = |q: &Vec<f64>| check_q(chain, q, LimitPolicy::Enforce).is_ok();
+    let corner = |bound: &[f64]| -> Vec<f64> {
+        (0..dof)
+            .map(|i| {
+                if bound[i].is_finite() {
+                    bound[i]
+                } else {
+                    neutral[i]
+                }
+            })
+            .collect()
+    };
+    let mut qs: Vec<Vec<f64>> = Vec::new();
+    for q in [vec![0.0; dof], corner(&lower), corner(&upper)] {
+        if admitted(&q) && !qs.contains(&q) {
+            qs.push(q);
+        }
+    }
+    let mut rng = SplitMix(options.seed);
+    for _ in 0..options.samples {
+        let q = (0..dof)
+            .map(|i| {
+                let (lo, hi) = match (lower[i].is_finite(), upper[i].is_finite()) {
+                    (true, true) => (lower[i], upper[i]),
+                    (true, false) => (lower[i], lower[i] + 2.0 * PI),
+                    (false, true) => (upper[i] - 2.0 * PI, upper[i]),
+                    (false, false) => (-PI, PI),
+                };
+                between(lo, hi, rng.unit())
+            })
+            .collect();
+        qs.push(q);
+    }
+    let mut rates = |n| (0..n).map(|_| 2.0 * rng.unit() - 1.0).collect::<Vec<f64>>();
+    qs.into_iter()
+        .map(|q| {
+            let qd = if options.level == Level::Pose {
+                vec![0.0; dof]
+            } else {
+                rates(dof)
+            };
+            let qdd = if options.level == Level::Acc {
+                rates(dof)
+            } else {
+                vec![0.0; dof]
+            };
+            (q, qd, qdd)
+        })
+        .collect()
+}
+
+/// Evaluates every link in `links` at one configuration, as a record holds it.
+fn states(
+    chain: &Chain,
+    data: &mut Data,
+    links: &[LinkId],
+    level: Level,
+    (q, qd, qdd): (&[f64], &[f64], &[f64]),
+    sample: usize,
+) -> Result<Vec<LinkState>, RegressionError> {
+    let state = |source| RegressionError::State { sample, source };
+    let mut out = Vec::with_capacity(links.len());
+    let finite = |link: LinkId, what, v: &[f64]| {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(RegressionError::NotFinite {
+                sample,
+                link: chain.link(link).name().to_string(),
+                what,
+            })
+        }
+    };
+    let pose_of = |t: &Transform| -> [f64; 12] {
+        let rows = t.to_rows();
+        std::array::from_fn(|k| rows[k / 4][k % 4])
+    };
+    match level {
+        Level::Pose => {
+            let poses = forward_kinematics(chain, data, q).map_err(state)?;
+            for &link in links {
+                let pose = pose_of(&poses.world_from_link(link));
+                finite(link, "pose", &pose)?;
+                out.push(LinkState::pose(pose));
+            }
+        }
+        Level::Vel => {
+            let vel = forward_velocities(chain, data, q, qd).map_err(state)?;
+            for &link in links {
+                let pose = pose_of(&vel.world_from_link(link));
+                finite(link, "pose", &pose)?;
+                let v = vel.velocity(link);
+                let s = LinkState {
+                    omega: Some(v.omega.into()),
+                    v: Some(v.v.into()),
+                    ..LinkState::pose(pose)
+                };
+                for (what, x) in [("omega", &s.omega), ("v", &s.v)] {
+                    finite(link, what, x.as_ref().map_or(&[][..], |x| x))?;
+                }
+                out.push(s);
+            }
+        }
+        Level::Acc => {
+            let acc = forward_accelerations(chain, data, q, qd, qdd).map_err(state)?;
+            for &link in links {
+                let pose = pose_of(&acc.world_from_link(link));
+                finite(link, "pose", &pose)?;
+                let (v, a) = (acc.velocity(link), acc.acceleration(link));
+                let s = LinkState {
+                    pose,
+                    omega: Some(v.omega.into()),
+                    v: Some(v.v.into()),
+                    alpha: Some(a.alpha.into()),
+                    a: Some(a.a.into()),
+                };
+                for (what, x) in [
+                    ("omega", &s.omega),
+                    ("v", &s.v),
+                    ("alpha", &s.alpha),
+                    ("a", &s.a),
+                ] {
+                    finite(link, what, x.as_ref().map_or(&[][..], |x| x))?;
+                }
+                out.push(s);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The links named, or every link; each named link must exist.
+fn chosen_links(chain: &Chain, names: &[String]) -> Result<Vec<LinkId>, RegressionError> {
+    if names.is_empty() {
+        return Ok((0..chain.links().len())
+            .map(|i| chain.link_id(chain.links()[i].name()))
+            .collect::<Result<_, _>>()?);
+    }
+    let mut ids: Vec<LinkId> = Vec::new();
+    for name in names {
+        let id = chain.link_id(name)?;
+        if !ids.contains(&id) {
+            ids.push(id);
+        }
+    }
+    Ok(ids)
+}
+
+/// Records `chain` at the configurations `options` describes.
+///
+/// # Errors
+/// An unknown link name; a chain without joints to move; a pose or rate that is not finite.
+pub fn record(chain: &Chain, options: &Options) -> Result<Golden, RegressionError> {
+    if chain.dof() == 0 {
+        return Err(RegressionError::Empty(
+            "the chain has no joints to move: there is nothing to record",
+        ));
+    }
+    let links = chosen_links(chain, &options.links)?;
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+    let mut samples = Vec::new();
+    for (i, (q, qd, qdd)) in configurations(chain, options).into_iter().enumerate() {
+        let links = states(chain, &mut data, &links, options.level, (&q, &qd, &qdd), i)?;
+        samples.push(Sample {
+            sample: i,
+            qd: (options.level != Level::Pose).then_some(qd),
+            qdd: (options.level == Level::Acc).then_some(qdd),
+            q,
+            links,
+        });
+    }
+    Ok(Golden {
+        header: Header {
+            kinechain_golden: golden::FORMAT,
+            robot: chain.name().to_string(),
+            dof: chain.dof(),
+            joints: variable_names(chain),
+            links: links
+                .iter()
+                .map(|&l| chain.link(l).name().to_string())
+                .collect(),
+            kinechain: env!("CARGO_PKG_VERSION").to_string(),
+            seed: options.seed,
+            samples: samples.len(),
+            level: options.level,
+        },
+        samples,
+    })
+}
+
+/// Evaluates `chain` at the record's configurations and compares every recorded link.
+///
+/// # Errors
+/// [`RegressionError::Joints`] when the joint names differ (listing both sides),
+/// [`RegressionError::Links`] when recorded links are missing; an evaluation that fails.
+pub fn verify(
+    chain: &Chain,
+    golden: &Golden,
+    tolerances: &Tolerances,
+) -> Result<Report, RegressionError> {
+    let names = variable_names(chain);
+    let missing: Vec<String> = golden
+        .header
+        .joints
+        .iter()
+        .filter(|j| !names.contains(j))
+        .cloned()
+        .collect();
+    let extra: Vec<String> = names
+        .iter()
+        .filter(|j| !golden.header.joints.contains(j))
+        .cloned()
+        .collect();
+    if !missing.is_empty() || !extra.is_empty() {
+        return Err(RegressionError::Joints { missing, extra });
+    }
+    let order: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            golden
+                .header
+                .joints
+                .iter()
+                .position(|j| j == n)
+                .unwrap_or(0)
+        })
+        .collect();
+    check_links(chain, &golden.header.links)?;
+    let mut report = Report::new(chain, &golden.header.links, golden.header.level, tolerances);
+    evaluate_against(chain, golden, &mut report, |recorded, _| {
+        order.iter().map(|&k| recorded[k]).collect()
+    })?;
+    Ok(report)
+}
+
+/// Every name in `links` is a link of `chain`.
+fn check_links(chain: &Chain, links: &[String]) -> Result<(), RegressionError> {
+    let missing: Vec<String> = links
+        .iter()
+        .filter(|l| chain.link_id(l).is_err())
+        .cloned()
+        .collect();
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(RegressionError::Links { missing })
+    }
+}
+
+/// Evaluates `chain` at each sample (its `q`, `q̇`, `q̈` mapped by `to_chain`, told whether it
+/// maps positions) and adds the differences to `report`.
+fn evaluate_against(
+    chain: &Chain,
+    golden: &Golden,
+    report: &mut Report,
+    to_chain: impl Fn(&[f64], bool) -> Vec<f64>,
+) -> Result<(), RegressionError> {
+    let links = chosen_links(chain, &golden.header.links)?;
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+    let zero = vec![0.0; golden.header.dof];
+    for s in &golden.samples {
+        let q = to_chain(&s.q, true);
+        let qd = to_chain(s.qd.as_deref().unwrap_or(&zero), false);
+        let qdd = to_chain(s.qdd.as_deref().unwrap_or(&zero), false);
+        if check_q(chain, &q, LimitPolicy::Enforce).is_err() {
+            report.outside_limits += 1;
+        }
+        let now = states(
+            chain,
+            &mut data,
+            &links,
+            golden.header.level,
+            (&q, &qd, &qdd),
+            s.sample,
+        )?;
+        report.add(s.sample, &s.links, &now);
+    }
+    report.samples = golden.samples.len();
+    Ok(())
+}
+
+/// Compares `b` with `a` at configurations drawn for `a` (`options`): joints they share take
+/// the same values, joints only `b` has its neutral values; the links compared are those named
+/// in `options` (each must be in both) or every link they share. The report lists the joints and
+/// links only one of them has.
+///
+/// # Errors
+/// A link asked for that one of them lacks; a chain without joints to move; an evaluation that
+/// fails.
+pub fn compare(
+    a: &Chain,
+    b: &Chain,
+    options: &Options,
+    tolerances: &Tolerances,
+) -> Result<Report, RegressionError> {
+    let link_names = |c: &Chain| {
+        c.links()
+            .iter()
+            .map(|l| l.name().to_string())
+            .collect::<Vec<_>>()
+    };
+    let (links_a, links_b) = (link_names(a), link_names(b));
+    let shared: Vec<String> = if options.links.is_empty() {
+        links_a
+            .iter()
+            .filter(|l| links_b.contains(l))
+            .cloned()
+            .collect()
+    } else {
+        check_links(a, &options.links)?;
+        check_links(b, &options.links)?;
+        options.links.clone()
+    };
+    let golden = record(
+        a,
+        &Options {
+            links: shared.clone(),
+            ..options.clone()
+        },
+    )?;
+    let (joints_a, joints_b) = (variable_names(a), variable_names(b));
+    let neutral_b = b.neutral();
+    let from_a: Vec<Option<usize>> = joints_b
+        .iter()
+        .map(|n| joints_a.iter().position(|j| j == n))
+        .collect();
+    let mut report = Report::new(b, &shared, options.level, tolerances);
+    report.only_in_first = Names {
+        joints: joints_a
+            .iter()
+            .filter(|j| !joints_b.contains(j))
+            .cloned()
+            .collect(),
+        links: links_a
+            .iter()
+            .filter(|l| !links_b.contains(l))
+            .cloned()
+            .collect(),
+    };
+    report.only_in_second = Names {
+        joints: joints_b
+            .iter()
+            .filter(|j| !joints_a.contains(j))
+            .cloned()
+            .collect(),
+        links: links_b
+            .iter()
+            .filter(|l| !links_a.contains(l))
+            .cloned()
+            .collect(),
+    };
+    // Joints only `b` has stand still at their neutral values.
+    evaluate_against(b, &golden, &mut report, |values, positions| {
+        from_a
+            .iter()
+            .enumerate()
+            .map(|(i, k)| match k {
+                Some(k) => values[*k],
+                None if positions => neutral_b[i],
+                None => 0.0,
+            })
+            .collect()
+    })?;
+    Ok(report)
+}
