@@ -1,0 +1,75 @@
+"""Type stubs of the compiled half of kinechain (the Chain class and the exceptions)."""
+
+from typing import Any, Iterable, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
+
+from . import FkResult
+
+__version__: str
+
+class Error(ValueError):
+    """Any error of kinechain."""
+
+class LoadError(Error):
+    """A robot file or text that cannot be loaded; the message names file, line, column, joint."""
+
+class StateError(Error):
+    """Joint values that cannot be evaluated (shape, length, not finite, out of limits)."""
+
+class Chain:
+    """A robot: links, joints and limits; immutable and shared between threads."""
+
+    @staticmethod
+    def from_file(path: str) -> "Chain":
+        """Loads a DH table (.yaml, .yml) or a URDF file (.urdf)."""
+    @staticmethod
+    def from_urdf_string(text: str) -> "Chain":
+        """A robot from URDF text."""
+    @staticmethod
+    def from_yaml_string(text: str) -> "Chain":
+        """A robot from DH YAML text."""
+    @property
+    def name(self) -> str:
+        """The robot's name."""
+    @property
+    def dof(self) -> int:
+        """Entries of a configuration q."""
+    @property
+    def joint_names(self) -> list[str]:
+        """The name of each entry of q, in order (a cylindrical joint's as NAME.theta, NAME.d)."""
+    @property
+    def link_names(self) -> list[str]:
+        """Every link, in the chain's order."""
+    @property
+    def lower(self) -> npt.NDArray[np.float64]:
+        """Smallest admitted value of each entry of q (-inf where unlimited)."""
+    @property
+    def upper(self) -> npt.NDArray[np.float64]:
+        """Largest admitted value of each entry of q (inf where unlimited)."""
+    def neutral(self) -> npt.NDArray[np.float64]:
+        """A configuration inside the limits."""
+    def fk(
+        self,
+        q: npt.ArrayLike,
+        qd: Optional[npt.ArrayLike] = None,
+        qdd: Optional[npt.ArrayLike] = None,
+        *,
+        links: Optional[Iterable[str]] = None,
+        check_limits: bool = True,
+        threads: Optional[int] = None,
+    ) -> FkResult:
+        """Poses (and velocities, accelerations) of the links at q of shape (dof,) or (N, dof)."""
+    def jacobian(
+        self,
+        q: npt.ArrayLike,
+        link: str,
+        *,
+        check_limits: bool = True,
+        threads: Optional[int] = None,
+    ) -> npt.NDArray[np.float64]:
+        """Geometric Jacobian of link, world frame: (6, dof) or (N, 6, dof), rows v then omega."""
+    def __reduce__(self) -> Tuple[Any, Tuple[str, str]]: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __hash__(self) -> int: ...

@@ -1,0 +1,206 @@
+"""The Python package: loading, shapes, agreement with the 50-digit reference data, batches
+against single evaluations bit for bit, Jacobians against velocities, errors as exceptions,
+pickling."""
+
+import glob
+import json
+import os
+import pickle
+
+import numpy as np
+import pytest
+
+import kinechain as kc
+
+ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
+ROBOTS = sorted(glob.glob(os.path.join(ROOT, "robots", "*.yaml")) + glob.glob(os.path.join(ROOT, "robots", "*.urdf")))
+REFERENCE = sorted(glob.glob(os.path.join(ROOT, "tests", "data", "reference", "urdf", "*.hp.json")))
+
+
+def random_q(chain, n, seed=1):
+    rng = np.random.default_rng(seed)
+    lo = np.where(np.isfinite(chain.lower), chain.lower, -np.pi)
+    hi = np.where(np.isfinite(chain.upper), chain.upper, np.pi)
+    return lo + (hi - lo) * rng.random((n, chain.dof))
+
+
+@pytest.mark.parametrize("path", ROBOTS, ids=os.path.basename)
+def test_every_bundled_robot_loads_and_evaluates(path):
+    chain = kc.load(path)
+    assert chain.dof == len(chain.joint_names) > 0
+    assert len(chain.link_names) == len(set(chain.link_names))
+    assert repr(chain) == f"Chain(name='{chain.name}', dof={chain.dof}, links={len(chain.link_names)})"
+    n = chain.neutral()
+    assert np.all(chain.lower <= n) and np.all(n <= chain.upper)
+    r = chain.fk(n)
+    assert r.poses.shape == (len(chain.link_names), 4, 4)
+    assert r.links == chain.link_names
+    assert np.array_equal(r.poses[:, 3, :], np.tile([0.0, 0.0, 0.0, 1.0], (len(r.links), 1)))
+    for pose in r.poses:
+        rot = pose[:3, :3]
+        assert np.abs(rot @ rot.T - np.eye(3)).max() < 1e-14
+
+
+@pytest.mark.parametrize("path", REFERENCE, ids=os.path.basename)
+def test_the_reference_data_within_1e_10(path):
+    with open(path) as f:
+        ref = json.load(f)
+    urdf = os.path.join(os.path.dirname(path), ref["model"]["file"])
+    chain = kc.load(urdf)
+    names = chain.joint_names
+    samples = ref["samples"]
+    q = np.array([[s["q"][j] for j in names] for s in samples])
+    qd = np.array([[s["qd"][j] for j in names] for s in samples])
+    qdd = np.array([[s["qdd"][j] for j in names] for s in samples])
+    r = chain.fk(q, qd, qdd, check_limits=False)
+    for i, s in enumerate(samples):
+        for link, want in s["links"].items():
+            k = r.links.index(link)
+            pose = np.array([[float(x) for x in row] for row in want["pose"]])
+            assert np.abs(r.poses[i, k] - pose).max() < 1e-10, (link, i)
+            for field in ("omega", "v", "alpha", "a"):
+                got = getattr(r, field)[i, k]
+                exp = np.array([float(x) for x in want[field]])
+                assert np.abs(got - exp).max() < 1e-10 * max(1.0, np.abs(exp).max()), (link, field, i)
+    # Poses alone go through the batch kernels; they equal the poses computed with the rates.
+    poses = chain.fk(q, check_limits=False).poses
+    assert np.array_equal(poses, r.poses)
+
+
+@pytest.mark.parametrize("name", ["panda.urdf", "ur5.yaml", "puma560.yaml", "cylindrical.yaml"])
+def test_batches_equal_single_evaluations_bit_for_bit(name):
+    chain = kc.load(os.path.join(ROOT, "robots", name))
+    q = random_q(chain, 301)
+    qd = random_q(chain, 301, seed=2)
+    qdd = random_q(chain, 301, seed=3)
+    for args in [(q,), (q, qd), (q, qd, qdd)]:
+        batch = chain.fk(*args)
+        one_thread = chain.fk(*args, threads=1)
+        for field in ("poses", "omega", "v", "alpha", "a"):
+            b = getattr(batch, field)
+            assert (b is None) == (getattr(one_thread, field) is None)
+            if b is not None:
+                assert np.array_equal(b, getattr(one_thread, field))
+        for i in (0, 7, 150, 300):
+            single = chain.fk(*(a[i] for a in args))
+            assert np.array_equal(single.poses, batch.poses[i])
+            if len(args) > 1:
+                assert np.array_equal(single.v, batch.v[i])
+    # Chosen links: the same numbers, in the order asked for, only those computed.
+    pick = [chain.link_names[-1], chain.link_names[1]]
+    sub = chain.fk(q, links=pick)
+    assert sub.links == pick
+    full = chain.fk(q)
+    assert np.array_equal(sub.poses[:, 0], full[pick[0]])
+    assert np.array_equal(sub[pick[1]], full[pick[1]])
+    assert np.array_equal(chain.fk(q, links=pick[0]).poses[:, 0], full[pick[0]])
+    assert np.array_equal(chain.fk(q[5], links=[pick[0]]).poses[0], full[pick[0]][5])
+    # An empty batch.
+    assert chain.fk(q[:0]).poses.shape == (0, len(chain.link_names), 4, 4)
+
+
+def test_jacobians_map_joint_rates_to_link_velocities():
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    q, qd = random_q(chain, 40), random_q(chain, 40, seed=5)
+    link = "panda_hand"
+    j = chain.jacobian(q, link)
+    assert j.shape == (40, 6, chain.dof)
+    r = chain.fk(q, qd, links=[link])
+    twist = np.einsum("nij,nj->ni", j, qd)
+    assert np.abs(twist[:, :3] - r.v[:, 0]).max() < 1e-13
+    assert np.abs(twist[:, 3:] - r.omega[:, 0]).max() < 1e-13
+    assert np.array_equal(chain.jacobian(q[3], link), j[3])
+    assert np.array_equal(chain.jacobian(q, link, threads=1), j)
+
+
+def test_array_likes_and_views_give_the_same_numbers():
+    chain = kc.load(os.path.join(ROOT, "robots", "ur5.yaml"))
+    q = random_q(chain, 10)
+    want = chain.fk(q).poses
+    assert np.array_equal(chain.fk(q.tolist()).poses, want)
+    assert np.array_equal(chain.fk(np.asfortranarray(q)).poses, want)
+    wide = np.zeros((10, 2 * chain.dof))
+    wide[:, ::2] = q
+    assert np.array_equal(chain.fk(wide[:, ::2]).poses, want)
+    assert np.array_equal(chain.fk(q.astype(np.float32).astype(np.float64)).poses, chain.fk(q.astype(np.float32)).poses)
+    ints = np.zeros((2, chain.dof), dtype=np.int64)
+    assert np.array_equal(chain.fk(ints).poses[0], chain.fk(np.zeros(chain.dof)).poses)
+
+
+def test_bad_input_raises_exceptions_naming_what_is_wrong():
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    n = chain.neutral()
+    cases = [
+        (lambda: chain.fk(n[:3]), kc.StateError, "3 entries"),
+        (lambda: chain.fk(np.zeros((2, 2, chain.dof))), kc.StateError, "shape"),
+        (lambda: chain.fk(np.zeros(())), kc.StateError, "shape"),
+        (lambda: chain.fk(np.where(np.arange(chain.dof) == 2, np.nan, n)), kc.StateError, "panda_joint3"),
+        (lambda: chain.fk(np.where(np.arange(chain.dof) == 0, np.inf, n)), kc.StateError, "panda_joint1"),
+        (lambda: chain.fk(np.where(np.arange(chain.dof) == 3, 1.0, n)), kc.StateError, "panda_joint4"),
+        (lambda: chain.fk(np.tile(n, (5, 1)), np.zeros((4, chain.dof))), kc.StateError, "shape"),
+        (lambda: chain.fk(n, None, n), kc.StateError, "qdd needs qd"),
+        (lambda: chain.fk(n, np.where(np.arange(chain.dof) == 1, np.nan, 0.0)), kc.StateError, "panda_joint2"),
+        (lambda: chain.fk(["a"] * chain.dof), kc.StateError, "float64"),
+        (lambda: chain.fk(n, links=["panda_hnd"]), kc.Error, "panda_hand"),
+        (lambda: chain.jacobian(n, "nowhere"), kc.Error, "nowhere"),
+        (lambda: chain.fk(n, threads=0), kc.Error, "threads"),
+        (lambda: chain.fk(np.tile(n, (100, 1)), threads=-2), kc.Error, "threads"),
+        (lambda: kc.load(os.path.join(ROOT, "robots", "missing.urdf")), kc.LoadError, "missing.urdf"),
+        (lambda: kc.Chain.from_urdf_string("<robot name='r'><link name='a'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/></joint></robot>"), kc.LoadError, "line 1"),
+        (lambda: kc.Chain.from_yaml_string("name: x\njoints: 3\n"), kc.LoadError, "joints"),
+    ]
+    for call, kind, says in cases:
+        with pytest.raises(kind) as info:
+            call()
+        assert isinstance(info.value, ValueError) and isinstance(info.value, kc.Error)
+        assert says in str(info.value), str(info.value)
+    # A batch names the configuration at fault.
+    qs = np.tile(n, (1000, 1))
+    qs[617, 3] = 1.0
+    with pytest.raises(kc.StateError, match="configuration 617: joint 'panda_joint4'"):
+        chain.fk(qs)
+    with pytest.raises(kc.StateError, match="configuration 617"):
+        chain.fk(qs, np.zeros_like(qs))
+    with pytest.raises(kc.StateError, match="configuration 617"):
+        chain.jacobian(qs, "panda_hand")
+    # With the limits unchecked the values are evaluated.
+    assert chain.fk(qs, check_limits=False).poses.shape[0] == 1000
+    with pytest.raises(KeyError, match="no link named 'x'"):
+        chain.fk(n)["x"]
+
+
+def test_chains_pickle_and_compare_equal():
+    for path in ROBOTS:
+        chain = kc.load(path)
+        back = pickle.loads(pickle.dumps(chain))
+        assert back == chain and hash(back) == hash(chain)
+        assert back.joint_names == chain.joint_names
+        q = chain.neutral()
+        assert np.array_equal(back.fk(q).poses, chain.fk(q).poses)
+    a, b = kc.load(ROBOTS[0]), kc.load(ROBOTS[1])
+    assert a != b and a != "a chain"
+
+
+def test_strings_load_like_files():
+    path = os.path.join(ROOT, "robots", "planar3.yaml")
+    with open(path) as f:
+        chain = kc.Chain.from_yaml_string(f.read())
+    assert chain == kc.Chain.from_file(path)
+    r = chain.fk([0.3, -0.2, 0.5], [1.0, 0.5, -0.2])
+    x = 4 * np.cos(0.3) + 3 * np.cos(0.1) + 2 * np.cos(0.6)
+    assert abs(r["link3"][0, 3] - x) < 1e-14
+    assert np.array_equal(r.omega[-1], [0.0, 0.0, 1.3])
+    with open(os.path.join(ROOT, "robots", "panda.urdf")) as f:
+        assert kc.Chain.from_urdf_string(f.read()).dof == 8
+    assert kc.__version__
+
+
+@pytest.mark.parametrize("page", ["README.md", os.path.join("docs", "python.md")])
+def test_the_documented_python_examples_run(page, monkeypatch):
+    with open(os.path.join(ROOT, page)) as f:
+        text = f.read()
+    blocks = [b.split("```", 1)[0] for b in text.split("```python\n")[1:]]
+    assert blocks, page
+    monkeypatch.chdir(ROOT)
+    for block in blocks:
+        exec(compile(block, page, "exec"), {})
