@@ -20,7 +20,7 @@ import numpy as np
 
 from ._kinechain import Chain, Error, LoadError, StateError, __version__
 
-__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "__version__"]
+__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "testing", "__version__"]
 
 
 def load(path: Union[str, "os.PathLike[str]"]) -> Chain:
@@ -130,3 +130,5 @@ _jacobian.__doc__ = """The geometric Jacobian of ``link`` at its origin, world f
 
 Chain.fk = _fk  # type: ignore[attr-defined]
 Chain.jacobian = _jacobian  # type: ignore[attr-defined]
+
+from . import testing  # noqa: E402  (kinechain.testing: assertions for test suites)

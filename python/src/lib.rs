@@ -11,7 +11,7 @@ use kinechain::eval::batch::{
     BatchData, forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
     forward_kinematics_batch_to_par,
 };
-use kinechain::regression::variable_names;
+use kinechain::regression::{self, variable_names};
 use kinechain::{
     Chain as Inner, Data, LimitPolicy, LinkId, StateError as KStateError, Transform,
     error::error_chain, forward_accelerations, forward_kinematics, forward_kinematics_to,
@@ -475,6 +475,117 @@ impl Chain {
     }
 }
 
+/// The options of a regression record or comparison.
+fn regression_options(
+    samples: usize,
+    seed: u64,
+    level: &str,
+    links: Option<Vec<String>>,
+) -> PyResult<regression::Options> {
+    let level = match level {
+        "pose" => regression::Level::Pose,
+        "vel" => regression::Level::Vel,
+        "acc" => regression::Level::Acc,
+        other => {
+            return Err(Error::new_err(format!(
+                "level '{other}': expected 'pose', 'vel' or 'acc'"
+            )));
+        }
+    };
+    Ok(regression::Options {
+        samples,
+        seed,
+        level,
+        links: links.unwrap_or_default(),
+    })
+}
+
+fn tolerances(position: f64, rotation: f64, rates: f64) -> PyResult<regression::Tolerances> {
+    for (what, x) in [("position", position), ("rotation", rotation), ("rates", rates)] {
+        if !(x.is_finite() && x >= 0.0) {
+            return Err(Error::new_err(format!(
+                "tolerance of {what} {x}: expected a finite number >= 0"
+            )));
+        }
+    }
+    Ok(regression::Tolerances {
+        position,
+        rotation,
+        rates,
+    })
+}
+
+/// A report as `(passed, table for people, JSON text)`.
+fn report_parts(report: &regression::Report) -> PyResult<(bool, String, String)> {
+    let json = serde_json::to_string(report).map_err(|e| Error::new_err(e.to_string()))?;
+    Ok((report.passed(), report.to_string(), json))
+}
+
+fn regression_error(e: &regression::RegressionError) -> PyErr {
+    Error::new_err(error_chain(e))
+}
+
+/// Records `chain` into the golden file `path` (what `kinechain record -o path` writes).
+#[pyfunction]
+#[pyo3(signature = (chain, path, samples, seed, level, links))]
+fn _record_golden(
+    chain: &Bound<'_, Chain>,
+    path: PathBuf,
+    samples: usize,
+    seed: u64,
+    level: &str,
+    links: Option<Vec<String>>,
+) -> PyResult<()> {
+    let options = regression_options(samples, seed, level, links)?;
+    let golden =
+        regression::record(&chain.get().inner, &options).map_err(|e| regression_error(&e))?;
+    let mut text = Vec::new();
+    regression::write_golden(&golden, &mut text).map_err(|e| Error::new_err(e.to_string()))?;
+    std::fs::write(&path, text)
+        .map_err(|e| Error::new_err(format!("cannot write {}: {e}", path.display())))
+}
+
+/// Verifies `chain` against the golden file `path`: `(passed, table, JSON)`.
+#[pyfunction]
+fn _verify_golden(
+    chain: &Bound<'_, Chain>,
+    path: PathBuf,
+    tol_position: f64,
+    tol_rotation: f64,
+    tol_rates: f64,
+) -> PyResult<(bool, String, String)> {
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| Error::new_err(format!("cannot read {}: {e}", path.display())))?;
+    let golden = regression::read_golden(&text, &path.display().to_string())
+        .map_err(|e| regression_error(&e))?;
+    let tol = tolerances(tol_position, tol_rotation, tol_rates)?;
+    let report =
+        regression::verify(&chain.get().inner, &golden, &tol).map_err(|e| regression_error(&e))?;
+    report_parts(&report)
+}
+
+/// Compares two chains: `(passed, table, JSON)`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (a, b, samples, seed, level, links, tol_position, tol_rotation, tol_rates))]
+fn _compare(
+    a: &Bound<'_, Chain>,
+    b: &Bound<'_, Chain>,
+    samples: usize,
+    seed: u64,
+    level: &str,
+    links: Option<Vec<String>>,
+    tol_position: f64,
+    tol_rotation: f64,
+    tol_rates: f64,
+) -> PyResult<(bool, String, String)> {
+    let options = regression_options(samples, seed, level, links)?;
+    let tol = tolerances(tol_position, tol_rotation, tol_rates)?;
+    let report = regression::compare(&a.get().inner, &b.get().inner, &options, &tol)
+        .map_err(|e| regression_error(&e))?;
+    report_parts(&report)
+}
+
 /// Every link asked for of a batch of poses, through the batch kernels (all links, or the one
 /// link's path alone), on the pool when `parallel`.
 fn batch_poses(
@@ -552,6 +663,9 @@ fn _kinechain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("LoadError", m.py().get_type::<LoadError>())?;
     m.add("StateError", m.py().get_type::<StateError>())?;
+    m.add_function(wrap_pyfunction!(_record_golden, m)?)?;
+    m.add_function(wrap_pyfunction!(_verify_golden, m)?)?;
+    m.add_function(wrap_pyfunction!(_compare, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
