@@ -20,7 +20,7 @@ import numpy as np
 
 from ._kinechain import Chain, Error, LoadError, StateError, __version__
 
-__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "testing", "__version__"]
+__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "orientation", "testing", "__version__"]
 
 
 def load(path: Union[str, "os.PathLike[str]"]) -> Chain:
@@ -131,4 +131,4 @@ _jacobian.__doc__ = """The geometric Jacobian of ``link`` at its origin, world f
 Chain.fk = _fk  # type: ignore[attr-defined]
 Chain.jacobian = _jacobian  # type: ignore[attr-defined]
 
-from . import testing  # noqa: E402  (kinechain.testing: assertions for test suites)
+from . import orientation, testing  # noqa: E402  (orientation coordinates; assertions for test suites)

@@ -204,3 +204,88 @@ def test_the_documented_python_examples_run(page, monkeypatch):
     monkeypatch.chdir(ROOT)
     for block in blocks:
         exec(compile(block, page, "exec"), {})
+
+
+def test_orientation_coordinates_recompose_to_the_matrices():
+    from kinechain import orientation as ko
+
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    poses = chain.fk(random_q(chain, 50)).poses  # (50, 13, 4, 4)
+    rot = poses[..., :3, :3]
+    w, x, y, z = np.moveaxis(ko.quaternion_from_matrix(poses), -1, 0)
+    assert w.shape == (50, 13) and np.all(w >= 0)
+    quat_matrix = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+    assert np.abs(quat_matrix - rot).max() < 1e-14
+    roll, pitch, yaw = np.moveaxis(ko.rpy_from_matrix(rot), -1, 0)
+
+    def rx(a):
+        c, s, o, i = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
+        return np.stack([np.stack([i, o, o], -1), np.stack([o, c, -s], -1), np.stack([o, s, c], -1)], -2)
+
+    def ry(a):
+        c, s, o, i = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
+        return np.stack([np.stack([c, o, s], -1), np.stack([o, i, o], -1), np.stack([-s, o, c], -1)], -2)
+
+    def rz(a):
+        c, s, o, i = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
+        return np.stack([np.stack([c, -s, o], -1), np.stack([s, c, o], -1), np.stack([o, o, i], -1)], -2)
+
+    finite = ~np.isnan(roll)
+    assert finite.sum() > 500
+    assert np.abs((rz(yaw) @ ry(pitch) @ rx(roll))[finite] - rot[finite]).max() < 1e-13
+    phi, theta, psi = np.moveaxis(ko.euler_zxz_from_matrix(rot), -1, 0)
+    ok = ~np.isnan(phi)
+    assert np.abs((rz(phi) @ rx(theta) @ rz(psi))[ok] - rot[ok]).max() < 1e-13
+    aa = ko.axis_angle_from_matrix(rot)
+    g = ko.rodrigues_from_matrix(rot)
+    ok = ~np.isnan(aa[..., 0]) & ~np.isnan(g[..., 0])
+    # Relative: the parameters grow without bound towards a half turn.
+    assert (np.abs(np.tan(aa[..., 3] / 2)[..., None] * aa[..., :3] - g) / (1 + np.abs(g)))[ok].max() < 1e-13
+    # Undefined coordinates are NaN; bad shapes and kinds are errors.
+    assert np.isnan(ko.axis_angle_from_matrix(np.eye(3))).all()
+    assert np.isnan(ko.euler_zxz_from_matrix(np.eye(3))).all()
+    assert np.array_equal(ko.quaternion_from_matrix(np.eye(3)), [1.0, 0.0, 0.0, 0.0])
+    with pytest.raises(kc.StateError, match="shape"):
+        ko.rpy_from_matrix(np.eye(2))
+    with pytest.raises(kc.StateError, match="not finite"):
+        ko.rpy_from_matrix(np.full((3, 3), np.nan))
+
+
+def test_batches_release_the_gil_while_they_run():
+    import threading
+    import time
+
+    chain = kc.load(os.path.join(ROOT, "robots", "snake50.yaml"))
+    tip = chain.link_names[-1]
+    n = 20_000
+    while True:
+        q = random_q(chain, n)
+        start = time.perf_counter()
+        chain.fk(q, links=[tip], threads=1)
+        took = time.perf_counter() - start
+        if took > 0.15 or n >= 2_000_000:
+            break
+        n *= 4
+    done = threading.Event()
+
+    def work():
+        chain.fk(q, links=[tip], threads=1)
+        done.set()
+
+    worker = threading.Thread(target=work)
+    worker.start()
+    # While the batch runs, this thread keeps running: no pause near the batch's length.
+    last, longest = time.perf_counter(), 0.0
+    while not done.is_set():
+        now = time.perf_counter()
+        longest = max(longest, now - last)
+        last = now
+    worker.join()
+    assert longest < 0.5 * took, (longest, took)
