@@ -5,7 +5,6 @@ from typing import Any, Iterable, Optional, Tuple
 import numpy as np
 import numpy.typing as npt
 
-from . import FkResult
 
 __version__: str
 
@@ -17,6 +16,25 @@ class LoadError(Error):
 
 class StateError(Error):
     """Joint values that cannot be evaluated (shape, length, not finite, out of limits)."""
+
+class FkResult:
+    """What Chain.fk computed: poses (L, 4, 4) or (N, L, 4, 4); with qd omega and v, with qdd
+    alpha and a, (L, 3) or (N, L, 3); None where not computed. r[name] is one link's pose."""
+
+    @property
+    def links(self) -> list[str]: ...
+    @property
+    def poses(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def omega(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def v(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def alpha(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def a(self) -> Optional[npt.NDArray[np.float64]]: ...
+    def __getitem__(self, link: str) -> npt.NDArray[np.float64]: ...
+    def __len__(self) -> int: ...
 
 class Chain:
     """A robot: links, joints and limits; immutable and shared between threads."""

@@ -8,8 +8,8 @@
 //! files as `kinechain.LoadError`.
 
 use kinechain::eval::batch::{
-    BatchData, forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
-    forward_kinematics_batch_to_par,
+    BatchData, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par,
+    forward_kinematics_batch_to, forward_kinematics_batch_to_par,
 };
 use kinechain::regression::{self, variable_names};
 use kinechain::{
@@ -20,10 +20,11 @@ use kinechain::{
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyList, PySlice, PyTuple};
 use rayon::prelude::*;
+use std::collections::HashMap;
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 pyo3::create_exception!(
     kinechain,
@@ -60,10 +61,40 @@ struct Chain {
     /// The text it was loaded from, and its format (`urdf` or `yaml`): what pickling ships.
     source: String,
     format: &'static str,
+    /// Every link's id and, for results of every link, the names as one shared Python list and
+    /// their positions.
+    all_links: Vec<LinkId>,
+    link_list: Py<PyList>,
+    link_index: Arc<HashMap<String, usize>>,
+    /// Buffers of single evaluations, reused by whichever call finds them free.
+    data: Mutex<Option<Data>>,
 }
 
 impl Chain {
-    fn from_text(text: String, format: &str) -> PyResult<Self> {
+    fn new(py: Python<'_>, inner: Inner, source: String, format: &'static str) -> PyResult<Self> {
+        let names: Vec<String> = inner.links().iter().map(|l| l.name().to_string()).collect();
+        let all_links = names
+            .iter()
+            .map(|n| inner.link_id(n))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| Error::new_err(e.to_string()))?;
+        let link_index = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), i))
+            .collect();
+        Ok(Chain {
+            inner: Arc::new(inner),
+            source,
+            format,
+            all_links,
+            link_list: PyList::new(py, &names)?.unbind(),
+            link_index: Arc::new(link_index),
+            data: Mutex::new(None),
+        })
+    }
+
+    fn from_text(py: Python<'_>, text: String, format: &str) -> PyResult<Self> {
         let (inner, format) = match format {
             "urdf" => (Inner::from_urdf_str(&text), "urdf"),
             "yaml" => (Inner::from_dh_yaml_str(&text), "yaml"),
@@ -74,24 +105,36 @@ impl Chain {
             }
         };
         let inner = inner.map_err(|e| load_error(&e))?;
-        Ok(Chain {
-            inner: Arc::new(inner),
-            source: text,
-            format,
-        })
+        Chain::new(py, inner, text, format)
     }
 
-    fn link_ids(&self, links: Option<Vec<String>>) -> PyResult<(Vec<LinkId>, Vec<String>)> {
-        let chain = &*self.inner;
-        let names: Vec<String> = match links {
-            Some(names) => names,
-            None => chain.links().iter().map(|l| l.name().to_string()).collect(),
+    /// The links asked for (every link for `None`): ids, the names as a Python list, and their
+    /// positions.
+    #[allow(clippy::type_complexity)]
+    fn link_ids(
+        &self,
+        py: Python<'_>,
+        links: Option<Vec<String>>,
+    ) -> PyResult<(Vec<LinkId>, Py<PyList>, Arc<HashMap<String, usize>>)> {
+        let Some(names) = links else {
+            return Ok((
+                self.all_links.clone(),
+                self.link_list.clone_ref(py),
+                Arc::clone(&self.link_index),
+            ));
         };
+        let chain = &*self.inner;
         let ids = names
             .iter()
             .map(|n| chain.link_id(n).map_err(|e| Error::new_err(e.to_string())))
             .collect::<PyResult<Vec<_>>>()?;
-        Ok((ids, names))
+        let index = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.clone(), i))
+            .rev()
+            .collect();
+        Ok((ids, PyList::new(py, &names)?.unbind(), Arc::new(index)))
     }
 }
 
@@ -195,7 +238,7 @@ impl Failure {
 impl Chain {
     /// Loads a robot file: a DH table (`.yaml`, `.yml`) or a URDF file (`.urdf`).
     #[staticmethod]
-    fn from_file(path: PathBuf) -> PyResult<Self> {
+    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let inner = Inner::from_file(&path).map_err(|e| load_error(&e))?;
         let source = std::fs::read_to_string(&path)
             .map_err(|e| LoadError::new_err(format!("{}: {e}", path.display())))?;
@@ -203,29 +246,25 @@ impl Chain {
             Some(kinechain::io::Format::Urdf) => "urdf",
             _ => "yaml",
         };
-        Ok(Chain {
-            inner: Arc::new(inner),
-            source,
-            format,
-        })
+        Chain::new(py, inner, source, format)
     }
 
     /// A robot from URDF text.
     #[staticmethod]
-    fn from_urdf_string(text: String) -> PyResult<Self> {
-        Chain::from_text(text, "urdf")
+    fn from_urdf_string(py: Python<'_>, text: String) -> PyResult<Self> {
+        Chain::from_text(py, text, "urdf")
     }
 
     /// A robot from DH YAML text.
     #[staticmethod]
-    fn from_yaml_string(text: String) -> PyResult<Self> {
-        Chain::from_text(text, "yaml")
+    fn from_yaml_string(py: Python<'_>, text: String) -> PyResult<Self> {
+        Chain::from_text(py, text, "yaml")
     }
 
     /// A robot from its text and format (`urdf` or `yaml`); what unpickling calls.
     #[staticmethod]
-    fn _from_source(text: String, format: &str) -> PyResult<Self> {
-        Chain::from_text(text, format)
+    fn _from_source(py: Python<'_>, text: String, format: &str) -> PyResult<Self> {
+        Chain::from_text(py, text, format)
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
@@ -302,21 +341,25 @@ impl Chain {
         PyArray1::from_vec(py, self.inner.neutral())
     }
 
-    /// The evaluation behind `Chain.fk`: a dict of `links`, `poses` and, with `qd` (and `qdd`),
-    /// `omega`, `v` (and `alpha`, `a`).
-    #[pyo3(signature = (q, qd=None, qdd=None, links=None, check_limits=true, threads=None))]
+    /// Poses (and with `qd`, `qdd` velocities and accelerations) of the links; see the
+    /// package's documentation of `Chain.fk`.
+    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, check_limits=true, threads=None))]
     #[allow(clippy::too_many_arguments)]
-    fn _fk<'py>(
+    fn fk<'py>(
         &self,
         py: Python<'py>,
-        q: PyReadonlyArrayDyn<'py, f64>,
-        qd: Option<PyReadonlyArrayDyn<'py, f64>>,
-        qdd: Option<PyReadonlyArrayDyn<'py, f64>>,
-        links: Option<Vec<String>>,
+        q: &Bound<'py, PyAny>,
+        qd: Option<&Bound<'py, PyAny>>,
+        qdd: Option<&Bound<'py, PyAny>>,
+        links: Option<&Bound<'py, PyAny>>,
         check_limits: bool,
-        threads: Option<usize>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+        threads: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<FkResult> {
         let chain = &*self.inner;
+        let threads = thread_count(threads)?;
+        let q = float_array(q, "q")?;
+        let qd = qd.map(|a| float_array(a, "qd")).transpose()?;
+        let qdd = qdd.map(|a| float_array(a, "qdd")).transpose()?;
         let (n, batched) = rows(chain, &q, "q")?;
         for (a, what) in [(&qd, "qd"), (&qdd, "qdd")] {
             if let Some(a) = a
@@ -334,14 +377,25 @@ impl Chain {
                 "qdd needs qd (accelerations depend on velocities)",
             ));
         }
+        let links = match links {
+            None => None,
+            Some(l) if l.is_instance_of::<pyo3::types::PyString>() => Some(vec![l.extract()?]),
+            Some(l) => Some(
+                l.try_iter()?
+                    .map(|x| x.and_then(|x| x.extract::<String>()))
+                    .collect::<PyResult<Vec<_>>>()?,
+            ),
+        };
         let level = usize::from(qd.is_some()) + usize::from(qdd.is_some());
-        let (ids, names) = self.link_ids(links)?;
+        let (ids, names, index) = self.link_ids(py, links)?;
         let l = ids.len();
-        let lead: Vec<usize> = if batched { vec![n] } else { vec![] };
-        let dims = |tail: &[usize]| [lead.as_slice(), &[l], tail].concat();
-        let poses = PyArrayDyn::<f64>::zeros(py, dims(&[4, 4]), false);
+        let lead: &[usize] = if batched { &[n] } else { &[] };
+        let dims = |tail: &[usize]| [lead, &[l], tail].concat();
+        // SAFETY: every entry is written below before the arrays are handed out (an error drops
+        // them unread).
+        let poses = unsafe { PyArrayDyn::<f64>::new(py, dims(&[4, 4]), false) };
         let rates: Vec<Bound<'py, PyArrayDyn<f64>>> = (0..2 * level)
-            .map(|_| PyArrayDyn::<f64>::zeros(py, dims(&[3]), false))
+            .map(|_| unsafe { PyArrayDyn::<f64>::new(py, dims(&[3]), false) })
             .collect();
         let policy = if check_limits {
             LimitPolicy::Enforce
@@ -356,91 +410,105 @@ impl Chain {
         let pose_out = Out::new(&poses);
         let rate_out: Vec<Out> = rates.iter().map(Out::new).collect();
         let dof = chain.dof();
-        let result = py.detach(|| {
-            if level == 0 && batched && n > 0 {
-                return on_threads(threads, || {
-                    batch_poses(chain, policy, q, &ids, pose_out, threads != Some(1))
-                })
-                .map_err(Failure::Threads)?;
+        let one = |data: &mut Data, i: usize| -> Result<(), KStateError> {
+            fn row(a: &[f64], i: usize, dof: usize) -> &[f64] {
+                &a[i * dof..(i + 1) * dof]
             }
-            let one = |data: &mut Data, i: usize| -> Result<(), KStateError> {
-                fn row(a: &[f64], i: usize, dof: usize) -> &[f64] {
-                    &a[i * dof..(i + 1) * dof]
+            // SAFETY: row i's ranges of the outputs, written by this call alone.
+            let pose = unsafe { pose_out.part(i * l * 16, l * 16) };
+            let mut parts: Vec<&mut [f64]> = rate_out
+                .iter()
+                .map(|o| unsafe { o.part(i * l * 3, l * 3) })
+                .collect();
+            match (qd, qdd) {
+                (None, _) if l == 1 => {
+                    write_pose(
+                        &forward_kinematics_to(chain, data, row(q, i, dof), ids[0])?,
+                        pose,
+                    );
                 }
-                // SAFETY: row i's ranges of the outputs, written by this call alone.
-                let pose = unsafe { pose_out.part(i * l * 16, l * 16) };
-                let mut parts: Vec<&mut [f64]> = rate_out
-                    .iter()
-                    .map(|o| unsafe { o.part(i * l * 3, l * 3) })
-                    .collect();
-                match (qd, qdd) {
-                    (None, _) if l == 1 => {
-                        write_pose(
-                            &forward_kinematics_to(chain, data, row(q, i, dof), ids[0])?,
-                            pose,
-                        );
-                    }
-                    (None, _) => {
-                        let p = forward_kinematics(chain, data, row(q, i, dof))?;
-                        for (k, &id) in ids.iter().enumerate() {
-                            write_pose(&p.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
-                        }
-                    }
-                    (Some(qd), None) => {
-                        let v = forward_velocities(chain, data, row(q, i, dof), row(qd, i, dof))?;
-                        for (k, &id) in ids.iter().enumerate() {
-                            write_pose(&v.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
-                            let lv = v.velocity(id);
-                            parts[0][3 * k..3 * k + 3].copy_from_slice(lv.omega.as_slice());
-                            parts[1][3 * k..3 * k + 3].copy_from_slice(lv.v.as_slice());
-                        }
-                    }
-                    (Some(qd), Some(qdd)) => {
-                        let a = forward_accelerations(
-                            chain,
-                            data,
-                            row(q, i, dof),
-                            row(qd, i, dof),
-                            row(qdd, i, dof),
-                        )?;
-                        for (k, &id) in ids.iter().enumerate() {
-                            write_pose(&a.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
-                            let (lv, la) = (a.velocity(id), a.acceleration(id));
-                            parts[0][3 * k..3 * k + 3].copy_from_slice(lv.omega.as_slice());
-                            parts[1][3 * k..3 * k + 3].copy_from_slice(lv.v.as_slice());
-                            parts[2][3 * k..3 * k + 3].copy_from_slice(la.alpha.as_slice());
-                            parts[3][3 * k..3 * k + 3].copy_from_slice(la.a.as_slice());
-                        }
+                (None, _) => {
+                    let p = forward_kinematics(chain, data, row(q, i, dof))?;
+                    for (k, &id) in ids.iter().enumerate() {
+                        write_pose(&p.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
                     }
                 }
-                Ok(())
-            };
-            per_row(chain, policy, n, threads, one)
-        });
+                (Some(qd), None) => {
+                    let v = forward_velocities(chain, data, row(q, i, dof), row(qd, i, dof))?;
+                    for (k, &id) in ids.iter().enumerate() {
+                        write_pose(&v.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
+                        let lv = v.velocity(id);
+                        parts[0][3 * k..3 * k + 3].copy_from_slice(lv.omega.as_slice());
+                        parts[1][3 * k..3 * k + 3].copy_from_slice(lv.v.as_slice());
+                    }
+                }
+                (Some(qd), Some(qdd)) => {
+                    let a = forward_accelerations(
+                        chain,
+                        data,
+                        row(q, i, dof),
+                        row(qd, i, dof),
+                        row(qdd, i, dof),
+                    )?;
+                    for (k, &id) in ids.iter().enumerate() {
+                        write_pose(&a.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
+                        let (lv, la) = (a.velocity(id), a.acceleration(id));
+                        parts[0][3 * k..3 * k + 3].copy_from_slice(lv.omega.as_slice());
+                        parts[1][3 * k..3 * k + 3].copy_from_slice(lv.v.as_slice());
+                        parts[2][3 * k..3 * k + 3].copy_from_slice(la.alpha.as_slice());
+                        parts[3][3 * k..3 * k + 3].copy_from_slice(la.a.as_slice());
+                    }
+                }
+            }
+            Ok(())
+        };
+        let result = if !batched {
+            // One configuration: too little work to leave the GIL for, buffers reused.
+            self.with_data(policy, |data| one(data, 0))
+                .map_err(|e| Failure::State(None, e))
+        } else {
+            py.detach(|| {
+                if level == 0 && n > 0 {
+                    on_threads(threads, || {
+                        batch_poses(chain, policy, q, &ids, pose_out, threads != Some(1))
+                    })
+                    .map_err(Failure::Threads)?
+                } else {
+                    per_row(chain, policy, n, threads, one)
+                }
+            })
+        };
         result.map_err(|f| f.into_py(batched))?;
-        let dict = PyDict::new(py);
-        dict.set_item("links", names)?;
-        dict.set_item("poses", poses)?;
-        for (key, a) in ["omega", "v", "alpha", "a"].iter().zip(rates) {
-            dict.set_item(key, a)?;
-        }
-        Ok(dict)
+        let mut rates = rates.into_iter().map(|a| Some(a.into_any().unbind()));
+        let mut next = || rates.next().flatten();
+        Ok(FkResult {
+            links: names,
+            index,
+            poses: poses.into_any().unbind(),
+            omega: next(),
+            v: next(),
+            alpha: next(),
+            a: next(),
+        })
     }
 
-    /// The evaluation behind `Chain.jacobian`: `(6, dof)` or `(N, 6, dof)`, rows v then ω.
-    #[pyo3(signature = (q, link, check_limits=true, threads=None))]
-    fn _jacobian<'py>(
+    /// The geometric Jacobian of `link` at its origin, world frame: `(6, dof)` or
+    /// `(N, 6, dof)`, rows v then ω, so that `[v; ω] = J q̇`.
+    #[pyo3(signature = (q, link, *, check_limits=true, threads=None))]
+    fn jacobian<'py>(
         &self,
         py: Python<'py>,
-        q: PyReadonlyArrayDyn<'py, f64>,
-        link: String,
+        q: &Bound<'py, PyAny>,
+        link: &str,
         check_limits: bool,
-        threads: Option<usize>,
+        threads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let chain = &*self.inner;
+        let threads = thread_count(threads)?;
+        let q = float_array(q, "q")?;
         let (n, batched) = rows(chain, &q, "q")?;
         let id = chain
-            .link_id(&link)
+            .link_id(link)
             .map_err(|e| Error::new_err(e.to_string()))?;
         let dof = chain.dof();
         let dims: Vec<usize> = if batched {
@@ -448,7 +516,8 @@ impl Chain {
         } else {
             vec![6, dof]
         };
-        let out = PyArrayDyn::<f64>::zeros(py, dims, false);
+        // SAFETY: every entry is written below before the array is handed out.
+        let out = unsafe { PyArrayDyn::<f64>::new(py, dims, false) };
         let policy = if check_limits {
             LimitPolicy::Enforce
         } else {
@@ -456,22 +525,160 @@ impl Chain {
         };
         let q = q.as_slice()?;
         let o = Out::new(&out);
-        let result = py.detach(|| {
-            per_row(chain, policy, n, threads, |data: &mut Data, i: usize| {
-                let poses = forward_kinematics(chain, data, &q[i * dof..(i + 1) * dof])?;
-                let j = poses.jacobian(id);
-                // SAFETY: row i's range, written by this call alone.
-                let dst = unsafe { o.part(i * 6 * dof, 6 * dof) };
-                for r in 0..6 {
-                    for c in 0..dof {
-                        dst[r * dof + c] = j[(r, c)];
-                    }
+        let one = |data: &mut Data, i: usize| -> Result<(), KStateError> {
+            let poses = forward_kinematics(chain, data, &q[i * dof..(i + 1) * dof])?;
+            let j = poses.jacobian(id);
+            // SAFETY: row i's range, written by this call alone.
+            let dst = unsafe { o.part(i * 6 * dof, 6 * dof) };
+            for r in 0..6 {
+                for c in 0..dof {
+                    dst[r * dof + c] = j[(r, c)];
                 }
-                Ok(())
-            })
-        });
+            }
+            Ok(())
+        };
+        let result = if batched {
+            py.detach(|| per_row(chain, policy, n, threads, one))
+        } else {
+            self.with_data(policy, |data| one(data, 0))
+                .map_err(|e| Failure::State(None, e))
+        };
         result.map_err(|f| f.into_py(batched))?;
         Ok(out)
+    }
+}
+
+impl Chain {
+    /// Runs `f` with this chain's cached single-evaluation buffers (or fresh ones when another
+    /// thread holds them), checking joint values under `policy`.
+    fn with_data<T>(&self, policy: LimitPolicy, f: impl FnOnce(&mut Data) -> T) -> T {
+        if let Ok(mut cached) = self.data.try_lock() {
+            let data = cached.get_or_insert_with(|| Data::new(&self.inner));
+            data.set_limit_policy(policy);
+            return f(data);
+        }
+        f(&mut Data::new(&self.inner).with_limit_policy(policy))
+    }
+}
+
+/// `x` as a C-contiguous float64 array: read as it is when it already is one, converted by numpy
+/// otherwise (a conversion that fails is a `StateError`).
+fn float_array<'py>(x: &Bound<'py, PyAny>, name: &str) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
+    if let Ok(a) = x.cast::<PyArrayDyn<f64>>()
+        && a.is_c_contiguous()
+        && a.ndim() > 0
+    {
+        return a
+            .try_readonly()
+            .map_err(|e| StateError::new_err(format!("{name}: {e}")));
+    }
+    let py = x.py();
+    let numpy = py.import("numpy")?;
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("dtype", numpy.getattr("float64")?)?;
+    let a = numpy
+        .getattr("asarray")?
+        .call((x,), Some(&kwargs))
+        .map_err(|e| {
+            StateError::new_err(format!("{name} cannot be read as float64 numbers: {e}"))
+        })?;
+    // (Before `ascontiguousarray`, which makes a scalar a 1-element vector.)
+    if a.getattr("ndim")?.extract::<usize>()? == 0 {
+        return Err(StateError::new_err(format!(
+            "{name} has shape (): expected (dof,) or (N, dof)"
+        )));
+    }
+    let a = numpy.getattr("ascontiguousarray")?.call1((a,))?;
+    let a = a
+        .cast_into::<PyArrayDyn<f64>>()
+        .map_err(|e| StateError::new_err(format!("{name}: {e}")))?;
+    a.try_readonly()
+        .map_err(|e| StateError::new_err(format!("{name}: {e}")))
+}
+
+/// `threads=`: `None`, or a positive integer.
+fn thread_count(threads: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    let Some(t) = threads else { return Ok(None) };
+    if t.is_none() {
+        return Ok(None);
+    }
+    match t.extract::<i64>() {
+        Ok(n) if n >= 1 && !t.is_instance_of::<pyo3::types::PyBool>() => {
+            Ok(Some(usize::try_from(n).unwrap_or(usize::MAX)))
+        }
+        _ => Err(Error::new_err(format!(
+            "threads must be a positive integer, not {}",
+            t.repr()?
+        ))),
+    }
+}
+
+/// What `Chain.fk` computed, as numpy arrays whose second-to-last axes follow `links`.
+///
+/// `poses`: `(L, 4, 4)` or `(N, L, 4, 4)` homogeneous transforms `world_from_link`. With `qd`:
+/// `omega` (angular velocity) and `v` (velocity of the link origin), `(L, 3)` or `(N, L, 3)`.
+/// With `qd` and `qdd`: `alpha` (angular acceleration) and `a` (classical acceleration of the
+/// link origin). Absent quantities are `None`. `r[name]` is one link's pose, `(4, 4)` or
+/// `(N, 4, 4)`.
+#[pyclass(module = "kinechain", name = "FkResult", frozen)]
+struct FkResult {
+    #[pyo3(get)]
+    links: Py<PyList>,
+    index: Arc<HashMap<String, usize>>,
+    #[pyo3(get)]
+    poses: Py<PyAny>,
+    #[pyo3(get)]
+    omega: Option<Py<PyAny>>,
+    #[pyo3(get)]
+    v: Option<Py<PyAny>>,
+    #[pyo3(get)]
+    alpha: Option<Py<PyAny>>,
+    #[pyo3(get)]
+    a: Option<Py<PyAny>>,
+}
+
+#[pymethods]
+impl FkResult {
+    fn __getitem__<'py>(&self, py: Python<'py>, link: &str) -> PyResult<Bound<'py, PyAny>> {
+        let Some(&i) = self.index.get(link) else {
+            return Err(pyo3::exceptions::PyKeyError::new_err(format!(
+                "no link named '{link}' in this result (links: {})",
+                self.links
+                    .bind(py)
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        };
+        let full = PySlice::full(py);
+        let key = (py.Ellipsis(), i, full.clone(), full);
+        self.poses.bind(py).get_item(key)
+    }
+
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.links.bind(py).len()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let shape = self.poses.bind(py).getattr("shape")?.repr()?.to_string();
+        let mut s = format!(
+            "FkResult(links={}, poses={shape}",
+            self.links.bind(py).len()
+        );
+        for (name, x) in [
+            ("omega", &self.omega),
+            ("v", &self.v),
+            ("alpha", &self.alpha),
+            ("a", &self.a),
+        ] {
+            if x.is_some() {
+                s.push_str(", ");
+                s.push_str(name);
+            }
+        }
+        s.push(')');
+        Ok(s)
     }
 }
 
@@ -501,7 +708,11 @@ fn regression_options(
 }
 
 fn tolerances(position: f64, rotation: f64, rates: f64) -> PyResult<regression::Tolerances> {
-    for (what, x) in [("position", position), ("rotation", rotation), ("rates", rates)] {
+    for (what, x) in [
+        ("position", position),
+        ("rotation", rotation),
+        ("rates", rates),
+    ] {
         if !(x.is_finite() && x >= 0.0) {
             return Err(Error::new_err(format!(
                 "tolerance of {what} {x}: expected a finite number >= 0"
@@ -598,11 +809,11 @@ fn batch_poses(
 ) -> Result<(), Failure> {
     let n = qs.len() / chain.dof().max(1);
     let l = ids.len();
-    let mut data = BatchData::new(chain).with_limit_policy(policy);
     let fail = |e: kinechain::eval::batch::BatchError| Failure::State(Some(e.index), e.source);
-    // SAFETY: the whole output, written by this thread alone.
-    let all = unsafe { out.part(0, n * l * 16) };
     if l == 1 {
+        let mut data = BatchData::new(chain).with_limit_policy(policy);
+        // SAFETY: the whole output, written by this thread alone.
+        let all = unsafe { out.part(0, n * 16) };
         let poses = if parallel {
             forward_kinematics_batch_to_par(chain, &mut data, qs, ids[0])
         } else {
@@ -613,17 +824,22 @@ fn batch_poses(
             write_pose(&poses.world_from_link(i), dst);
         }
     } else {
-        let poses = if parallel {
-            forward_kinematics_batch_par(chain, &mut data, qs)
+        // Block by block while the frames are in cache, straight into the output.
+        let write = |(), first: usize, poses: kinechain::eval::batch::BatchPoses<'_>| {
+            for i in 0..poses.len() {
+                // SAFETY: configuration first + i's range, written by this call alone.
+                let row = unsafe { out.part((first + i) * l * 16, l * 16) };
+                for (k, &id) in ids.iter().enumerate() {
+                    write_pose(&poses.world_from_link(i, id), &mut row[16 * k..16 * k + 16]);
+                }
+            }
+        };
+        if parallel {
+            forward_kinematics_batch_fold_par(chain, qs, policy, || (), write, |(), ()| ())
         } else {
-            forward_kinematics_batch(chain, &mut data, qs)
+            forward_kinematics_batch_fold(chain, qs, policy, || (), write, |(), ()| ())
         }
         .map_err(fail)?;
-        for (i, row) in all.chunks_exact_mut(16 * l).enumerate() {
-            for (k, &id) in ids.iter().enumerate() {
-                write_pose(&poses.world_from_link(i, id), &mut row[16 * k..16 * k + 16]);
-            }
-        }
     }
     Ok(())
 }
@@ -669,9 +885,7 @@ fn _orientation<'py>(
     r: PyReadonlyArrayDyn<'py, f64>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     use kinechain::nalgebra::Matrix3;
-    use kinechain::orientation::{
-        AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy,
-    };
+    use kinechain::orientation::{AxisAngle, EulerParameters, EulerZxz, RodriguezParameters, Rpy};
     let shape = r.shape().to_vec();
     let side = match shape.as_slice() {
         [.., 3, 3] => 3,
@@ -704,7 +918,10 @@ fn _orientation<'py>(
     let o = Out::new(&out);
     // SAFETY: the whole of a new array, written here alone.
     let dst = unsafe { o.part(0, n * width) };
-    for (m, d) in values.chunks_exact(side * side).zip(dst.chunks_exact_mut(width)) {
+    for (m, d) in values
+        .chunks_exact(side * side)
+        .zip(dst.chunks_exact_mut(width))
+    {
         let a = Matrix3::from_fn(|i, j| m[i * side + j]);
         let nan = [f64::NAN; 4];
         let v: [f64; 4] = match kind {
@@ -714,8 +931,9 @@ fn _orientation<'py>(
             }
             "rpy" => Rpy::from_matrix(&a).map_or(nan, |x| [x.roll, x.pitch, x.yaw, 0.0]),
             "euler_zxz" => EulerZxz::from_matrix(&a).map_or(nan, |x| [x.phi, x.theta, x.psi, 0.0]),
-            "axis_angle" => AxisAngle::from_matrix(&a)
-                .map_or(nan, |x| [x.axis.x, x.axis.y, x.axis.z, x.angle]),
+            "axis_angle" => {
+                AxisAngle::from_matrix(&a).map_or(nan, |x| [x.axis.x, x.axis.y, x.axis.z, x.angle])
+            }
             _ => RodriguezParameters::from_matrix(&a).map_or(nan, |x| [x.0.x, x.0.y, x.0.z, 0.0]),
         };
         d.copy_from_slice(&v[..width]);
@@ -726,6 +944,7 @@ fn _orientation<'py>(
 #[pymodule]
 fn _kinechain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Chain>()?;
+    m.add_class::<FkResult>()?;
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("LoadError", m.py().get_type::<LoadError>())?;
     m.add("StateError", m.py().get_type::<StateError>())?;

@@ -1,0 +1,94 @@
+"""Run time of kinechain from Python on the Panda, with Pinocchio in the same run when it is
+installed (``pip install pin``): ``python python/benchmarks/panda.py``. Prints a markdown table and the CPU.
+
+Each row is the median of seven rounds of at least 0.2 s; the methods run in alternation, so
+that they see the same state of the machine."""
+
+import os
+import platform
+import statistics
+import time
+
+import numpy as np
+
+import kinechain as kc
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+URDF = os.path.join(ROOT, "robots", "panda.urdf")
+
+
+def cpu():
+    try:
+        with open("/proc/cpuinfo") as f:
+            info = dict(l.split(":", 1) for l in f.read().splitlines() if ":" in l)
+        return f"{info['model name'].strip()} (family {info['cpu family'].strip()}, model {info['model'].strip()})"
+    except (OSError, KeyError):
+        return platform.processor() or "unknown CPU"
+
+
+def per_call(f, items=1, rounds=7, min_time=0.2):
+    """Median seconds per item of `f()` (which handles `items` items)."""
+    times = []
+    for _ in range(rounds):
+        n, start = 0, time.perf_counter()
+        while True:
+            f()
+            n += 1
+            elapsed = time.perf_counter() - start
+            if elapsed >= min_time:
+                break
+        times.append(elapsed / (n * items))
+    return statistics.median(times)
+
+
+def main():
+    chain = kc.load(URDF)
+    rng = np.random.default_rng(1)
+    q1 = chain.neutral()
+    n = 100_000
+    qs = rng.uniform(chain.lower, chain.upper, (n, chain.dof))
+    rows = []
+
+    rows.append(("kinechain `chain.fk(q)`, all links, one configuration", per_call(lambda: chain.fk(q1)), "13 × 4×4 numpy"))
+    rows.append(("kinechain `chain.fk(q, links=[hand])`, one configuration", per_call(lambda: chain.fk(q1, links=["panda_hand"])), "1 × 4×4 numpy"))
+    rows.append(("kinechain batch of 100 000, end link, 1 thread", per_call(lambda: chain.fk(qs, links=["panda_hand"], threads=1), n, rounds=5), "per configuration"))
+    rows.append(("kinechain batch of 100 000, end link, all threads", per_call(lambda: chain.fk(qs, links=["panda_hand"]), n, rounds=5), "per configuration"))
+    rows.append(("kinechain batch of 100 000, all links, 1 thread", per_call(lambda: chain.fk(qs, threads=1), n, rounds=5), "per configuration"))
+    rows.append(("kinechain batch of 100 000, all links, all threads", per_call(lambda: chain.fk(qs), n, rounds=5), "per configuration"))
+    rows.append(("kinechain Jacobian of the hand, one configuration", per_call(lambda: chain.jacobian(q1, "panda_hand")), "6 × 8 numpy"))
+    try:
+        import pinocchio as pin
+    except ImportError:
+        pin = None
+    if pin is not None:
+        model = pin.buildModelFromUrdf(URDF)
+        data = model.createData()
+        pq = pin.neutral(model)
+        rows.append(("Pinocchio `forwardKinematics`, one configuration", per_call(lambda: pin.forwardKinematics(model, data, pq)), "poses not read"))
+
+        def with_poses():
+            pin.forwardKinematics(model, data, pq)
+            pin.updateFramePlacements(model, data)
+            return [f.homogeneous for f in data.oMf]
+
+        rows.append(("Pinocchio `forwardKinematics` + `updateFramePlacements` + every frame as numpy", per_call(with_poses), "frames as 4×4 numpy"))
+        m = 2_000
+        pqs = [pin.randomConfiguration(model) for _ in range(m)]
+
+        def loop():
+            for x in pqs:
+                pin.forwardKinematics(model, data, x)
+                pin.updateFramePlacement(model, data, model.getFrameId("panda_hand"))
+
+        rows.append(("Pinocchio, Python loop over 2 000 configurations, hand frame", per_call(loop, m, rounds=5), "per configuration"))
+    print(f"CPU: {cpu()}; {os.cpu_count()} logical CPUs; kinechain {kc.__version__}" + (f", Pinocchio {pin.__version__}" if pin else ", Pinocchio not installed"))
+    print()
+    print("| method | time | result |")
+    print("|---|---:|---|")
+    for name, t, what in rows:
+        unit = f"{t * 1e9:.1f} ns" if t < 1e-6 else f"{t * 1e6:.2f} µs"
+        print(f"| {name} | {unit} | {what} |")
+
+
+if __name__ == "__main__":
+    main()
