@@ -14,7 +14,7 @@ import kinechain as kc
 
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
 ROBOTS = sorted(glob.glob(os.path.join(ROOT, "robots", "*.yaml")) + glob.glob(os.path.join(ROOT, "robots", "*.urdf")))
-REFERENCE = sorted(glob.glob(os.path.join(ROOT, "tests", "data", "reference", "urdf", "*.hp.json")))
+REFERENCE = sorted(glob.glob(os.path.join(ROOT, "tests", "data", "reference", "*", "*.hp.json")))
 
 
 def random_q(chain, n, seed=1):
@@ -41,17 +41,56 @@ def test_every_bundled_robot_loads_and_evaluates(path):
         assert np.abs(rot @ rot.T - np.eye(3)).max() < 1e-14
 
 
-@pytest.mark.parametrize("path", REFERENCE, ids=os.path.basename)
+def model_yaml(ref):
+    """The DH YAML of a reference file's DH or axis-form model (as tests/common/mod.rs writes it)."""
+    m = ref["model"]
+
+    def f(x):
+        return repr(float(x))
+
+    def matrix(v):
+        return "[" + ", ".join("[" + ", ".join(f(x) for x in row) + "]" for row in v) + "]"
+
+    out = [f"name: {ref['robot']}"]
+    if m["kind"] == "dh":
+        out += [f"convention: {m['convention']}", f"base: {{name: link0, matrix: {matrix(m['base'])}}}",
+                f"tool: {{name: tool, matrix: {matrix(m['tool'])}}}", "joints:"]
+        for j in m["joints"]:
+            assert not j["flip"]
+            theta, d = (j["offset"], j["d"]) if j["type"] == "revolute" else (j["theta"], j["offset"])
+            lo, hi = j["qlim"]
+            out.append(f"  - {{name: {j['name']}, link: {j['link']}, type: {j['type']}, a: {f(j['a'])}, "
+                       f"alpha: {f(j['alpha'])}, d: {f(d)}, theta: {f(theta)}, limits: [{f(lo)}, {f(hi)}]}}")
+    else:
+        assert m["kind"] == "axis", m["kind"]
+        out += ["convention: axis", f"base: {{name: {m['base_link']}}}", "joints:"]
+        for j in m["joints"]:
+            out += [f"  - name: {j['name']}", f"    link: {j['link']}", f"    type: {j['type']}",
+                    f"    origin: {{matrix: {matrix(j['origin'])}}}",
+                    "    axis: [" + ", ".join(f(x) for x in j["axis"]) + "]"]
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("path", REFERENCE, ids=lambda p: os.path.relpath(p, os.path.join(ROOT, "tests", "data", "reference")))
 def test_the_reference_data_within_1e_10(path):
+    """Every model of the reference data: poses, velocities and accelerations of every link."""
     with open(path) as f:
         ref = json.load(f)
-    urdf = os.path.join(os.path.dirname(path), ref["model"]["file"])
-    chain = kc.load(urdf)
+    if ref["model"]["kind"] == "urdf":
+        chain = kc.load(os.path.join(os.path.dirname(path), ref["model"]["file"]))
+    else:
+        chain = kc.Chain.from_yaml_string(model_yaml(ref))
     names = chain.joint_names
     samples = ref["samples"]
-    q = np.array([[s["q"][j] for j in names] for s in samples])
-    qd = np.array([[s["qd"][j] for j in names] for s in samples])
-    qdd = np.array([[s["qdd"][j] for j in names] for s in samples])
+    def vector(values):
+        # A cylindrical joint's entries are NAME.theta and NAME.d, its value [theta, d].
+        return [values[n[:-6]][0] if n.endswith(".theta") and n[:-6] in values
+                else values[n[:-2]][1] if n.endswith(".d") and n[:-2] in values
+                else values[n] for n in names]
+
+    q = np.array([vector(s["q"]) for s in samples])
+    qd = np.array([vector(s["qd"]) for s in samples])
+    qdd = np.array([vector(s["qdd"]) for s in samples])
     r = chain.fk(q, qd, qdd, check_limits=False)
     for i, s in enumerate(samples):
         for link, want in s["links"].items():
