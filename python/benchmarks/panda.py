@@ -20,7 +20,11 @@ URDF = os.path.join(ROOT, "robots", "panda.urdf")
 def cpu():
     try:
         with open("/proc/cpuinfo") as f:
-            info = dict(l.split(":", 1) for l in f.read().splitlines() if ":" in l)
+            info = {}
+            for line in f.read().splitlines():
+                if ":" in line:
+                    k, v = line.split(":", 1)
+                    info.setdefault(k.strip(), v)
         return f"{info['model name'].strip()} (family {info['cpu family'].strip()}, model {info['model'].strip()})"
     except (OSError, KeyError):
         return platform.processor() or "unknown CPU"
@@ -55,6 +59,9 @@ def main():
     rows.append(("kinechain batch of 100 000, end link, all threads", per_call(lambda: chain.fk(qs, links=["panda_hand"]), n, rounds=5), "per configuration"))
     rows.append(("kinechain batch of 100 000, all links, 1 thread", per_call(lambda: chain.fk(qs, threads=1), n, rounds=5), "per configuration"))
     rows.append(("kinechain batch of 100 000, all links, all threads", per_call(lambda: chain.fk(qs), n, rounds=5), "per configuration"))
+    out = chain.fk(qs).poses
+    rows.append(("kinechain batch of 100 000, all links, 1 thread, `out=` reused", per_call(lambda: chain.fk(qs, threads=1, out=out), n, rounds=5), "per configuration"))
+    rows.append(("kinechain batch of 100 000, all links, all threads, `out=` reused", per_call(lambda: chain.fk(qs, out=out), n, rounds=5), "per configuration"))
     rows.append(("kinechain Jacobian of the hand, one configuration", per_call(lambda: chain.jacobian(q1, "panda_hand")), "6 × 8 numpy"))
     try:
         import pinocchio as pin

@@ -77,8 +77,10 @@ class Chain:
         links: Optional[Iterable[str]] = None,
         check_limits: bool = True,
         threads: Optional[int] = None,
+        out: Optional[npt.NDArray[np.float64]] = None,
     ) -> FkResult:
-        """Poses (and velocities, accelerations) of the links at q of shape (dof,) or (N, dof)."""
+        """Poses (and velocities, accelerations) of the links at q of shape (dof,) or (N, dof);
+        out: a C-contiguous float64 array of the poses' shape to write them into."""
     def jacobian(
         self,
         q: npt.ArrayLike,

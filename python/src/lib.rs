@@ -343,7 +343,7 @@ impl Chain {
 
     /// Poses (and with `qd`, `qdd` velocities and accelerations) of the links; see the
     /// package's documentation of `Chain.fk`.
-    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, check_limits=true, threads=None))]
+    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, check_limits=true, threads=None, out=None))]
     #[allow(clippy::too_many_arguments)]
     fn fk<'py>(
         &self,
@@ -354,6 +354,7 @@ impl Chain {
         links: Option<&Bound<'py, PyAny>>,
         check_limits: bool,
         threads: Option<&Bound<'py, PyAny>>,
+        out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<FkResult> {
         let chain = &*self.inner;
         let threads = thread_count(threads)?;
@@ -391,9 +392,36 @@ impl Chain {
         let l = ids.len();
         let lead: &[usize] = if batched { &[n] } else { &[] };
         let dims = |tail: &[usize]| [lead, &[l], tail].concat();
-        // SAFETY: every entry is written below before the arrays are handed out (an error drops
-        // them unread).
-        let poses = unsafe { PyArrayDyn::<f64>::new(py, dims(&[4, 4]), false) };
+        let poses = match out {
+            // The caller's array, reused (no fresh pages to fault in); checked to be exactly
+            // what the poses need, and not borrowed elsewhere.
+            Some(o) => {
+                let a = o
+                    .cast::<PyArrayDyn<f64>>()
+                    .map_err(|_| StateError::new_err("out must be a numpy array of float64"))?;
+                if a.shape() != dims(&[4, 4]).as_slice() || !a.is_c_contiguous() {
+                    return Err(StateError::new_err(format!(
+                        "out has shape {:?}: expected a writeable C-contiguous float64 array of shape {:?}",
+                        a.shape(),
+                        dims(&[4, 4])
+                    )));
+                }
+                a.clone()
+            }
+            // SAFETY: every entry is written below before the array is handed out (an error
+            // drops it unread).
+            None => unsafe { PyArrayDyn::<f64>::new(py, dims(&[4, 4]), false) },
+        };
+        // Held until the poses are written: `out` is writeable and shares no memory with the
+        // inputs (numpy's borrow checking refuses an overlap with q's read borrow).
+        let _out_borrow = match out {
+            Some(_) => Some(
+                poses
+                    .try_readwrite()
+                    .map_err(|e| StateError::new_err(format!("out: {e}")))?,
+            ),
+            None => None,
+        };
         let rates: Vec<Bound<'py, PyArrayDyn<f64>>> = (0..2 * level)
             .map(|_| unsafe { PyArrayDyn::<f64>::new(py, dims(&[3]), false) })
             .collect();

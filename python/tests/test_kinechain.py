@@ -328,3 +328,29 @@ def test_batches_release_the_gil_while_they_run():
         last = now
     worker.join()
     assert longest < 0.5 * took, (longest, took)
+
+
+def test_poses_can_be_written_into_an_array_of_the_caller():
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    q = random_q(chain, 1000)
+    want = chain.fk(q).poses
+    out = np.full_like(want, np.nan)
+    r = chain.fk(q, out=out)
+    assert r.poses is out and np.array_equal(out, want)
+    one = np.empty((1, 4, 4))
+    assert chain.fk(q[3], links=["panda_hand"], out=one).poses is one
+    assert np.array_equal(one[0], want[3, chain.link_names.index("panda_hand")])
+    with pytest.raises(kc.StateError, match="shape"):
+        chain.fk(q, out=np.empty((1000, 2, 4, 4)))
+    with pytest.raises(kc.StateError, match="float64"):
+        chain.fk(q, out=np.empty(want.shape, dtype=np.float32))
+    frozen = np.empty_like(want)
+    frozen.flags.writeable = False
+    with pytest.raises(kc.StateError, match="out"):
+        chain.fk(q, out=frozen)
+    # An output that shares memory with the input is refused.
+    buffer = np.zeros(want.size + q.size)
+    qv = buffer[: q.size].reshape(q.shape)
+    qv[:] = q
+    with pytest.raises(kc.StateError, match="out"):
+        chain.fk(qv, out=buffer[: want.size].reshape(want.shape))
