@@ -20,7 +20,7 @@ import numpy as np
 
 from ._kinechain import Chain, Error, FkResult, LoadError, StateError, __version__
 
-__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "orientation", "testing", "__version__"]
+__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "orientation", "table", "testing", "__version__"]
 
 
 def load(path: Union[str, "os.PathLike[str]"]) -> Chain:
@@ -41,4 +41,4 @@ def _float_array(x: Any, name: str) -> np.ndarray:
     return np.ascontiguousarray(a)
 
 
-from . import orientation, testing  # noqa: E402  (orientation coordinates; assertions for test suites)
+from . import orientation, table, testing  # noqa: E402  (orientation coordinates; tables; assertions for test suites)

@@ -520,6 +520,31 @@ impl Chain {
         })
     }
 
+    /// For each row of `q` (`(N, dof)`), whether `fk` would accept it: finite, and within the
+    /// limits when `check_limits`.
+    #[pyo3(signature = (q, check_limits=true))]
+    fn _admitted<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        check_limits: bool,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let chain = &*self.inner;
+        let q = float_array(q, "q")?;
+        let (n, _) = rows(chain, &q, "q")?;
+        let policy = if check_limits {
+            LimitPolicy::Enforce
+        } else {
+            LimitPolicy::Ignore
+        };
+        let dof = chain.dof();
+        let q = q.as_slice()?;
+        let ok: Vec<bool> = (0..n)
+            .map(|i| kinechain::check_q(chain, &q[i * dof..(i + 1) * dof], policy).is_ok())
+            .collect();
+        Ok(PyArray1::from_vec(py, ok))
+    }
+
     /// The geometric Jacobian of `link` at its origin, world frame: `(6, dof)` or
     /// `(N, 6, dof)`, rows v then ω, so that `[v; ω] = J q̇`.
     #[pyo3(signature = (q, link, *, check_limits=true, threads=None))]

@@ -1,0 +1,167 @@
+"""Link poses for tables of joint values: pandas DataFrames, pyarrow Tables, and through
+``map_partitions`` Dask DataFrames.
+
+>>> out = kc.table.poses(df, chain, links=["panda_hand"], orientation="quaternion")   # doctest: +SKIP
+>>> ddf.map_partitions(kc.table.poses, chain, links=["panda_hand"],
+...                    meta=kc.table.poses_meta(ddf._meta, chain, links=["panda_hand"]))  # doctest: +SKIP
+
+Joint values come from one float64 column per entry of ``q``, named as ``chain.joint_names``
+(a cylindrical joint's as ``NAME.theta`` and ``NAME.d``), or from one list column
+(``q_column=``). Every other column is carried through unchanged, in order; after them come, for
+each link asked for, ``<link>.x``, ``<link>.y``, ``<link>.z`` and its orientation:
+``quaternion`` → ``<link>.qw .qx .qy .qz``; ``matrix`` → ``<link>.r00`` … ``<link>.r22``;
+``rpy`` → ``<link>.roll .pitch .yaw`` (NaN at gimbal lock).
+
+Rows whose values are not finite or out of limits are an error naming the row and the joint;
+with ``on_error="null"`` their pose columns are null and the other rows are computed. Rows are
+evaluated in chunks through the batch engine, without the GIL, on all cores unless ``threads``
+says otherwise; the values equal ``chain.fk`` on the same rows bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable, List, Optional
+
+import numpy as np
+
+from . import Chain, StateError
+from . import orientation as _orientation
+
+__all__ = ["poses", "poses_meta", "pose_columns"]
+
+#: Rows evaluated per call into the batch engine (bounds the memory of all links' poses).
+CHUNK_ROWS = 1 << 16
+
+_ORIENTATION = {
+    "quaternion": ["qw", "qx", "qy", "qz"],
+    "matrix": [f"r{i}{j}" for i in range(3) for j in range(3)],
+    "rpy": ["roll", "pitch", "yaw"],
+}
+
+
+def pose_columns(chain: Chain, links: Optional[Iterable[str]] = None, orientation: str = "quaternion") -> List[str]:
+    """The names of the columns ``poses`` adds, in order."""
+    if orientation not in _ORIENTATION:
+        raise ValueError(f"orientation {orientation!r}: expected one of {', '.join(_ORIENTATION)}")
+    names = chain.link_names if links is None else _link_list(links)
+    return [f"{link}.{c}" for link in names for c in ["x", "y", "z"] + _ORIENTATION[orientation]]
+
+
+def _link_list(links: Iterable[str]) -> List[str]:
+    return [links] if isinstance(links, str) else list(links)
+
+
+def _is_arrow(table: Any) -> bool:
+    try:
+        import pyarrow as pa
+    except ImportError:
+        return False
+    return isinstance(table, pa.Table)
+
+
+def _joint_values(table: Any, chain: Chain, q_column: Optional[str], arrow: bool) -> np.ndarray:
+    """The table's joint values as an ``(N, dof)`` float64 array (NaN where null)."""
+    names = chain.joint_names
+    n = table.num_rows if arrow else len(table)
+    if q_column is not None:
+        if q_column not in (table.column_names if arrow else table.columns):
+            raise StateError(f"no column {q_column!r} for q (columns: {', '.join(map(str, _columns(table, arrow)))})")
+        values = table.column(q_column).to_pylist() if arrow else list(table[q_column])
+        q = np.full((n, chain.dof), np.nan)
+        for i, row in enumerate(values):
+            if row is None:
+                continue
+            row = np.asarray(row, dtype=np.float64)
+            if row.shape != (chain.dof,):
+                raise StateError(f"row {i}: {q_column} has {row.size} values; the chain has {chain.dof} (joints: {', '.join(names)})")
+            q[i] = row
+        return q
+    columns = _columns(table, arrow)
+    missing = [j for j in names if j not in columns]
+    if missing:
+        raise StateError(f"no column for joints {', '.join(map(repr, missing))} (give one float64 column per joint, named as chain.joint_names, or q_column=)")
+    q = np.empty((n, chain.dof))
+    for k, j in enumerate(names):
+        if arrow:
+            col = table.column(j)
+            q[:, k] = col.to_numpy(zero_copy_only=False).astype(np.float64) if col.null_count == 0 else \
+                np.array([np.nan if v is None else v for v in col.to_pylist()], dtype=np.float64)
+        else:
+            q[:, k] = table[j].to_numpy(dtype=np.float64, na_value=np.nan)
+    return q
+
+
+def _columns(table: Any, arrow: bool) -> List[Any]:
+    return list(table.column_names if arrow else table.columns)
+
+
+def _pose_values(chain: Chain, q: np.ndarray, links: Optional[List[str]], orientation: str,
+                 threads: Optional[int]) -> np.ndarray:
+    """``(N, L * k)``: each row's pose columns, in ``pose_columns`` order."""
+    n = q.shape[0]
+    width = 3 + len(_ORIENTATION[orientation])
+    nlinks = len(chain.link_names if links is None else links)
+    out = np.empty((n, nlinks, width))
+    for start in range(0, n, CHUNK_ROWS):
+        part = q[start:start + CHUNK_ROWS]
+        p = chain.fk(part, links=links, threads=threads).poses  # (m, L, 4, 4)
+        block = out[start:start + len(part)]
+        block[..., :3] = p[..., :3, 3]
+        if orientation == "quaternion":
+            block[..., 3:] = _orientation.quaternion_from_matrix(p)
+        elif orientation == "rpy":
+            block[..., 3:] = _orientation.rpy_from_matrix(p)
+        else:
+            block[..., 3:] = p[..., :3, :3].reshape(p.shape[:-2] + (9,))
+    return out.reshape(n, nlinks * width)
+
+
+def poses(
+    table: Any,
+    chain: Chain,
+    links: Optional[Iterable[str]] = None,
+    orientation: str = "quaternion",
+    *,
+    q_column: Optional[str] = None,
+    on_error: str = "raise",
+    threads: Optional[int] = None,
+) -> Any:
+    """``table`` (pandas DataFrame or pyarrow Table) with each link's pose added as columns; the
+    same kind of table is returned. See the module's documentation."""
+    if on_error not in ("raise", "null"):
+        raise ValueError(f"on_error {on_error!r}: expected 'raise' or 'null'")
+    links = None if links is None else _link_list(links)
+    names = pose_columns(chain, links, orientation)
+    arrow = _is_arrow(table)
+    q = _joint_values(table, chain, q_column, arrow)
+    ok = chain._admitted(q) if len(q) else np.ones(0, dtype=bool)
+    if not ok.all() and on_error == "raise":
+        i = int(np.flatnonzero(~ok)[0])
+        try:
+            chain.fk(q[i])
+        except StateError as e:
+            label = "" if arrow or table.index[i] == i else f" (index {table.index[i]!r})"
+            raise StateError(f"row {i}{label}: {e}") from None
+    values = np.full((len(q), len(names)), np.nan)
+    if ok.all():
+        values = _pose_values(chain, q, links, orientation, threads)
+    elif ok.any():
+        values[ok] = _pose_values(chain, q[ok], links, orientation, threads)
+    if arrow:
+        import pyarrow as pa
+
+        mask = None if ok.all() else ~ok
+        for k, name in enumerate(names):
+            table = table.append_column(name, pa.array(values[:, k], type=pa.float64(), mask=mask))
+        return table
+    import pandas as pd
+
+    added = pd.DataFrame(values, columns=names, index=table.index)
+    return pd.concat([table, added], axis=1)
+
+
+def poses_meta(meta: Any, chain: Chain, links: Optional[Iterable[str]] = None, orientation: str = "quaternion",
+               **kwargs: Any) -> Any:
+    """The empty result ``poses`` gives for the empty table ``meta`` (a Dask DataFrame's
+    ``_meta``): what ``map_partitions`` needs as ``meta=``. Same arguments as ``poses``."""
+    return poses(meta.iloc[:0] if hasattr(meta, "iloc") else meta.slice(0, 0), chain, links, orientation, **kwargs)
