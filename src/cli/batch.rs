@@ -65,10 +65,14 @@ impl PendingPoses {
                         results_table(chain, &results, args.orientation, buf);
                         Ok(())
                     })?,
+                    OutputFormat::Csv => write_buffered_line(out, &mut self.text, |buf| {
+                        csv_row(Some(line), &results, args.orientation, buf);
+                        Ok(())
+                    })?,
                 },
                 Err(e) if args.keep_going => {
                     failed += 1;
-                    write_line(out, &failed_line(args.format, line, &e))?;
+                    write_line(out, &failed_line(chain, args, line, &e))?;
                 }
                 Err(e) => return Err(at_line(path, line, e)),
             }
@@ -228,7 +232,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
                     Err(e @ CliError::Io { .. }) => return Err(e),
                     Err(e) if args.keep_going => {
                         failed_lines += 1;
-                        write_line(out, &failed_line(args.format, i + 1, &e))?;
+                        write_line(out, &failed_line(chain, args, i + 1, &e))?;
                     }
                     Err(e) => return Err(at_line(path, i + 1, e)),
                 }
@@ -239,7 +243,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
                     return Err(at_line(path, i + 1, e));
                 }
                 failed_lines += 1;
-                write_line(out, &failed_line(args.format, i + 1, &e))?;
+                write_line(out, &failed_line(chain, args, i + 1, &e))?;
             }
         }
     }
@@ -333,11 +337,21 @@ pub(super) fn read_capped_line(
 }
 
 /// The output line standing in for a failed batch line under `--keep-going`: an object
-/// `{"line": N, "error": ".."}` in JSON output, `line N: error: ..` in a table.
-pub(super) fn failed_line(format: OutputFormat, line: usize, e: &CliError) -> String {
-    match format {
+/// `{"line": N, "error": ".."}` in JSON output, `line N: error: ..` in a table, and in CSV the
+/// row of line N with its values empty and the message in the `error` column.
+pub(super) fn failed_line(chain: &Chain, args: &FkArgs, line: usize, e: &CliError) -> String {
+    match args.format {
         OutputFormat::Json => json!({ "line": line, "error": error_chain(e) }).to_string(),
         OutputFormat::Table => format!("line {line}: error: {}", error_chain(e)),
+        OutputFormat::Csv => {
+            let fields =
+                csv_links(chain, args).len() * (3 + orientation_columns(args.orientation).len());
+            format!(
+                "{line}{},{}",
+                ",".repeat(fields),
+                csv_field(&error_chain(e))
+            )
+        }
     }
 }
 

@@ -275,6 +275,9 @@ pub(super) fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
         data.set_limit_policy(LimitPolicy::Ignore);
     }
     let mut request = Request::new(&chain, args)?;
+    if args.format == OutputFormat::Csv {
+        write_line(out, &csv_header(&chain, args))?;
+    }
     if let Some(path) = &args.batch {
         return fk_batch_file(&chain, args, &mut data, &mut request, path, out);
     }
@@ -319,6 +322,13 @@ impl Request {
             }
             Ok(ids)
         };
+        if args.format == OutputFormat::Csv
+            && (!args.points.is_empty() || !args.jacobians.is_empty() || args.qd.is_some())
+        {
+            return Err(CliError::Csv(
+                "prints link poses; --point, --jacobian, --qd and --qdd need json or table",
+            ));
+        }
         let links = unique(&args.links)?;
         let points = args
             .points
@@ -367,6 +377,11 @@ impl Request {
         line: Option<usize>,
         out: &mut dyn Write,
     ) -> Result<(), CliError> {
+        if args.format == OutputFormat::Csv && c.qd.is_some() {
+            return Err(CliError::Csv(
+                "prints link poses; velocities and accelerations need json or table",
+            ));
+        }
         evaluate(chain, data, c, &self.links, &self.points, &mut self.outputs)?;
         let Outputs {
             links: results,
@@ -393,6 +408,10 @@ impl Request {
                 results_table(chain, results, args.orientation, buf);
                 points_table(chain, points, point_results, buf);
                 jacobians_table(chain, jacobians, buf);
+                Ok(())
+            }),
+            OutputFormat::Csv => write_buffered_line(out, &mut self.text, |buf| {
+                csv_row(line, results, args.orientation, buf);
                 Ok(())
             }),
         }

@@ -487,3 +487,101 @@ pub(super) fn results_table(
         }
     }
 }
+
+/// The column names of one link's orientation in CSV output (`<link>.<name>`), in the order of
+/// [`orientation_values`].
+pub(super) fn orientation_columns(kind: Orientation) -> &'static [&'static str] {
+    match kind {
+        Orientation::Matrix => &[
+            "r00", "r01", "r02", "r10", "r11", "r12", "r20", "r21", "r22",
+        ],
+        Orientation::Quat => &["qw", "qx", "qy", "qz"],
+        Orientation::Rpy => &["roll", "pitch", "yaw"],
+        Orientation::Zxz => &["phi", "theta", "psi"],
+        Orientation::AxisAngle => &["axis_x", "axis_y", "axis_z", "angle"],
+        Orientation::Rodrigues => &["g1", "g2", "g3"],
+    }
+}
+
+/// The links `fk` prints: those of `--link` (each once, in the order named) or every link.
+pub(super) fn csv_links(chain: &Chain, args: &FkArgs) -> Vec<String> {
+    if args.links.is_empty() {
+        return chain.links().iter().map(|l| l.name().to_string()).collect();
+    }
+    let mut names: Vec<String> = Vec::new();
+    for n in &args.links {
+        if !names.contains(n) {
+            names.push(n.clone());
+        }
+    }
+    names
+}
+
+/// A CSV field: as it is, or quoted (quotes doubled) when it holds a comma, quote or line break.
+pub(super) fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// The CSV header: `line` (with `--batch`), then `<link>.x`, `<link>.y`, `<link>.z` and the
+/// orientation columns of every link printed, then `error` (with `--batch`: the message of a
+/// line that failed under `--keep-going`). The names of `kinechain.table.poses` in Python.
+pub(super) fn csv_header(chain: &Chain, args: &FkArgs) -> String {
+    let mut fields: Vec<String> = Vec::new();
+    if args.batch.is_some() {
+        fields.push("line".into());
+    }
+    for link in csv_links(chain, args) {
+        for c in ["x", "y", "z"]
+            .iter()
+            .chain(orientation_columns(args.orientation))
+        {
+            fields.push(csv_field(&format!("{link}.{c}")));
+        }
+    }
+    if args.batch.is_some() {
+        fields.push("error".into());
+    }
+    fields.join(",")
+}
+
+/// One configuration's CSV row: numbers that read back to the same `f64`, an empty field where
+/// an orientation is undefined.
+pub(super) fn csv_row(
+    line: Option<usize>,
+    results: &[LinkResult],
+    kind: Orientation,
+    buf: &mut Vec<u8>,
+) {
+    use std::fmt::Write as _;
+    let mut row = line.map(|l| l.to_string()).unwrap_or_default();
+    let mut first = line.is_none();
+    let mut push = |row: &mut String, value: Option<f64>| {
+        if !first {
+            row.push(',');
+        }
+        first = false;
+        if let Some(x) = value {
+            // `{:?}` of an f64 is the shortest text that reads back to it.
+            let _ = write!(row, "{x:?}");
+        }
+    };
+    for (_, pose, _, _) in results {
+        let p = pose.translation();
+        for x in [p.x, p.y, p.z] {
+            push(&mut row, Some(x));
+        }
+        let width = orientation_columns(kind).len();
+        match orientation_values(&pose.rotation(), kind) {
+            Some(c) => c.as_slice().iter().for_each(|&x| push(&mut row, Some(x))),
+            None => (0..width).for_each(|_| push(&mut row, None)),
+        }
+    }
+    if line.is_some() {
+        row.push(',');
+    }
+    buf.extend_from_slice(row.as_bytes());
+}

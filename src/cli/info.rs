@@ -76,6 +76,9 @@ pub(super) fn info(
             });
             write_line(out, &value.to_string())
         }
+        OutputFormat::Csv => Err(CliError::Csv(
+            "is for fk results; info prints json or table",
+        )),
         OutputFormat::Table => {
             let mut text = format!(
                 "{}: {} degree{} of freedom\n",

@@ -202,6 +202,8 @@ struct FkArgs {
 enum OutputFormat {
     Json,
     Table,
+    /// Comma-separated values (`fk` only): a header row, then one row per configuration.
+    Csv,
 }
 
 /// A failure of a CLI command (printed as `error: …` with its source chain).
@@ -251,6 +253,9 @@ pub enum CliError {
         /// The most configurations allowed for this robot.
         most: usize,
     },
+    /// `--format csv` asked of what it cannot print.
+    #[error("--format csv {0}")]
+    Csv(&'static str),
     /// `--qdd` without `--qd`.
     #[error("--qdd needs --qd (accelerations depend on velocities)")]
     QddWithoutQd,

@@ -142,6 +142,11 @@ fn print_report(
             writeln!(out).map_err(output_error)?;
         }
         OutputFormat::Table => writeln!(out, "{report}").map_err(output_error)?,
+        OutputFormat::Csv => {
+            return Err(CliError::Csv(
+                "is for fk results; verify and compare print json or table",
+            ));
+        }
     }
     match &report.first_moved {
         None => Ok(()),
