@@ -38,7 +38,7 @@ def main():
     table = best(lambda: kc.table.poses(frame, chain, links, threads=1))
     print(f"{n} rows; raw batch + quaternion, 1 thread: {n / raw / 1e6:.2f} M rows/s")
     print(f"kc.table.poses (pandas), 1 thread: {n / table / 1e6:.2f} M rows/s ({table / raw:.2f}x the raw time)")
-    with tempfile.TemporaryDirectory() as d:
+    with tempfile.TemporaryDirectory() as d, tempfile.TemporaryDirectory() as written:
         for part in range(16):
             frame.iloc[part * n // 16:(part + 1) * n // 16].to_parquet(os.path.join(d, f"p{part}.parquet"), index=False)
         rates = {}
@@ -46,7 +46,7 @@ def main():
             with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as c, Client(c):
                 ddf = dd.read_parquet(d)
                 meta = kc.table.poses_meta(ddf._meta, chain, links)
-                run = lambda: ddf.map_partitions(kc.table.poses, chain, links, threads=1, meta=meta).to_parquet(os.path.join(d, f"out{workers}"), overwrite=True)  # noqa: E731
+                run = lambda: ddf.map_partitions(kc.table.poses, chain, links, threads=1, meta=meta).to_parquet(os.path.join(written, f"out{workers}"), overwrite=True)  # noqa: E731
                 run()
                 rates[workers] = n / best(run)
             print(f"Dask, {workers} worker process(es), Parquet in and out: {rates[workers] / 1e6:.2f} M rows/s")

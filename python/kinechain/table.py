@@ -24,7 +24,7 @@ from typing import Any, Iterable, List, Optional
 
 import numpy as np
 
-from . import Chain, StateError
+from . import Chain, Error, StateError
 from . import orientation as _orientation
 
 __all__ = ["poses", "poses_meta", "pose_columns"]
@@ -133,6 +133,10 @@ def poses(
     links = None if links is None else _link_list(links)
     names = pose_columns(chain, links, orientation)
     arrow = _is_arrow(table)
+    clash = [c for c in names if c in set(map(str, _columns(table, arrow)))]
+    if clash:
+        raise Error(f"the table already has columns {', '.join(map(repr, clash[:5]))}{' …' if len(clash) > 5 else ''}: "
+                    "refusing to add a second column of the same name")
     q = _joint_values(table, chain, q_column, arrow)
     ok = chain._admitted(q) if len(q) else np.ones(0, dtype=bool)
     if not ok.all() and on_error == "raise":

@@ -99,6 +99,10 @@ def test_bad_rows_are_errors_or_nulls(chain, dataset):
         kc.table.poses(bad.drop(columns=["panda_joint1"]), chain)
     with pytest.raises(ValueError, match="orientation"):
         kc.table.poses(bad, chain, orientation="euler")
+    # A table that already has the pose columns is not given a second set.
+    once = kc.table.poses(frame.iloc[:10], chain, LINKS)
+    with pytest.raises(kc.Error, match="already has columns 'panda_hand.x'"):
+        kc.table.poses(once, chain, LINKS)
 
 
 def test_a_dask_local_cluster_gives_the_same_bits(chain, dataset):
