@@ -444,10 +444,8 @@ impl Chain {
             }
             // SAFETY: row i's ranges of the outputs, written by this call alone.
             let pose = unsafe { pose_out.part(i * l * 16, l * 16) };
-            let mut parts: Vec<&mut [f64]> = rate_out
-                .iter()
-                .map(|o| unsafe { o.part(i * l * 3, l * 3) })
-                .collect();
+            // SAFETY: as for `pose`; each rate array is taken once per row.
+            let part = |k: usize| unsafe { rate_out[k].part(i * l * 3, l * 3) };
             match (qd, qdd) {
                 (None, _) if l == 1 => {
                     write_pose(
@@ -463,6 +461,7 @@ impl Chain {
                 }
                 (Some(qd), None) => {
                     let v = forward_velocities(chain, data, row(q, i, dof), row(qd, i, dof))?;
+                    let parts = [part(0), part(1)];
                     for (k, &id) in ids.iter().enumerate() {
                         write_pose(&v.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
                         let lv = v.velocity(id);
@@ -478,6 +477,7 @@ impl Chain {
                         row(qd, i, dof),
                         row(qdd, i, dof),
                     )?;
+                    let parts = [part(0), part(1), part(2), part(3)];
                     for (k, &id) in ids.iter().enumerate() {
                         write_pose(&a.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
                         let (lv, la) = (a.velocity(id), a.acceleration(id));
