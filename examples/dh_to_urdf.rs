@@ -3,23 +3,18 @@
 //!
 //! Run with `cargo run --release --example dh_to_urdf [ROBOT.yaml]`; the URDF goes to stdout.
 
+mod support;
+
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
-/// Runs the example; an error is printed with its causes, as the command line prints it.
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+    support::main(run)
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let path = std::env::args()
+    let path = std::env::args_os()
         .nth(1)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/robots/stanford.yaml").into());
+        .map_or_else(|| support::robot("stanford.yaml"), std::path::PathBuf::from);
     let dh = Chain::from_file(&path)?;
     let text = kinechain::io::convert::to_urdf(&dh)?;
     let urdf = Chain::from_urdf_str(&text)?;
@@ -45,7 +40,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         worst = worst.max((x - y).abs().max());
     }
     eprintln!(
-        "{path}: {} links, {} joints in the URDF; largest pose difference {worst:.1e}",
+        "{}: {} links, {} joints in the URDF; largest pose difference {worst:.1e}",
+        path.display(),
         urdf.links().len(),
         urdf.joints().len()
     );

@@ -2,24 +2,16 @@
 //!
 //! Run with `cargo run --release --example end_effector`.
 
+mod support;
+
 use kinechain::{Chain, Data, forward_kinematics, forward_kinematics_to};
 
-/// Runs the example; an error is printed with its causes, as the command line prints it.
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+    support::main(run)
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/robots/panda_mdh.yaml"
-    ))?;
+    let chain = Chain::from_file(support::robot("panda_mdh.yaml"))?;
     let tcp = chain.link_id("tcp")?;
     let mut data = Data::new(&chain);
 

@@ -5,6 +5,8 @@
 //!
 //! Run with `cargo run --release --example resolved_rate`.
 
+mod support;
+
 use kinechain::nalgebra::{Matrix6, Vector3, Vector6};
 use kinechain::{Chain, Data, Limits, Transform, forward_kinematics};
 
@@ -34,22 +36,12 @@ fn limits_of_q(chain: &Chain) -> Vec<Option<Limits>> {
     limits
 }
 
-/// Runs the example; an error is printed with its causes, as the command line prints it.
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+    support::main(run)
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/robots/panda_mdh.yaml"
-    ))?;
+    let chain = Chain::from_file(support::robot("panda_mdh.yaml"))?;
     let tcp = chain.link_id("tcp")?;
     let limits = limits_of_q(&chain);
     let mut data = Data::new(&chain);

@@ -6,6 +6,8 @@
 //!
 //! Run with `cargo run --release --example trajectory`.
 
+mod support;
+
 use kinechain::{Chain, Data, forward_accelerations, forward_kinematics};
 
 /// Quintic blend s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ on [0, 1], with zero velocity and acceleration at
@@ -19,19 +21,12 @@ fn blend(tau: f64) -> (f64, f64, f64) {
     )
 }
 
-/// Runs the example; an error is printed with its causes, as the command line prints it.
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+    support::main(run)
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/robots/ur5.yaml"))?;
+    let chain = Chain::from_file(support::robot("ur5.yaml"))?;
     let tool = chain.link_id("tool0")?;
     let mut data = Data::new(&chain);
     let start = [0.0, -1.6, 1.4, -1.4, -1.57, 0.0];

@@ -4,6 +4,8 @@
 //!
 //! Run with `cargo run --release --example workspace`.
 
+mod support;
+
 use kinechain::eval::batch::forward_kinematics_batch_fold_par;
 use kinechain::{Chain, LimitPolicy};
 
@@ -31,22 +33,12 @@ impl Reach {
     }
 }
 
-/// Runs the example; an error is printed with its causes, as the command line prints it.
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {}", kinechain::error::error_chain(e.as_ref()));
-            std::process::ExitCode::FAILURE
-        }
-    }
+    support::main(run)
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let chain = Chain::from_file(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/robots/panda_mdh.yaml"
-    ))?;
+    let chain = Chain::from_file(support::robot("panda_mdh.yaml"))?;
     let tcp = chain.link_id("tcp")?;
     let n = 1_000_000;
     // Uniform within the joint limits, seeded (row-major: one configuration after another).
