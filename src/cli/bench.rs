@@ -75,6 +75,7 @@ pub(super) fn bench(
         None => chain.end_link(),
     };
     let flat: &Vec<f64> = &qs.concat();
+    let flat_qd: &Vec<f64> = &qd.concat();
     // The multi-threaded rows evaluate the configurations `copies` times over in one batch of
     // THREADED_ROWS_WORK joint evaluations on the end link's path.
     let mut end_path = Vec::new();
@@ -88,6 +89,7 @@ pub(super) fn bench(
         qs,
         qd,
         flat,
+        flat_qd,
         big,
         copies,
         end,
@@ -118,6 +120,7 @@ pub(super) struct Workload<'a> {
     pub(super) qs: &'a [Vec<f64>],
     pub(super) qd: &'a [Vec<f64>],
     pub(super) flat: &'a [f64],
+    pub(super) flat_qd: &'a [f64],
     pub(super) big: &'a [f64],
     pub(super) copies: usize,
     pub(super) end: LinkId,
@@ -354,19 +357,31 @@ impl<'a> Workload<'a> {
     }
 
     /// The rows of `--level vel` (`acc` false) or `--level acc`: the evaluation with rates, and
-    /// poses alone.
+    /// poses alone, each single and as a batch on one thread.
     fn rate_methods(&self, acc: bool) -> Vec<Method<'a>> {
+        use crate::eval::batch::{
+            forward_accelerations_batch, forward_kinematics_batch, forward_velocities_batch,
+        };
         let Workload {
-            chain, qs, qd, end, ..
+            chain,
+            qs,
+            qd,
+            flat,
+            flat_qd,
+            end,
+            ..
         } = *self;
+        let with_rates = if acc {
+            format!("{WITH_RATES} + accelerations")
+        } else {
+            WITH_RATES.to_string()
+        };
         let mut d = self.data();
+        let mut b = self.batch_data();
+        let mut poses = self.batch_data();
         vec![
             (
-                if acc {
-                    format!("{WITH_RATES} + accelerations")
-                } else {
-                    WITH_RATES.to_string()
-                },
+                with_rates.clone(),
                 Box::new(move || {
                     for (q, v) in qs.iter().zip(qd) {
                         if acc {
@@ -387,6 +402,33 @@ impl<'a> Workload<'a> {
                 qs.len(),
             ),
             (POSES_ONLY.into(), self.all_links(None, false), qs.len()),
+            (
+                with_rates.replacen("kinechain, ", BATCH_PREFIX, 1) + ", 1 thread",
+                Box::new(move || {
+                    let (q, v) = (black_box(flat), black_box(flat_qd));
+                    black_box(if acc {
+                        forward_accelerations_batch(chain, &mut b, q, v, v)
+                            .ok()
+                            .map(|b| b.len())
+                    } else {
+                        forward_velocities_batch(chain, &mut b, q, v)
+                            .ok()
+                            .map(|b| b.len())
+                    });
+                }),
+                qs.len(),
+            ),
+            (
+                format!("{BATCH_POSES_ONLY}, 1 thread"),
+                Box::new(move || {
+                    black_box(
+                        forward_kinematics_batch(chain, &mut poses, black_box(flat))
+                            .ok()
+                            .map(|b| b.len()),
+                    );
+                }),
+                qs.len(),
+            ),
         ]
     }
 }
@@ -433,6 +475,11 @@ pub(super) fn timing_table(
     for (part, whole, of) in [
         (INCREMENTAL, ALL_LINKS, "all links"),
         (WITH_RATES, POSES_ONLY, "poses only"),
+        (
+            BATCH_WITH_RATES,
+            BATCH_POSES_ONLY,
+            "the batch of poses only",
+        ),
     ] {
         if let (Some(p), Some(w)) = (row(part), row(whole)) {
             text.push_str(&format!(
@@ -540,6 +587,9 @@ pub(super) const INCREMENTAL: &str = "kinechain, incremental";
 pub(super) const WITH_RATES: &str = "kinechain, poses + velocities";
 pub(super) const ALL_LINKS: &str = "kinechain, all links";
 pub(super) const POSES_ONLY: &str = "kinechain, poses only";
+pub(super) const BATCH_PREFIX: &str = "kinechain, batch, ";
+pub(super) const BATCH_WITH_RATES: &str = "kinechain, batch, poses + velocities";
+pub(super) const BATCH_POSES_ONLY: &str = "kinechain, batch, poses only";
 
 /// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that
 /// reads one (on an arm with a gripper and the tool as `link`, the arm's last joint, not the

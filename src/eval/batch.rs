@@ -94,12 +94,18 @@ macro_rules! limit_policy_methods {
 mod blocks;
 mod claims;
 mod fold;
+mod lane_rates;
+mod rates;
 pub mod single_precision;
 
 #[allow(clippy::wildcard_imports)]
 use blocks::*;
 pub(crate) use fold::{BlockEval, block_len, fold_blocks};
 pub use fold::{fold_block_len, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par};
+pub use rates::{
+    BatchAccelerations, BatchVelocities, forward_accelerations_batch,
+    forward_accelerations_batch_par, forward_velocities_batch, forward_velocities_batch_par,
+};
 
 batch_len!(BatchPoses, BatchLinkPoses);
 
@@ -147,6 +153,11 @@ pub struct BatchData {
     path: Vec<usize>,
     /// The all-links kernel's frames of the bodies read again, when it streams ([`streams`]).
     kept: Vec<Frame<Lanes>>,
+    /// The rate batches' ω and v, and α and a, of each body, chunk-major like `frames`; and one
+    /// chunk's `q`, `q̇`, `q̈` transposed into lanes.
+    velocities: Vec<rates::Pair>,
+    accelerations: Vec<rates::Pair>,
+    rate_lanes: Vec<Lanes>,
     len: usize,
     bodies: usize,
     dof: usize,
@@ -163,6 +174,9 @@ impl BatchData {
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
             kept: Vec::new(),
+            velocities: Vec::new(),
+            accelerations: Vec::new(),
+            rate_lanes: vec![Lanes::splat(0.0); 3 * chain.dof()],
             len: 0,
             bodies: chain.bodies.len(),
             dof: chain.dof(),

@@ -31,6 +31,19 @@ pub enum StateError {
         /// The value given.
         value: f64,
     },
+    /// A batch's `q_dot` or `q_ddot` does not hold one row of the chain's dof per configuration
+    /// of its `q`.
+    #[error("{what} has {got} entries, the batch's q has {rows} configurations of {dof} entries")]
+    WrongRows {
+        /// `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Configurations in `q`.
+        rows: usize,
+        /// The chain's dof.
+        dof: usize,
+        /// Entries given.
+        got: usize,
+    },
     /// A batch for a chain without moving joints: its configurations have no entries, so a flat
     /// batch cannot say how many it holds. Evaluate such a chain once, with
     /// [`forward_kinematics`](crate::forward_kinematics).

@@ -97,7 +97,7 @@ pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
 
 /// `R u + p` with a constant `u`.
 #[inline(always)]
-fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
+pub(crate) fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
     mat_vec_add::<N, A>(r, &u.map(N::splat), p)
 }
 
@@ -347,7 +347,7 @@ pub(crate) fn cheap_steps<N: Num, A: Arith, const SHAPE: u8>(f: &mut Frame<N>, p
 
 /// The axis `r · axis`.
 #[inline(always)]
-fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
+pub(crate) fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
     match *axis {
         Axis::X => r[0],
         Axis::Y => r[1],

@@ -251,35 +251,26 @@ impl<'a> Poses<'a> {
         }
     }
 
-    /// The frame a link's motion is computed for, and the link's offset from it in world axes:
-    /// the body's rotation applied to the offset's translation (not the difference of the two
-    /// origins, which would cancel and need the link's whole pose).
+    /// The frame a link's motion is computed for, and the link's offset from it in world axes
+    /// ([`offset_in_world`]).
     #[inline]
     fn carrier(&self, link: LinkId) -> Option<(usize, [f64; 3])> {
         let l = self.chain.carrier(link);
         let b = l.body?;
-        let r = match l.offset {
-            Placement::Identity => [0.0; 3],
-            offset => {
-                padded::transform(&self.data.world_from_body[b]).apply(offset.to_transform().p)
-            }
-        };
-        Some((b, r))
+        Some((
+            b,
+            offset_in_world(&padded::transform(&self.data.world_from_body[b]), &l.offset),
+        ))
     }
 
     #[inline]
     fn velocity(&self, link: LinkId) -> LinkVelocity {
-        let (omega, v) = match self.carrier(link) {
-            None => ([0.0; 3], [0.0; 3]),
+        match self.carrier(link) {
+            None => link_velocity([0.0; 3], [0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                let omega = padded::cut(&body.omega);
-                (omega, add3(padded::cut(&body.v), cross3(omega, r)))
+                link_velocity(padded::cut(&body.omega), padded::cut(&body.v), r)
             }
-        };
-        LinkVelocity {
-            omega: omega.into(),
-            v: v.into(),
         }
     }
 
@@ -339,22 +330,49 @@ impl<'a> Poses<'a> {
 
     #[inline]
     fn acceleration(&self, link: LinkId) -> LinkAcceleration {
-        let (alpha, a) = match self.carrier(link) {
-            None => ([0.0; 3], [0.0; 3]),
+        match self.carrier(link) {
+            None => link_acceleration([[0.0; 3]; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                let (w, al) = (padded::cut(&body.omega), padded::cut(&body.alpha));
-                let a = add3(
+                let (w, al, a) = (
+                    padded::cut(&body.omega),
+                    padded::cut(&body.alpha),
                     padded::cut(&body.a),
-                    add3(cross3(al, r), cross3(w, cross3(w, r))),
                 );
-                (al, a)
+                link_acceleration([w, al, a], r)
             }
-        };
-        LinkAcceleration {
-            alpha: alpha.into(),
-            a: a.into(),
         }
+    }
+}
+
+/// A link's offset from the frame of the body that carries it, in world axes: the body's
+/// rotation applied to the offset's translation (not the difference of the two origins, which
+/// would cancel and need the link's whole pose).
+#[inline]
+pub(crate) fn offset_in_world(body: &Transform, offset: &Placement) -> [f64; 3] {
+    match offset {
+        Placement::Identity => [0.0; 3],
+        offset => body.apply(offset.to_transform().p),
+    }
+}
+
+/// A link's ω and origin velocity from its body's ω and origin velocity `v`, the link's origin
+/// `r` from the body's (eq. 2.55): `v + ω × r`.
+#[inline]
+pub(crate) fn link_velocity(omega: [f64; 3], v: [f64; 3], r: [f64; 3]) -> LinkVelocity {
+    LinkVelocity {
+        omega: omega.into(),
+        v: add3(v, cross3(omega, r)).into(),
+    }
+}
+
+/// A link's α and classical origin acceleration from its body's `[ω, α, a]`, the link's origin
+/// `r` from the body's (eq. 2.75 for a point fixed on the body): `a + α × r + ω × (ω × r)`.
+#[inline]
+pub(crate) fn link_acceleration([w, al, a]: [[f64; 3]; 3], r: [f64; 3]) -> LinkAcceleration {
+    LinkAcceleration {
+        alpha: al.into(),
+        a: add3(a, add3(cross3(al, r), cross3(w, cross3(w, r)))).into(),
     }
 }
 
