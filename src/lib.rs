@@ -62,6 +62,7 @@ pub use nalgebra;
 pub use error::{Error, FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
 pub use eval::chain::Chain;
 pub use eval::data::{Data, LimitPolicy};
+pub use eval::jacobian::JacobianFrame;
 pub use eval::kinematics::{
     Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_incremental,

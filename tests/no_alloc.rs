@@ -124,6 +124,55 @@ fn evaluations_allocate_nothing() {
     }
 }
 
+/// Batches of rates and Jacobians into reused buffers and a reused caller's array allocate
+/// nothing after the first call (which sizes the buffers), on the calling thread.
+#[test]
+fn batches_of_rates_and_jacobians_allocate_nothing_on_reuse() {
+    use kinechain::JacobianFrame;
+    use kinechain::eval::batch::{
+        BatchData, forward_accelerations_batch, forward_velocities_batch, jacobian_batch,
+        jacobian_dot_batch,
+    };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for file in ["robots/panda.urdf", "robots/cylindrical.yaml"] {
+        let chain = Chain::from_file(root.join(file)).unwrap();
+        let n = 100;
+        let dof = chain.dof();
+        let qs: Vec<f64> = chain
+            .neutral()
+            .iter()
+            .cycle()
+            .take(n * dof)
+            .copied()
+            .collect();
+        let qds = vec![0.1; n * dof];
+        let mut data = BatchData::new(&chain);
+        let mut out = vec![0.0; n * 6 * dof];
+        let tip = chain.end_link();
+        let run = |data: &mut BatchData, out: &mut [f64]| {
+            let v = forward_velocities_batch(&chain, data, &qs, &qds).unwrap();
+            std::hint::black_box(v.velocity(n - 1, tip));
+            let a = forward_accelerations_batch(&chain, data, &qs, &qds, &qds).unwrap();
+            std::hint::black_box(a.acceleration(n - 1, tip));
+            for frame in [
+                JacobianFrame::World,
+                JacobianFrame::Link,
+                JacobianFrame::Point([0.1; 3]),
+            ] {
+                jacobian_batch(&chain, data, &qs, tip, frame, out).unwrap();
+                jacobian_dot_batch(&chain, data, &qs, &qds, tip, frame, out).unwrap();
+            }
+            std::hint::black_box(&out);
+        };
+        run(&mut data, &mut out);
+        let before = allocations();
+        for _ in 0..10 {
+            run(&mut data, &mut out);
+        }
+        assert_eq!(allocations(), before, "{file}: a reused batch allocated");
+    }
+}
+
 /// Files whose aliases replay exponentially more than they hold are refused after a number of
 /// allocations in proportion to their size: an alias bomb (ten anchors, each a list of nine
 /// aliases to the one before: 9¹⁰ leaves in 555 bytes) and a merge bomb (each joint merging the

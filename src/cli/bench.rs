@@ -379,7 +379,7 @@ impl<'a> Workload<'a> {
         let mut d = self.data();
         let mut b = self.batch_data();
         let mut poses = self.batch_data();
-        vec![
+        let mut methods: Vec<Method<'a>> = vec![
             (
                 with_rates.clone(),
                 Box::new(move || {
@@ -423,6 +423,65 @@ impl<'a> Workload<'a> {
                 Box::new(move || {
                     black_box(
                         forward_kinematics_batch(chain, &mut poses, black_box(flat))
+                            .ok()
+                            .map(|b| b.len()),
+                    );
+                }),
+                qs.len(),
+            ),
+        ];
+        if !acc {
+            methods.extend(self.jacobian_methods());
+        }
+        methods
+    }
+
+    /// The Jacobian rows of `--level vel`: the end link's world Jacobian after a single
+    /// evaluation and as a batch, and the batch of that link's pose alone.
+    fn jacobian_methods(&self) -> Vec<Method<'a>> {
+        use crate::eval::batch::{forward_kinematics_batch_to, jacobian_batch};
+        let Workload {
+            chain,
+            qs,
+            flat,
+            end,
+            ..
+        } = *self;
+        let name = chain.link(end).name();
+        let mut d = self.data();
+        let mut j = nalgebra::Matrix6xX::zeros(chain.dof());
+        let mut b = self.batch_data();
+        let mut out = vec![0.0; flat.len() * 6];
+        let mut poses = self.batch_data();
+        vec![
+            (
+                format!("{JACOBIAN} {name}"),
+                Box::new(move || {
+                    for q in qs {
+                        if let Ok(p) = forward_kinematics(chain, &mut d, black_box(q)) {
+                            p.jacobian_into(end, &mut j);
+                        }
+                        black_box(&j);
+                    }
+                }),
+                qs.len(),
+            ),
+            (
+                format!("{BATCH_JACOBIAN} {name}, 1 thread"),
+                Box::new(move || {
+                    let frame = crate::JacobianFrame::World;
+                    black_box(
+                        jacobian_batch(chain, &mut b, black_box(flat), end, frame, &mut out).ok(),
+                    );
+                    black_box(&out);
+                }),
+                qs.len(),
+            ),
+            (
+                format!("{BATCH_LINK_POSE} {name}, 1 thread"),
+                Box::new(move || {
+                    black_box(
+                        forward_kinematics_batch_to(chain, &mut poses, black_box(flat), end)
                             .ok()
                             .map(|b| b.len()),
                     );
@@ -479,6 +538,11 @@ pub(super) fn timing_table(
             BATCH_WITH_RATES,
             BATCH_POSES_ONLY,
             "the batch of poses only",
+        ),
+        (
+            BATCH_JACOBIAN,
+            BATCH_LINK_POSE,
+            "the batch of that link's pose only",
         ),
     ] {
         if let (Some(p), Some(w)) = (row(part), row(whole)) {
@@ -590,6 +654,9 @@ pub(super) const POSES_ONLY: &str = "kinechain, poses only";
 pub(super) const BATCH_PREFIX: &str = "kinechain, batch, ";
 pub(super) const BATCH_WITH_RATES: &str = "kinechain, batch, poses + velocities";
 pub(super) const BATCH_POSES_ONLY: &str = "kinechain, batch, poses only";
+pub(super) const JACOBIAN: &str = "kinechain, Jacobian of";
+pub(super) const BATCH_JACOBIAN: &str = "kinechain, batch, Jacobian of";
+pub(super) const BATCH_LINK_POSE: &str = "kinechain, batch, pose only of";
 
 /// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that
 /// reads one (on an arm with a gripper and the tool as `link`, the arm's last joint, not the

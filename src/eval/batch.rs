@@ -94,6 +94,7 @@ macro_rules! limit_policy_methods {
 mod blocks;
 mod claims;
 mod fold;
+mod jacobians;
 mod lane_rates;
 mod rates;
 pub mod single_precision;
@@ -102,6 +103,9 @@ pub mod single_precision;
 use blocks::*;
 pub(crate) use fold::{BlockEval, block_len, fold_blocks};
 pub use fold::{fold_block_len, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par};
+pub use jacobians::{
+    jacobian_batch, jacobian_batch_par, jacobian_dot_batch, jacobian_dot_batch_par,
+};
 pub use rates::{
     BatchAccelerations, BatchVelocities, forward_accelerations_batch,
     forward_accelerations_batch_par, forward_velocities_batch, forward_velocities_batch_par,
@@ -158,6 +162,12 @@ pub struct BatchData {
     velocities: Vec<rates::Pair>,
     accelerations: Vec<rates::Pair>,
     rate_lanes: Vec<Lanes>,
+    /// One Jacobian, column-major, before it is written out row-major.
+    jacobian: Vec<f64>,
+    /// The lane Jacobian kernel's columns of one chunk, and its path bodies' joint origins and
+    /// directions.
+    jacobian_lanes: Vec<Lanes>,
+    axes: Vec<[[Lanes; 3]; 2]>,
     len: usize,
     bodies: usize,
     dof: usize,
@@ -177,6 +187,9 @@ impl BatchData {
             velocities: Vec::new(),
             accelerations: Vec::new(),
             rate_lanes: vec![Lanes::splat(0.0); 3 * chain.dof()],
+            jacobian: vec![0.0; 6 * chain.dof()],
+            jacobian_lanes: Vec::new(),
+            axes: Vec::new(),
             len: 0,
             bodies: chain.bodies.len(),
             dof: chain.dof(),

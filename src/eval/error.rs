@@ -44,6 +44,14 @@ pub enum StateError {
         /// Entries given.
         got: usize,
     },
+    /// A caller's output buffer for a batch has the wrong length.
+    #[error("the output has {got} entries, the batch needs {expected}")]
+    OutputLength {
+        /// Entries needed.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
     /// A batch for a chain without moving joints: its configurations have no entries, so a flat
     /// batch cannot say how many it holds. Evaluate such a chain once, with
     /// [`forward_kinematics`](crate::forward_kinematics).

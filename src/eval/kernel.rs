@@ -167,7 +167,7 @@ fn rotate_columns<N: Num, A: Arith>(r: &mut [[N; 3]; 3], axis: &Axis, s: N, c: N
 
 /// `f ← f · placement`.
 #[inline(always)]
-fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
+pub(crate) fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
     match placement {
         Placement::Identity => {}
         Placement::Translation(t) => f.p = apply_const_add::<N, A>(&f.r, *t, f.p),

@@ -9,6 +9,7 @@ pub mod batch;
 pub mod chain;
 pub mod data;
 pub mod error;
+pub mod jacobian;
 pub(crate) mod kernel;
 pub mod kinematics;
 pub(crate) mod lanes;

@@ -7,10 +7,11 @@
 
 use crate::eval::chain::Chain;
 use crate::eval::data::Data;
+use crate::eval::jacobian::{self, JacobianFrame};
 use crate::eval::layout::{Body, Placement};
 use crate::eval::padded;
 use crate::model::chain::LinkId;
-use crate::model::transform::{Transform, add3, cross3, scale3, sub3};
+use crate::model::transform::{Transform, add3, cross3, scale3};
 use nalgebra::Vector3;
 
 /// Angular velocity and linear velocity of a link-frame origin.
@@ -138,34 +139,8 @@ impl<'a> Poses<'a> {
     /// [`Poses::axis_of`] on plain arrays, read from the parent's stored frame in place.
     #[inline(always)]
     fn axis_entries(&self, body: &Body) -> ([f64; 3], [f64; 3]) {
-        let (parent_origin, offset, z) = self.axis_parts(body);
+        let (parent_origin, offset, z) = jacobian::axis_parts(self, body);
         (add3(parent_origin, offset), z)
-    }
-
-    /// The parts of a body's joint axis in the world frame: the origin of the frame before the
-    /// joint (the parent body's, or the world's), the joint-frame origin's offset from it in
-    /// world axes, and the unit direction.
-    #[inline(always)]
-    fn axis_parts(&self, body: &Body) -> ([f64; 3], [f64; 3], [f64; 3]) {
-        match body.parent {
-            Some(p) => {
-                let parent = &self.data.world_from_body[p];
-                let r = Transform {
-                    r: [
-                        padded::cut(&parent[0]),
-                        padded::cut(&parent[1]),
-                        padded::cut(&parent[2]),
-                    ],
-                    p: [0.0; 3],
-                };
-                (
-                    padded::cut(&parent[3]),
-                    r.apply(body.pre_frame.p),
-                    r.apply(body.axis_in_parent),
-                )
-            }
-            None => ([0.0; 3], body.pre_frame.p, body.axis_in_parent),
-        }
     }
 
     /// The geometric Jacobian of `link` at the evaluated configuration: the 6 × [`Chain::dof`](crate::Model::dof)
@@ -208,47 +183,52 @@ impl<'a> Poses<'a> {
     /// # Panics
     /// If `link` comes from another chain with more links.
     pub fn jacobian_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
-        let p = self.world_from_link(link).p;
-        self.path_columns(link, j, |bd| {
-            let (origin, z) = self.axis_entries(bd);
-            let turning = cross3(z, sub3(p, origin));
-            (join(turning, z), join(z, [0.0; 3]))
-        });
+        self.jacobian_in_into(link, JacobianFrame::World, j);
     }
 
-    /// `j` (resized to 6 × [`Chain::dof`](crate::Model::dof) if it has another shape) ← the sum, over the bodies
-    /// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
-    /// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
-    /// joint's two), and entries of joints off the path stay zero.
-    #[inline(always)]
-    fn path_columns(
+    /// The Jacobian of `link` in `frame` ([`JacobianFrame`]: world axes at the link origin, link
+    /// axes at the link origin, or world axes at a point fixed on the link): 6 × [`Chain::dof`](crate::Model::dof),
+    /// rows `[v; ω]`.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, Data, JacobianFrame, forward_velocities, nalgebra::{DVector, Vector3}};
+    /// let chain = Chain::from_file("robots/puma560.yaml")?;
+    /// let mut data = Data::new(&chain);
+    /// let (q, qd) = ([0.1, -0.5, 0.3, 0.2, 0.4, 0.0], [0.3, 0.1, -0.2, 0.5, 0.0, 1.0]);
+    /// let tool = chain.link_id("tool")?;
+    /// let u = Vector3::new(0.0, 0.0, 0.1); // 10 cm along the tool's z axis
+    /// let vel = forward_velocities(&chain, &mut data, &q, &qd)?;
+    /// let j = vel.poses().jacobian_in(tool, JacobianFrame::Point(u.into()));
+    /// let twist = j * DVector::from_row_slice(&qd);
+    /// approx::assert_relative_eq!(twist.fixed_rows::<3>(0).into_owned(), vel.point(tool, &u).velocity, epsilon = 1e-14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn jacobian_in(&self, link: LinkId, frame: JacobianFrame) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain.dof());
+        self.jacobian_in_into(link, frame, &mut j);
+        j
+    }
+
+    /// [`Poses::jacobian_in`] written into `j`, which is resized to 6 × [`Chain::dof`](crate::Model::dof) if it
+    /// has another shape (so a reused matrix allocates nothing).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_in_into(
         &self,
         link: LinkId,
+        frame: JacobianFrame,
         j: &mut nalgebra::Matrix6xX<f64>,
-        mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
     ) {
-        let dof = self.chain.dof();
-        if j.ncols() != dof {
-            *j = nalgebra::Matrix6xX::zeros(dof);
+        if j.ncols() != self.chain.dof() {
+            *j = nalgebra::Matrix6xX::zeros(self.chain.dof());
         }
-        // Column-major: column i is entries 6i..6i + 6, zeroed whole, then added to entry by
-        // entry.
-        let entries = j.as_mut_slice();
-        entries.fill(0.0);
-        let mut body = self.chain.carrier(link).body;
-        while let Some(b) = body {
-            let bd = &self.chain.bodies[b];
-            let (turning, sliding) = columns(bd);
-            for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
-                if rate.scale != 0.0 {
-                    let column = &mut entries[6 * rate.index..6 * rate.index + 6];
-                    for (c, x) in column.iter_mut().zip(terms) {
-                        *c += x * rate.scale;
-                    }
-                }
-            }
-            body = bd.parent;
-        }
+        jacobian::jacobian(self, link, frame, j.as_mut_slice());
     }
 
     /// The frame a link's motion is computed for, and the link's offset from it in world axes
@@ -463,29 +443,39 @@ impl<'a> Velocities<'a> {
     /// # Panics
     /// If `link` comes from another chain with more links.
     pub fn jacobian_dot_into(&self, link: LinkId, j: &mut nalgebra::Matrix6xX<f64>) {
-        let poses = &self.poses;
-        let p = poses.world_from_link(link).p;
-        let p_dot: [f64; 3] = self.velocity(link).v.into();
-        poses.path_columns(link, j, |bd| {
-            let (parent_origin, offset, z) = poses.axis_parts(bd);
-            let origin = add3(parent_origin, offset);
-            // The frame before the joint turns at ω and its origin moves at v; the axis point
-            // at v + ω × offset (the offset in world axes, not a difference of origins).
-            let (omega, origin_dot) = match bd.parent {
-                Some(parent) => {
-                    let rates = &poses.data.rates[parent];
-                    let (omega, v) = (padded::cut(&rates.omega), padded::cut(&rates.v));
-                    (omega, add3(v, cross3(omega, offset)))
-                }
-                None => ([0.0; 3], [0.0; 3]),
-            };
-            let z_dot = cross3(omega, z);
-            let turning = add3(
-                cross3(z_dot, sub3(p, origin)),
-                cross3(z, sub3(p_dot, origin_dot)),
-            );
-            (join(turning, z_dot), join(z_dot, [0.0; 3]))
-        });
+        self.jacobian_dot_in_into(link, JacobianFrame::World, j);
+    }
+
+    /// The time derivative of [`Poses::jacobian_in`] in `frame`, so that `J q̈ + J̇ q̇` is the time
+    /// derivative of `J q̇`: for [`JacobianFrame::World`] and [`JacobianFrame::Point`], `[a; α]`,
+    /// the classical acceleration of the frame's point and the angular acceleration, world axes;
+    /// for [`JacobianFrame::Link`], the derivative of the link-axes components `[Aᵀ v; Aᵀ ω]`,
+    /// which is `[Aᵀ (a − ω × v); Aᵀ α]` (`d/dt Aᵀ x = Aᵀ (ẋ − ω × x)`).
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    #[must_use]
+    pub fn jacobian_dot_in(&self, link: LinkId, frame: JacobianFrame) -> nalgebra::Matrix6xX<f64> {
+        let mut j = nalgebra::Matrix6xX::zeros(self.chain().dof());
+        self.jacobian_dot_in_into(link, frame, &mut j);
+        j
+    }
+
+    /// [`Velocities::jacobian_dot_in`] written into `j`, resized as [`Poses::jacobian_in_into`]
+    /// resizes.
+    ///
+    /// # Panics
+    /// If `link` comes from another chain with more links.
+    pub fn jacobian_dot_in_into(
+        &self,
+        link: LinkId,
+        frame: JacobianFrame,
+        j: &mut nalgebra::Matrix6xX<f64>,
+    ) {
+        if j.ncols() != self.chain().dof() {
+            *j = nalgebra::Matrix6xX::zeros(self.chain().dof());
+        }
+        jacobian::jacobian_dot(&self.poses, link, frame, j.as_mut_slice());
     }
 }
 
@@ -571,8 +561,27 @@ impl<'a> Accelerations<'a> {
     }
 }
 
-/// Six entries: `a` then `b`.
-#[inline(always)]
-fn join(a: [f64; 3], b: [f64; 3]) -> [f64; 6] {
-    [a[0], a[1], a[2], b[0], b[1], b[2]]
+/// A single evaluation as the state a Jacobian is computed from.
+impl jacobian::State for Poses<'_> {
+    fn chain(&self) -> &Chain {
+        self.chain
+    }
+    #[inline(always)]
+    fn body_frame(&self, b: usize) -> Transform {
+        padded::transform(&self.data.world_from_body[b])
+    }
+    #[inline(always)]
+    fn body_rates(&self, b: usize) -> [[f64; 3]; 2] {
+        let rates = &self.data.rates[b];
+        [padded::cut(&rates.omega), padded::cut(&rates.v)]
+    }
+    #[inline(always)]
+    fn link_pose(&self, link: LinkId) -> Transform {
+        self.world_from_link(link)
+    }
+    #[inline(always)]
+    fn link_rates(&self, link: LinkId) -> [[f64; 3]; 2] {
+        let v = self.velocity(link);
+        [v.omega.into(), v.v.into()]
+    }
 }

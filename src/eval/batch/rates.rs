@@ -139,7 +139,7 @@ fma_dispatch!(fn chunk(chain: &Chain, rows: [&[f64]; 3], c: usize, lanes: &mut [
 
 /// Checks a batch's `q̇` or `q̈` (`values`, named `what`) against the `n` configurations of its
 /// `q`: one row per configuration, every entry finite.
-fn check_rates(
+pub(super) fn check_rates(
     chain: &Chain,
     values: &[f64],
     what: &'static str,
@@ -167,7 +167,7 @@ fn check_rates(
 
 /// Evaluates the batch into `data` (α and a when `qdds` is given), on rayon's pool when
 /// `parallel` and the batch is worth it.
-fn evaluate(
+pub(super) fn evaluate(
     chain: &Chain,
     data: &mut BatchData,
     qs: &[f64],
@@ -272,7 +272,12 @@ fn carrier(
 
 /// `[ω, v]` of `link` in configuration `index`.
 #[inline]
-fn velocity(chain: &Chain, data: &BatchData, index: usize, link: LinkId) -> LinkVelocity {
+pub(super) fn velocity(
+    chain: &Chain,
+    data: &BatchData,
+    index: usize,
+    link: LinkId,
+) -> LinkVelocity {
     match carrier(chain, data, index, link) {
         None => link_velocity([0.0; 3], [0.0; 3], [0.0; 3]),
         Some((b, r)) => {

@@ -1,0 +1,200 @@
+//! Geometric Jacobians and their time derivatives, in the three frames [`JacobianFrame`] names,
+//! from any evaluated state: a single evaluation's [`Poses`](crate::Poses) or one configuration
+//! of a batch. Both read the same stored frames and rates and run this code, so a batched
+//! Jacobian equals the single one bit for bit.
+
+use crate::eval::chain::Chain;
+use crate::eval::layout::Body;
+use crate::model::chain::LinkId;
+use crate::model::transform::{Transform, add3, cross3, sub3};
+
+/// Where a Jacobian's velocity is taken and in which axes its rows are written. Every kind has
+/// rows `[v; ω]` (linear first, as Pinocchio and KDL order them) and one column per entry of `q`,
+/// so that `[v; ω] = J q̇` and `[a; α] = J q̈ + J̇ q̇` (eqs. 2.120–2.127).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum JacobianFrame {
+    /// `v` of the link-frame origin and `ω`, both in world axes (Pinocchio's
+    /// `LOCAL_WORLD_ALIGNED`, KDL's `JntToJac` with the reference point at the link origin).
+    World,
+    /// `v` of the link-frame origin and `ω`, both in the link's own axes: the world rows turned
+    /// by `Aᵀ` (eq. 2.41; Pinocchio's `LOCAL`), as [`Velocities::velocity_local`](crate::Velocities::velocity_local) gives them.
+    Link,
+    /// `v` of the point with link coordinates `ū` (the velocity of eq. 2.55 for a fixed point)
+    /// and `ω`, both in world axes.
+    Point([f64; 3]),
+}
+
+impl JacobianFrame {
+    /// The point `ū` (link coordinates) of [`JacobianFrame::Point`], the link origin otherwise.
+    #[must_use]
+    pub fn point(&self) -> [f64; 3] {
+        match *self {
+            JacobianFrame::Point(u) => u,
+            _ => [0.0; 3],
+        }
+    }
+}
+
+/// What a Jacobian is computed from: the world frames of the bodies and of the links and, for
+/// `J̇`, the bodies' and links' velocities.
+pub(crate) trait State {
+    fn chain(&self) -> &Chain;
+    /// World frame of body `b`.
+    fn body_frame(&self, b: usize) -> Transform;
+    /// `[ω, v]` of body `b` (v of its origin), world axes.
+    fn body_rates(&self, b: usize) -> [[f64; 3]; 2];
+    /// World pose of `link`.
+    fn link_pose(&self, link: LinkId) -> Transform;
+    /// `[ω, v]` of `link` (v of its origin), world axes.
+    fn link_rates(&self, link: LinkId) -> [[f64; 3]; 2];
+}
+
+/// The parts of a body's joint axis in the world frame: the origin of the frame before the
+/// joint (the parent body's, or the world's), the joint-frame origin's offset from it in world
+/// axes, and the unit direction.
+#[inline(always)]
+pub(crate) fn axis_parts(s: &impl State, body: &Body) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    match body.parent {
+        Some(p) => {
+            let parent = s.body_frame(p);
+            let r = Transform {
+                r: parent.r,
+                p: [0.0; 3],
+            };
+            (
+                parent.p,
+                r.apply(body.pre_frame.p),
+                r.apply(body.axis_in_parent),
+            )
+        }
+        None => ([0.0; 3], body.pre_frame.p, body.axis_in_parent),
+    }
+}
+
+/// `j` (6 × dof, column-major: column `i` is entries `6i..6i + 6`) ← the sum, over the bodies
+/// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
+/// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
+/// joint's two), and entries of joints off the path stay zero.
+#[inline(always)]
+fn path_columns(
+    s: &impl State,
+    link: LinkId,
+    j: &mut [f64],
+    mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
+) {
+    let chain = s.chain();
+    j.fill(0.0);
+    let mut body = chain.carrier(link).body;
+    while let Some(b) = body {
+        let bd = &chain.bodies[b];
+        let (turning, sliding) = columns(bd);
+        for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
+            if rate.scale != 0.0 {
+                let column = &mut j[6 * rate.index..6 * rate.index + 6];
+                for (c, x) in column.iter_mut().zip(terms) {
+                    *c += x * rate.scale;
+                }
+            }
+        }
+        body = bd.parent;
+    }
+}
+
+fn join(a: [f64; 3], b: [f64; 3]) -> [f64; 6] {
+    [a[0], a[1], a[2], b[0], b[1], b[2]]
+}
+
+/// The reference point of `frame` on `link` in the world frame, and the link's pose.
+fn point_of(s: &impl State, link: LinkId, frame: JacobianFrame) -> ([f64; 3], Transform) {
+    let pose = s.link_pose(link);
+    let p = match frame {
+        JacobianFrame::Point(u) => add3(pose.p, pose.apply(u)),
+        _ => pose.p,
+    };
+    (p, pose)
+}
+
+/// Turns each 3-row half of every column of `j` by `Aᵀ` (`pose`'s rotation transposed), for
+/// [`JacobianFrame::Link`].
+fn to_link_axes(pose: &Transform, j: &mut [f64]) {
+    for column in j.chunks_exact_mut(3) {
+        let x = [column[0], column[1], column[2]];
+        for (k, c) in column.iter_mut().enumerate() {
+            let r = pose.r[k];
+            *c = r[0] * x[0] + r[1] * x[1] + r[2] * x[2];
+        }
+    }
+}
+
+/// The Jacobian of `link` in `frame` into `j` (6 × dof, column-major).
+pub(crate) fn jacobian(s: &impl State, link: LinkId, frame: JacobianFrame, j: &mut [f64]) {
+    let (p, pose) = point_of(s, link, frame);
+    path_columns(s, link, j, |bd| {
+        let (parent_origin, offset, z) = axis_parts(s, bd);
+        let origin = add3(parent_origin, offset);
+        let turning = cross3(z, sub3(p, origin));
+        (join(turning, z), join(z, [0.0; 3]))
+    });
+    if frame == JacobianFrame::Link {
+        to_link_axes(&pose, j);
+    }
+}
+
+/// `J̇` of [`jacobian`] (needs the rates in `s`) into `j`.
+///
+/// Each joint axis is fixed in the frame before its joint, which turns with that frame's
+/// angular velocity `ω_j`: a turning column `[z × (p − p_j); z]` changes at
+/// `[ż × (p − p_j) + z × (ṗ − ṗ_j); ż]` with `ż = ω_j × z` (eq. 2.120 for `ṗ_j`, the velocity of
+/// the axis point), a sliding column `[z; 0]` at `[ż; 0]`. For a point `p = o + A ū`,
+/// `ṗ = v + ω × (A ū)`. In link axes, `d/dt (Aᵀ c) = Aᵀ (ċ − ω × c)` for each half `c` of a
+/// column of the world Jacobian.
+pub(crate) fn jacobian_dot(s: &impl State, link: LinkId, frame: JacobianFrame, j: &mut [f64]) {
+    let (p, pose) = point_of(s, link, frame);
+    let [omega, v] = s.link_rates(link);
+    let p_dot = match frame {
+        JacobianFrame::Point(u) => add3(v, cross3(omega, pose.apply(u))),
+        _ => v,
+    };
+    path_columns(s, link, j, |bd| {
+        let (parent_origin, offset, z) = axis_parts(s, bd);
+        let origin = add3(parent_origin, offset);
+        // The frame before the joint turns at ω and its origin moves at v; the axis point
+        // at v + ω × offset (the offset in world axes, not a difference of origins).
+        let (omega_j, origin_dot) = match bd.parent {
+            Some(parent) => {
+                let [omega, v] = s.body_rates(parent);
+                (omega, add3(v, cross3(omega, offset)))
+            }
+            None => ([0.0; 3], [0.0; 3]),
+        };
+        let z_dot = cross3(omega_j, z);
+        let turning = add3(
+            cross3(z_dot, sub3(p, origin)),
+            cross3(z, sub3(p_dot, origin_dot)),
+        );
+        let (turning_dot, sliding_dot) = (join(turning, z_dot), join(z_dot, [0.0; 3]));
+        if frame != JacobianFrame::Link {
+            return (turning_dot, sliding_dot);
+        }
+        // Aᵀ (ċ − ω × c) for each half c of the world column at the origin.
+        let less_spin = |dot: [f64; 6], c: [f64; 6]| {
+            let (a, b) = (
+                cross3(omega, [c[0], c[1], c[2]]),
+                cross3(omega, [c[3], c[4], c[5]]),
+            );
+            join(
+                sub3([dot[0], dot[1], dot[2]], a),
+                sub3([dot[3], dot[4], dot[5]], b),
+            )
+        };
+        let turning = cross3(z, sub3(p, origin));
+        (
+            less_spin(turning_dot, join(turning, z)),
+            less_spin(sliding_dot, join(z, [0.0; 3])),
+        )
+    });
+    if frame == JacobianFrame::Link {
+        to_link_axes(&pose, j);
+    }
+}
