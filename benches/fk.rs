@@ -87,6 +87,18 @@ fn kinechain_modes(c: &mut Criterion) {
                 black_box(&jacobian);
             })
         });
+        // What Pinocchio's `computeJointJacobian` computes: the last joint's child link in its own
+        // axes (LOCAL), the poses included.
+        let link7 = chain
+            .joint(chain.joint_id(last_joint(name)).unwrap())
+            .child();
+        c.bench_function(&format!("fk/jacobian_local_last_joint/{name}"), |b| {
+            b.iter(|| {
+                let p = forward_kinematics(&chain, &mut data, black_box(next())).unwrap();
+                p.jacobian_in_into(link7, kinechain::JacobianFrame::Link, &mut jacobian);
+                black_box(&jacobian);
+            })
+        });
         // The same with velocities and the Jacobian's rate (the bias term of [a; α] = J q̈ + J̇ q̇).
         c.bench_function(&format!("fk/jacobian_dot/{name}"), |b| {
             b.iter(|| {

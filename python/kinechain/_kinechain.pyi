@@ -86,10 +86,15 @@ class Chain:
         q: npt.ArrayLike,
         link: str,
         *,
+        frame: str = "world",
+        point: Optional[npt.ArrayLike] = None,
         check_limits: bool = True,
         threads: Optional[int] = None,
     ) -> npt.NDArray[np.float64]:
-        """Geometric Jacobian of link, world frame: (6, dof) or (N, 6, dof), rows v then omega."""
+        """Geometric Jacobian of link: (6, dof) or (N, 6, dof), rows v then omega.
+
+        frame="world": v of the link origin (or of point, in link coordinates) and omega in
+        world axes; frame="link": both in the link's own axes."""
     def __reduce__(self) -> Tuple[Any, Tuple[str, str]]: ...
     def __eq__(self, other: object) -> bool: ...
     def __hash__(self) -> int: ...

@@ -7,9 +7,11 @@
 //! values out of limits are checked and raised as `kinechain.StateError` / `kinechain.Error`,
 //! files as `kinechain.LoadError`.
 
+use kinechain::JacobianFrame;
 use kinechain::eval::batch::{
     BatchData, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par,
-    forward_kinematics_batch_to, forward_kinematics_batch_to_par,
+    forward_kinematics_batch_to, forward_kinematics_batch_to_par, jacobian_batch,
+    jacobian_batch_par,
 };
 use kinechain::regression::{self, variable_names};
 use kinechain::{
@@ -545,19 +547,42 @@ impl Chain {
         Ok(PyArray1::from_vec(py, ok))
     }
 
-    /// The geometric Jacobian of `link` at its origin, world frame: `(6, dof)` or
-    /// `(N, 6, dof)`, rows v then ω, so that `[v; ω] = J q̇`.
-    #[pyo3(signature = (q, link, *, check_limits=true, threads=None))]
+    /// The geometric Jacobian of `link`: `(6, dof)` or `(N, 6, dof)`, rows v then ω, so that
+    /// `[v; ω] = J q̇`. `frame="world"` (default): v of the link origin (or of `point`, link
+    /// coordinates) and ω in world axes; `frame="link"`: both in the link's own axes. A batch
+    /// runs the batch kernels without the GIL and writes straight into the returned array.
+    #[pyo3(signature = (q, link, *, frame="world", point=None, check_limits=true, threads=None))]
+    #[allow(clippy::too_many_arguments)]
     fn jacobian<'py>(
         &self,
         py: Python<'py>,
         q: &Bound<'py, PyAny>,
         link: &str,
+        frame: &str,
+        point: Option<[f64; 3]>,
         check_limits: bool,
         threads: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let chain = &*self.inner;
         let threads = thread_count(threads)?;
+        let frame = match (frame, point) {
+            ("world", None) => JacobianFrame::World,
+            ("world", Some(u)) if u.iter().all(|x| x.is_finite()) => JacobianFrame::Point(u),
+            ("world", Some(u)) => {
+                return Err(Error::new_err(format!("point {u:?} is not finite")));
+            }
+            ("link", None) => JacobianFrame::Link,
+            ("link", Some(_)) => {
+                return Err(Error::new_err(
+                    "point is given in link coordinates with frame=\"world\" (the point's velocity in world axes)",
+                ));
+            }
+            (other, _) => {
+                return Err(Error::new_err(format!(
+                    "frame must be \"world\" or \"link\", not {other:?}"
+                )));
+            }
+        };
         let q = float_array(q, "q")?;
         let (n, batched) = rows(chain, &q, "q")?;
         let id = chain
@@ -578,23 +603,34 @@ impl Chain {
         };
         let q = q.as_slice()?;
         let o = Out::new(&out);
-        let one = |data: &mut Data, i: usize| -> Result<(), KStateError> {
-            let poses = forward_kinematics(chain, data, &q[i * dof..(i + 1) * dof])?;
-            let j = poses.jacobian(id);
-            // SAFETY: row i's range, written by this call alone.
-            let dst = unsafe { o.part(i * 6 * dof, 6 * dof) };
-            for r in 0..6 {
-                for c in 0..dof {
-                    dst[r * dof + c] = j[(r, c)];
-                }
-            }
-            Ok(())
-        };
         let result = if batched {
-            py.detach(|| per_row(chain, policy, n, threads, one))
+            py.detach(|| {
+                // SAFETY: the whole array, written by this call alone.
+                let dst = unsafe { o.part(0, n * 6 * dof) };
+                let mut data = BatchData::new(chain).with_limit_policy(policy);
+                on_threads(threads, || {
+                    if threads == Some(1) {
+                        jacobian_batch(chain, &mut data, q, id, frame, dst)
+                    } else {
+                        jacobian_batch_par(chain, &mut data, q, id, frame, dst)
+                    }
+                })
+                .map_err(Failure::Threads)?
+                .map_err(|e| Failure::State(Some(e.index), e.source))
+            })
         } else {
-            self.with_data(policy, |data| one(data, 0))
-                .map_err(|e| Failure::State(None, e))
+            self.with_data(policy, |data| {
+                let j = forward_kinematics(chain, data, q)?.jacobian_in(id, frame);
+                // SAFETY: the whole array, written by this call alone.
+                let dst = unsafe { o.part(0, 6 * dof) };
+                for r in 0..6 {
+                    for c in 0..dof {
+                        dst[r * dof + c] = j[(r, c)];
+                    }
+                }
+                Ok(())
+            })
+            .map_err(|e| Failure::State(None, e))
         };
         result.map_err(|f| f.into_py(batched))?;
         Ok(out)

@@ -150,6 +150,22 @@ def test_jacobians_map_joint_rates_to_link_velocities():
     assert np.abs(twist[:, 3:] - r.omega[:, 0]).max() < 1e-13
     assert np.array_equal(chain.jacobian(q[3], link), j[3])
     assert np.array_equal(chain.jacobian(q, link, threads=1), j)
+    # In the link's axes: the world rows turned by the rotation's transpose.
+    rt = np.swapaxes(r.poses[:, 0, :3, :3], -1, -2)
+    local = chain.jacobian(q, link, frame="link")
+    assert np.abs(local[:, :3] - rt @ j[:, :3]).max() < 1e-13
+    assert np.abs(local[:, 3:] - rt @ j[:, 3:]).max() < 1e-13
+    assert np.array_equal(chain.jacobian(q[7], link, frame="link"), local[7])
+    # At a point fixed on the link: v + omega x (R u).
+    u = np.array([0.0, 0.0, 0.1034])
+    at = chain.jacobian(q, link, point=u)
+    ru = r.poses[:, 0, :3, :3] @ u
+    expected = twist[:, :3] + np.cross(twist[:, 3:], ru)
+    assert np.abs(np.einsum("nij,nj->ni", at, qd)[:, :3] - expected).max() < 1e-13
+    assert np.array_equal(chain.jacobian(q[5], link, point=u), at[5])
+    for bad in [dict(frame="body"), dict(frame="link", point=u), dict(point=[np.nan, 0, 0])]:
+        with pytest.raises(kc.Error):
+            chain.jacobian(q, link, **bad)
 
 
 def test_array_likes_and_views_give_the_same_numbers():
