@@ -469,7 +469,7 @@ impl<'a> Workload<'a> {
             (
                 format!("{BATCH_JACOBIAN} {name}, 1 thread"),
                 Box::new(move || {
-                    let frame = crate::JacobianFrame::World;
+                    let frame = crate::eval::jacobian::JacobianFrame::World;
                     black_box(
                         jacobian_batch(chain, &mut b, black_box(flat), end, frame, &mut out).ok(),
                     );
