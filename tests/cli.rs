@@ -651,10 +651,10 @@ fn factor_after(text: &str, label: &str) -> f64 {
 
 #[test]
 fn batch_keeps_order_across_chunks_and_keep_going_reports_each_bad_line() {
-    // 1000 lines: poses in several kernel batches (of up to 256 lines), with rate lines (which
-    // are evaluated one by one) and bad lines inside: one whose evaluation fails (a rate line
-    // beyond a limit), one of the wrong length, one that is not JSON. The failures are counted
-    // across the batches held and flushed after them.
+    // 1000 lines: poses in several kernel batches (of up to 256 lines), with rate lines (each
+    // ends a run of poses and starts one of velocities) and bad lines inside: one whose
+    // evaluation fails (a rate line beyond a limit), one of the wrong length, one that is not
+    // JSON. The failures are counted across the batches held and flushed after them.
     let lines: String = (0..1000)
         .map(|i| {
             let line = match i {
@@ -1900,4 +1900,72 @@ fn bench_is_capped_by_configurations_times_links() {
         e.ends_with("at most 4192 configurations for this robot"),
         "{e}"
     );
+}
+
+/// Batch lines with rates go through the batch kernels in runs of one level (poses, velocities,
+/// accelerations, in any order); each line's output is, byte for byte, what `fk --q --qd --qdd`
+/// prints for it alone. A non-finite rate names its line; `qdd` without `qd` is the single path's
+/// error.
+#[test]
+fn batch_lines_with_rates_equal_single_runs() {
+    let q = |i: usize| format!("[{}, -0.5, 0.6, 0.2, 0.4, 0.0]", 0.01 * i as f64);
+    let qd = "[0.3, 0.1, -0.2, 0.5, 0.0, 1.0]";
+    let qdd = "[0.2, -0.4, 0.1, 0.0, 0.3, -0.1]";
+    let mut lines = Vec::new();
+    for i in 0..40 {
+        lines.push(match i % 5 {
+            0 | 1 => format!(r#"{{"q": {}, "qd": {qd}}}"#, q(i)),
+            2 => format!(r#"{{"q": {}, "qd": {qd}, "qdd": {qdd}}}"#, q(i)),
+            3 => q(i),
+            _ => format!(r#"{{"q": {}, "qd": {qd}, "qdd": {qdd}}}"#, q(i)),
+        });
+    }
+    let dir = Scratch::new("cli-batch-rates");
+    let batch = dir.write("rates.jsonl", lines.join("\n") + "\n");
+    let out = kinechain(&["fk", "robots/stanford.yaml", "--batch", &batch]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let got = String::from_utf8(out.stdout).unwrap();
+    let got: Vec<&str> = got.lines().collect();
+    assert_eq!(got.len(), 40);
+    for (i, line) in got.iter().enumerate() {
+        let mut args = vec!["fk", "robots/stanford.yaml"];
+        let qi = q(i);
+        args.extend(["--q", &qi]);
+        if i % 5 != 3 {
+            args.extend(["--qd", qd]);
+        }
+        if i % 5 == 2 || i % 5 == 4 {
+            args.extend(["--qdd", qdd]);
+        }
+        let single = kinechain(&args);
+        let single = String::from_utf8(single.stdout).unwrap();
+        let mut want: Value = serde_json::from_str(single.trim()).unwrap();
+        want.as_object_mut()
+            .unwrap()
+            .insert("line".into(), Value::from(i + 1));
+        let got: Value = serde_json::from_str(line).unwrap();
+        assert_eq!(got, want, "line {}", i + 1);
+    }
+    let bad = dir.write(
+        "bad.jsonl",
+        format!(
+            "{}\n{{\"q\": {}, \"qd\": [0, 0, NaN, 0, 0, 0]}}\n",
+            lines[0],
+            q(1)
+        ),
+    );
+    let out = kinechain(&["fk", "robots/stanford.yaml", "--batch", &bad]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("line 2"), "{stderr}");
+    let bad = dir.write(
+        "qdd.jsonl",
+        format!("{{\"q\": {}, \"qdd\": {qdd}}}\n", q(1)),
+    );
+    let out = kinechain(&["fk", "robots/stanford.yaml", "--batch", &bad]);
+    assert!(!out.status.success());
 }

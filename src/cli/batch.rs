@@ -1,12 +1,19 @@
-//! `kinechain fk --batch`: one result per input line, pose-only lines through the batch kernel.
+//! `kinechain fk --batch`: one result per input line; lines of poses, of poses and velocities, and
+//! of poses, velocities and accelerations through the batch kernels.
 
 #[allow(clippy::wildcard_imports)]
 use super::*;
+use crate::eval::kinematics::check_values;
 
-/// Pose-only lines of a batch file, evaluated together by the batch kernel.
+/// Consecutive lines of a batch file that ask for every link at the same level (poses, with
+/// velocities, with accelerations), evaluated together by the batch kernels.
 pub(super) struct PendingPoses {
-    /// Their configurations, row-major.
+    /// Their configurations, row-major, and their rates when the level has them.
     pub(super) qs: Vec<f64>,
+    pub(super) qds: Vec<f64>,
+    pub(super) qdds: Vec<f64>,
+    /// 0: poses, 1: with velocities, 2: with accelerations.
+    pub(super) level: u8,
     /// The 1-based line number of each.
     pub(super) lines: Vec<usize>,
     pub(super) batch: BatchData,
@@ -32,20 +39,27 @@ impl PendingPoses {
             return Ok(0);
         }
         let lines = &self.lines;
-        let poses = forward_kinematics_batch(chain, &mut self.batch, &self.qs).map_err(|e| {
+        let at = |e: crate::eval::batch::BatchError| {
             // (Each line was checked as it was read, so this is not expected.)
             let line = lines.get(e.index).or(lines.last()).copied().unwrap_or(0);
             at_line(path, line, CliError::State(e.source))
-        })?;
+        };
+        let (qs, qds, qdds) = (&self.qs, &self.qds, &self.qdds);
+        let view = match self.level {
+            0 => View::Poses(forward_kinematics_batch(chain, &mut self.batch, qs).map_err(at)?),
+            1 => View::Velocities(
+                forward_velocities_batch(chain, &mut self.batch, qs, qds).map_err(at)?,
+            ),
+            _ => View::Accelerations(
+                forward_accelerations_batch(chain, &mut self.batch, qs, qds, qdds).map_err(at)?,
+            ),
+        };
         let mut failed = 0;
         // One buffer for every line's link results.
         let mut results: Vec<LinkResult> = Vec::with_capacity(chain.links().len());
         for (i, &line) in lines.iter().enumerate() {
             results.clear();
-            results.extend(
-                (0..chain.links().len())
-                    .map(|l| (LinkId(l), poses.world_from_link(i, LinkId(l)), None, None)),
-            );
+            results.extend((0..chain.links().len()).map(|l| view.result(i, LinkId(l))));
             match check_finite(chain, &results, &[], &[]) {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
@@ -78,8 +92,77 @@ impl PendingPoses {
             }
         }
         self.qs.clear();
+        self.qds.clear();
+        self.qdds.clear();
         self.lines.clear();
         Ok(failed)
+    }
+
+    /// Holds configuration `c` of line `line`, checked, for the batch of its level (the lines
+    /// held before it are written first when they are of another level). False, holding
+    /// nothing, for what the batch kernels do not serve: acceleration without velocity (an
+    /// error the single path reports), and rates asked for in CSV.
+    fn hold(
+        &mut self,
+        chain: &Chain,
+        args: &FkArgs,
+        path: &Path,
+        c: &Configuration,
+        line: usize,
+        out: &mut dyn Write,
+    ) -> Result<(bool, usize), CliError> {
+        let level = match (&c.qd, &c.qdd) {
+            (None, None) => 0,
+            _ if args.format == OutputFormat::Csv => return Ok((false, 0)),
+            (Some(_), None) => 1,
+            (Some(_), Some(_)) => 2,
+            (None, Some(_)) => return Ok((false, 0)),
+        };
+        let policy = self.batch.limit_policy();
+        check_q(chain, &c.q, policy)?;
+        if let Some(qd) = &c.qd {
+            check_values(chain, qd, "q_dot")?;
+        }
+        if let Some(qdd) = &c.qdd {
+            check_values(chain, qdd, "q_ddot")?;
+        }
+        let failed = if level == self.level {
+            0
+        } else {
+            let failed = self.flush(chain, args, path, out)?;
+            self.level = level;
+            failed
+        };
+        self.qs.extend_from_slice(&c.q);
+        self.qds
+            .extend_from_slice(c.qd.as_deref().unwrap_or_default());
+        self.qdds
+            .extend_from_slice(c.qdd.as_deref().unwrap_or_default());
+        self.lines.push(line);
+        Ok((true, failed))
+    }
+}
+
+/// The results of a batch at one of [`PendingPoses`]' levels.
+enum View<'a> {
+    Poses(crate::eval::batch::BatchPoses<'a>),
+    Velocities(crate::eval::batch::BatchVelocities<'a>),
+    Accelerations(crate::eval::batch::BatchAccelerations<'a>),
+}
+
+impl View<'_> {
+    /// Link `l`'s result in configuration `i`.
+    fn result(&self, i: usize, l: LinkId) -> LinkResult {
+        match self {
+            View::Poses(p) => (l, p.world_from_link(i, l), None, None),
+            View::Velocities(v) => (l, v.world_from_link(i, l), Some(v.velocity(i, l)), None),
+            View::Accelerations(a) => (
+                l,
+                a.world_from_link(i, l),
+                Some(a.velocity(i, l)),
+                Some(a.acceleration(i, l)),
+            ),
+        }
     }
 }
 
@@ -123,9 +206,10 @@ pub(super) enum Row {
     BadHeader(CliError),
 }
 
-/// One result per line of `reader` (`path` names it in errors), in line order. Pose-only lines
-/// (the common case) go through the batch kernel, [`PendingPoses::MAX`] at a time; lines with
-/// rates, or a request with `--link`, `--point` or `--jacobian`, go one by one. Everything before
+/// One result per line of `reader` (`path` names it in errors), in line order. Lines asking for
+/// every link (the common case) go through the batch kernels, [`PendingPoses::MAX`] consecutive
+/// lines of one level (poses, with `qd`, with `qd` and `qdd`) at a time; a request with `--link`,
+/// `--point` or `--jacobian` goes line by line. Everything before
 /// a bad line is written before its error. Whenever the input read is used up, the results held
 /// are written and the output flushed: reading more may wait for a program that writes a line
 /// at a time and waits for its result.
@@ -141,6 +225,9 @@ pub(super) fn fk_batch<R: std::io::Read>(
     let batchable = request.poses_only(chain);
     let mut pending = PendingPoses {
         qs: Vec::new(),
+        qds: Vec::new(),
+        qdds: Vec::new(),
+        level: 0,
         lines: Vec::new(),
         batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
         text: Vec::new(),
@@ -185,6 +272,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
                 source,
             }),
         };
+        let mut failed_before = 0;
         let result = result.and_then(|line| {
             // A byte order mark, which spreadsheet programs put at the start of the CSV files
             // they write, is not part of the first line.
@@ -207,14 +295,16 @@ pub(super) fn fk_batch<R: std::io::Read>(
                 });
             }
             let c = batch_configuration(chain, line, header.as_ref())?;
-            if batchable && c.qd.is_none() && c.qdd.is_none() {
-                check_q(chain, &c.q, data.limit_policy())?;
-                pending.qs.extend_from_slice(&c.q);
-                pending.lines.push(i + 1);
-                return Ok(Row::Held);
+            if batchable {
+                let (held, failed) = pending.hold(chain, args, path, &c, i + 1, out)?;
+                failed_before += failed;
+                if held {
+                    return Ok(Row::Held);
+                }
             }
             Ok(Row::Single(c))
         });
+        failed_lines += failed_before;
         match result {
             Ok(Row::Held) => {
                 if pending.lines.len() >= PendingPoses::MAX {

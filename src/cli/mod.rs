@@ -3,7 +3,9 @@
 
 use crate::error::error_chain;
 
-use crate::eval::batch::{BatchData, forward_kinematics_batch};
+use crate::eval::batch::{
+    BatchData, forward_accelerations_batch, forward_kinematics_batch, forward_velocities_batch,
+};
 use crate::eval::chain::Chain;
 use crate::eval::data::{Data, LimitPolicy};
 use crate::eval::kinematics::{
