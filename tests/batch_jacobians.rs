@@ -19,18 +19,6 @@ const FRAMES: [JacobianFrame; 3] = [
     JacobianFrame::Point([0.05, -0.02, 0.1]),
 ];
 
-fn chains() -> Vec<(String, Chain)> {
-    let mut out: Vec<(String, Chain)> = robot_files()
-        .into_iter()
-        .map(|p| (p.display().to_string(), Chain::from_file(&p).unwrap()))
-        .collect();
-    for path in reference_files() {
-        let chain = reference_chain(&path, &read_json(&path));
-        out.push((path.display().to_string(), chain));
-    }
-    out
-}
-
 fn samples(chain: &Chain, n: usize, seed: u64) -> [Vec<f64>; 3] {
     let mut rng = rng(seed);
     let qs = (0..n).flat_map(|_| random_q(chain, &mut rng)).collect();
@@ -46,7 +34,7 @@ fn matrix(out: &[f64], i: usize, dof: usize) -> Matrix6xX<f64> {
 
 #[test]
 fn batched_jacobians_equal_single_ones_bit_for_bit() {
-    for (file, chain) in chains() {
+    for (file, chain) in all_models() {
         let dof = chain.dof();
         if dof == 0 {
             continue;
@@ -123,7 +111,7 @@ fn parallel_jacobian_batches_equal_one_thread() {
 /// derivatives `Aᵀ (a − ω × v)`, `Aᵀ α`; and a point's.
 #[test]
 fn jacobians_give_the_recursions_velocities_and_accelerations() {
-    for (file, chain) in chains() {
+    for (file, chain) in all_models() {
         let dof = chain.dof();
         if dof == 0 {
             continue;

@@ -11,19 +11,6 @@ use kinechain::eval::batch::{
 };
 use kinechain::{Chain, Data, LimitPolicy, StateError, forward_accelerations, forward_velocities};
 
-/// Every bundled robot and every reference model.
-fn chains() -> Vec<(String, Chain)> {
-    let mut out: Vec<(String, Chain)> = robot_files()
-        .into_iter()
-        .map(|p| (p.display().to_string(), Chain::from_file(&p).unwrap()))
-        .collect();
-    for path in reference_files() {
-        let chain = reference_chain(&path, &read_json(&path));
-        out.push((path.display().to_string(), chain));
-    }
-    out
-}
-
 /// 37 configurations (four chunks of eight and a partial one) with rates.
 fn samples(chain: &Chain, seed: u64) -> [Vec<f64>; 3] {
     let mut rng = rng(seed);
@@ -36,7 +23,7 @@ fn samples(chain: &Chain, seed: u64) -> [Vec<f64>; 3] {
 
 #[test]
 fn batched_rates_equal_single_evaluations_bit_for_bit() {
-    for (file, chain) in chains() {
+    for (file, chain) in all_models() {
         if chain.dof() == 0 {
             continue;
         }

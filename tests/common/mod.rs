@@ -500,6 +500,19 @@ pub fn rate_ulps(path: &Path) -> [f64; 4] {
     std::array::from_fn(|k| worst[k] / (largest[k] * f64::EPSILON))
 }
 
+/// Every bundled robot and every reference model, each with a name for messages.
+pub fn all_models() -> Vec<(String, Chain)> {
+    let mut out: Vec<(String, Chain)> = robot_files()
+        .into_iter()
+        .map(|p| (p.display().to_string(), Chain::from_file(&p).unwrap()))
+        .collect();
+    for path in reference_files() {
+        let chain = reference_chain(&path, &read_json(&path));
+        out.push((path.display().to_string(), chain));
+    }
+    out
+}
+
 /// The ids of all of `chain`'s links, in the order of `chain.links()`.
 pub fn link_ids(chain: &Chain) -> Vec<kinechain::LinkId> {
     chain
