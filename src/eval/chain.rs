@@ -47,6 +47,9 @@ pub struct Chain {
     /// that body's frame, by link index.
     carriers: Vec<Carrier>,
     reach: f64,
+    /// For each entry of `q`, the number of rate terms (θ or d of a body) that read it: the
+    /// number of terms its Jacobian column can take (more than one for a mimicked joint).
+    pub(crate) column_terms: Vec<usize>,
 }
 
 impl std::ops::Deref for Chain {
@@ -279,7 +282,14 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             offset: link_carrier[l].1,
         })
         .collect();
+    let mut column_terms = vec![0_usize; dof];
+    for t in bodies.iter().flat_map(|b| [b.theta_rate, b.d_rate]) {
+        if t.scale != 0.0 {
+            column_terms[t.index] += 1;
+        }
+    }
     Ok(Chain {
+        column_terms,
         model: v.model,
         bodies,
         theta_gather,

@@ -3,8 +3,10 @@
 //! of a batch. Both read the same stored frames and rates and run this code, so a batched
 //! Jacobian equals the single one bit for bit.
 
+use crate::eval::arith::{Arith, Col};
 use crate::eval::chain::Chain;
 use crate::eval::layout::Body;
+use crate::eval::padded::{Frame4, Stored, place};
 use crate::model::chain::LinkId;
 use crate::model::transform::{Transform, add3, cross3, sub3};
 
@@ -127,7 +129,9 @@ fn to_link_axes(pose: &Transform, j: &mut [f64]) {
     }
 }
 
-/// The Jacobian of `link` in `frame` into `j` (6 × dof, column-major).
+/// The Jacobian of `link` in `frame` into `j` (6 × dof, column-major): the scalar statement of
+/// what [`stored_jacobian`] computes on vectors and the batch's lane kernel on lanes.
+#[cfg(test)]
 pub(crate) fn jacobian(s: &impl State, link: LinkId, frame: JacobianFrame, j: &mut [f64]) {
     let (p, pose) = point_of(s, link, frame);
     path_columns(s, link, j, |bd| {
@@ -196,5 +200,194 @@ pub(crate) fn jacobian_dot(s: &impl State, link: LinkId, frame: JacobianFrame, j
     });
     if frame == JacobianFrame::Link {
         to_link_axes(&pose, j);
+    }
+}
+
+/// `R u` for constant `u`, on padded columns, in [`Transform::apply`]'s order (no fused
+/// multiply–adds): `(c₀ u₀ + c₁ u₁) + c₂ u₂`.
+#[inline(always)]
+fn turn<C: Col>(c: &[C; 4], u: [f64; 3]) -> C {
+    C::add(
+        C::add(C::mul(c[0], C::splat(u[0])), C::mul(c[1], C::splat(u[1]))),
+        C::mul(c[2], C::splat(u[2])),
+    )
+}
+
+/// `a × b` on padded columns, entry for entry [`cross3`].
+#[inline(always)]
+fn cross4<C: Col>(a: C, b: C) -> C {
+    C::sub(C::mul(a.yzx(), b.zxy()), C::mul(a.zxy(), b.yzx()))
+}
+
+/// [`jacobian`] read straight from stored body frames (`frames`, as [`crate::Data`] holds
+/// them), on padded columns: each path body's axis, point and column in vector registers, in
+/// the same operations and order as the scalar code, so the same bits. Only the frames of
+/// the bodies on `link`'s path (and their parents) are read.
+#[inline(always)]
+fn stored_jacobian_generic<A: Arith>(
+    chain: &Chain,
+    frames: &[Stored],
+    link: LinkId,
+    frame: JacobianFrame,
+    j: &mut [f64],
+) {
+    type C<A> = <A as Arith>::Col;
+    let carrier = chain.carrier(link);
+    let Some(body) = carrier.body else {
+        // A link fixed to the world: no joint moves it (and no frame to turn the zeros by).
+        j.fill(0.0);
+        return;
+    };
+    let pad = |v: [f64; 3]| [v[0], v[1], v[2], 0.0];
+    let zero = C::<A>::splat(0.0);
+    let mut pose = Frame4::<C<A>>::load(&frames[body]);
+    place::<A>(&mut pose.0, &carrier.offset);
+    let p = match frame {
+        JacobianFrame::Point(u) => C::<A>::add(pose.0[3], turn(&pose.0, u)),
+        _ => pose.0[3],
+    };
+    // Aᵀ x = x₀ (row 0 of A) + x₁ (row 1) + x₂ (row 2), in `to_link_axes`' order.
+    let mut r = [[0.0; 4]; 4];
+    for (c, column) in pose.0.iter().zip(r.iter_mut()) {
+        c.store(column);
+    }
+    let rows: [C<A>; 3] =
+        std::array::from_fn(|i| C::<A>::from_entries([r[0][i], r[1][i], r[2][i], 0.0]));
+    let to_link = |x: [f64; 3]| {
+        C::<A>::add(
+            C::<A>::add(
+                C::<A>::mul(rows[0], C::<A>::splat(x[0])),
+                C::<A>::mul(rows[1], C::<A>::splat(x[1])),
+            ),
+            C::<A>::mul(rows[2], C::<A>::splat(x[2])),
+        )
+    };
+    let entries = |x: C<A>| {
+        let mut e = [0.0; 4];
+        x.store(&mut e);
+        [e[0], e[1], e[2]]
+    };
+    let link_axes = frame == JacobianFrame::Link;
+    // A column of one term is written once, already turned into link axes; the others (a
+    // mimicked joint's) are summed from zero and turned at the end, as the scalar code does
+    // every column. Columns no body on the path writes are zeros, turned like the others.
+    let unwritten = if link_axes {
+        entries(to_link([0.0; 3]))
+    } else {
+        [0.0; 3]
+    };
+    for (column, &terms) in j.chunks_exact_mut(6).zip(&chain.column_terms) {
+        if terms > 1 {
+            column.fill(0.0);
+        } else {
+            column[..3].copy_from_slice(&unwritten);
+            column[3..].copy_from_slice(&unwritten);
+        }
+    }
+    let mut at = Some(body);
+    while let Some(b) = at {
+        let bd = &chain.bodies[b];
+        let (origin, z) = match bd.parent {
+            Some(parent) => {
+                let c = Frame4::<C<A>>::load(&frames[parent]).0;
+                (
+                    C::<A>::add(c[3], turn(&c, bd.pre_frame.p)),
+                    turn(&c, bd.axis_in_parent),
+                )
+            }
+            // `axis_parts`' world origin plus the offset (`0 + x`, as the scalar code adds).
+            None => (
+                C::<A>::add(zero, C::<A>::from_entries(pad(bd.pre_frame.p))),
+                C::<A>::from_entries(pad(bd.axis_in_parent)),
+            ),
+        };
+        let turning = cross4(z, C::<A>::sub(p, origin));
+        for (rate, halves) in [(bd.theta_rate, [turning, z]), (bd.d_rate, [z, zero])] {
+            if rate.scale != 0.0 {
+                let scale = C::<A>::splat(rate.scale);
+                let single = chain.column_terms[rate.index] == 1;
+                let column = &mut j[6 * rate.index..6 * rate.index + 6];
+                for (half, x) in column.chunks_exact_mut(3).zip(halves) {
+                    let x = C::<A>::mul(x, scale);
+                    if single {
+                        // `0 + x`, as the sum from zero gives it.
+                        let mut x = entries(C::<A>::add(x, zero));
+                        if link_axes {
+                            x = entries(to_link(x));
+                        }
+                        half.copy_from_slice(&x);
+                    } else {
+                        for (c, x) in half.iter_mut().zip(entries(x)) {
+                            *c += x;
+                        }
+                    }
+                }
+            }
+        }
+        at = bd.parent;
+    }
+    if link_axes {
+        for (column, &terms) in j.chunks_exact_mut(6).zip(&chain.column_terms) {
+            if terms > 1 {
+                for half in column.chunks_exact_mut(3) {
+                    let x = entries(to_link([half[0], half[1], half[2]]));
+                    half.copy_from_slice(&x);
+                }
+            }
+        }
+    }
+}
+
+crate::eval::arith::fma_dispatch!(avx2 pub(crate) fn stored_jacobian(chain: &Chain, frames: &[Stored], link: LinkId, frame: JacobianFrame, j: &mut [f64]) => stored_jacobian_generic);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::measure::configurations;
+    use crate::{Data, LimitPolicy, forward_kinematics};
+
+    /// The vector kernel reading stored frames gives the scalar code's bits: every link of every
+    /// bundled robot (the Panda's mimicked finger joint sums two terms into one column), in each
+    /// frame.
+    #[test]
+    fn stored_frames_give_the_scalar_code_bits() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots");
+        let mut files: Vec<_> = std::fs::read_dir(&root)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "urdf" || e == "yaml"))
+            .collect();
+        files.sort();
+        assert!(files.len() >= 4, "{files:?}");
+        for file in files {
+            let chain = Chain::from_file(&file).unwrap();
+            let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+            let dof = chain.dof();
+            let (mut vector, mut scalar) = (vec![0.0; 6 * dof], vec![0.0; 6 * dof]);
+            for q in configurations(&chain, 5, 7) {
+                let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+                for l in 0..chain.links().len() {
+                    let link = LinkId(l);
+                    for frame in [
+                        JacobianFrame::World,
+                        JacobianFrame::Link,
+                        JacobianFrame::Point([0.1, -0.2, 0.05]),
+                    ] {
+                        // Filled with something else first: every entry must be written.
+                        vector.fill(f64::NAN);
+                        stored_jacobian(
+                            &chain,
+                            &poses.data.world_from_body,
+                            link,
+                            frame,
+                            &mut vector,
+                        );
+                        jacobian(&poses, link, frame, &mut scalar);
+                        let bits = |j: &[f64]| j.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                        assert_eq!(bits(&vector), bits(&scalar), "{file:?} link {l} {frame:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -228,7 +228,13 @@ impl<'a> Poses<'a> {
         if j.ncols() != self.chain.dof() {
             *j = nalgebra::Matrix6xX::zeros(self.chain.dof());
         }
-        jacobian::jacobian(self, link, frame, j.as_mut_slice());
+        jacobian::stored_jacobian(
+            self.chain,
+            &self.data.world_from_body,
+            link,
+            frame,
+            j.as_mut_slice(),
+        );
     }
 
     /// The frame a link's motion is computed for, and the link's offset from it in world axes
