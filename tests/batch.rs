@@ -622,3 +622,52 @@ fn evaluations_fit_a_small_thread_stack() {
         .spawn(run);
     thread.unwrap().join().unwrap();
 }
+
+/// Matrices written out eight configurations at a time hold the bits of each configuration's
+/// `world_from_link`, for every link of every bundled robot and reference model (links fixed to
+/// the world included), from full batches and one-link batches, with a partial last chunk; a
+/// buffer of another length is refused.
+#[test]
+fn written_matrices_are_the_poses_bit_for_bit() {
+    let mut rng = rng(17);
+    for (name, chain) in all_models() {
+        let qs: Vec<f64> = (0..21).flat_map(|_| random_q(&chain, &mut rng)).collect();
+        let n = qs.len() / chain.dof();
+        let ids = link_ids(&chain);
+        let mut full = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let all = forward_kinematics_batch(&chain, &mut full, &qs).unwrap();
+        let mut out = vec![f64::NAN; n * ids.len() * 16];
+        all.write_matrices(&ids, &mut out).unwrap();
+        let bits = |m: &[f64]| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for i in 0..n {
+            for (k, &id) in ids.iter().enumerate() {
+                let at = (i * ids.len() + k) * 16;
+                let rows = all.world_from_link(i, id).to_rows().concat();
+                assert_eq!(
+                    bits(&out[at..at + 16]),
+                    bits(&rows),
+                    "{name} {k} configuration {i}"
+                );
+            }
+        }
+        assert!(matches!(
+            all.write_matrices(&ids, &mut out[1..]),
+            Err(StateError::OutputLength { got, expected }) if got + 1 == expected
+        ));
+        let mut one = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut out = vec![f64::NAN; n * 16];
+        for &id in &ids {
+            let poses = forward_kinematics_batch_to(&chain, &mut one, &qs, id).unwrap();
+            poses.write_matrices(&mut out).unwrap();
+            for i in 0..n {
+                let rows = all.world_from_link(i, id).to_rows().concat();
+                assert_eq!(
+                    bits(&out[16 * i..16 * i + 16]),
+                    bits(&rows),
+                    "{name} configuration {i}"
+                );
+            }
+            assert!(poses.write_matrices(&mut out[..16]).is_err());
+        }
+    }
+}

@@ -382,3 +382,33 @@ fn assert_close(got: &Transform, want: &Transform) {
         }
     }
 }
+
+/// `write_matrices` holds each link's `world_from_link(..).to_rows()` bit for bit, for every
+/// link of every bundled robot and reference model (links fixed to the world included), in any
+/// order and with repeats; a buffer of another length is refused.
+#[test]
+fn written_matrices_are_the_poses_bit_for_bit() {
+    let mut rng = rng(23);
+    for (name, chain) in all_models() {
+        let mut data = unchecked(&chain);
+        let mut ids = link_ids(&chain);
+        ids.reverse();
+        ids.push(ids[0]);
+        let mut out = vec![f64::NAN; 16 * ids.len()];
+        for _ in 0..3 {
+            let q = random_q(&chain, &mut rng);
+            let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+            poses.write_matrices(&ids, &mut out).unwrap();
+            for (k, &id) in ids.iter().enumerate() {
+                let rows = poses.world_from_link(id).to_rows().concat();
+                let bits = |m: &[f64]| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(
+                    bits(&out[16 * k..16 * k + 16]),
+                    bits(&rows),
+                    "{name} link {k}"
+                );
+            }
+            assert!(poses.write_matrices(&ids, &mut out[..16]).is_err());
+        }
+    }
+}

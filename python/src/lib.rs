@@ -10,8 +10,7 @@
 use kinechain::JacobianFrame;
 use kinechain::eval::batch::{
     BatchData, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par,
-    forward_kinematics_batch_to, forward_kinematics_batch_to_par, jacobian_batch,
-    jacobian_batch_par,
+    forward_kinematics_batch_to, jacobian_batch, jacobian_batch_par,
 };
 use kinechain::regression::{self, variable_names};
 use kinechain::{
@@ -19,6 +18,7 @@ use kinechain::{
     error::error_chain, forward_accelerations, forward_kinematics, forward_kinematics_to,
     forward_velocities,
 };
+use numpy::ndarray::Dimension;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -117,10 +117,14 @@ impl Chain {
         &self,
         py: Python<'_>,
         links: Option<Vec<String>>,
-    ) -> PyResult<(Vec<LinkId>, Py<PyList>, Arc<HashMap<String, usize>>)> {
+    ) -> PyResult<(
+        std::borrow::Cow<'_, [LinkId]>,
+        Py<PyList>,
+        Arc<HashMap<String, usize>>,
+    )> {
         let Some(names) = links else {
             return Ok((
-                self.all_links.clone(),
+                std::borrow::Cow::Borrowed(&self.all_links),
                 self.link_list.clone_ref(py),
                 Arc::clone(&self.link_index),
             ));
@@ -136,7 +140,11 @@ impl Chain {
             .map(|(i, n)| (n.clone(), i))
             .rev()
             .collect();
-        Ok((ids, PyList::new(py, &names)?.unbind(), Arc::new(index)))
+        Ok((
+            std::borrow::Cow::Owned(ids),
+            PyList::new(py, &names)?.unbind(),
+            Arc::new(index),
+        ))
     }
 }
 
@@ -392,8 +400,16 @@ impl Chain {
         let level = usize::from(qd.is_some()) + usize::from(qdd.is_some());
         let (ids, names, index) = self.link_ids(py, links)?;
         let l = ids.len();
-        let lead: &[usize] = if batched { &[n] } else { &[] };
-        let dims = |tail: &[usize]| [lead, &[l], tail].concat();
+        // The shape `(N, L, *tail)` or `(L, *tail)`, built on the stack (`IxDyn` keeps up to
+        // four axes inline).
+        let dims = |tail: &[usize]| {
+            let mut d = [0; 4];
+            let lead = usize::from(batched);
+            d[0] = n;
+            d[lead] = l;
+            d[lead + 1..lead + 1 + tail.len()].copy_from_slice(tail);
+            numpy::ndarray::IxDyn(&d[..lead + 1 + tail.len()])
+        };
         let poses = match out {
             // The caller's array, reused (no fresh pages to fault in); checked to be exactly
             // what the poses need, and not borrowed elsewhere.
@@ -401,11 +417,12 @@ impl Chain {
                 let a = o
                     .cast::<PyArrayDyn<f64>>()
                     .map_err(|_| StateError::new_err("out must be a numpy array of float64"))?;
-                if a.shape() != dims(&[4, 4]).as_slice() || !a.is_c_contiguous() {
+                let want = dims(&[4, 4]);
+                if a.shape() != want.slice() || !a.is_c_contiguous() {
                     return Err(StateError::new_err(format!(
                         "out has shape {:?}: expected a writeable C-contiguous float64 array of shape {:?}",
                         a.shape(),
-                        dims(&[4, 4])
+                        want.slice()
                     )));
                 }
                 a.clone()
@@ -456,10 +473,7 @@ impl Chain {
                     );
                 }
                 (None, _) => {
-                    let p = forward_kinematics(chain, data, row(q, i, dof))?;
-                    for (k, &id) in ids.iter().enumerate() {
-                        write_pose(&p.world_from_link(id), &mut pose[16 * k..16 * k + 16]);
-                    }
+                    forward_kinematics(chain, data, row(q, i, dof))?.write_matrices(&ids, pose)?;
                 }
                 (Some(qd), None) => {
                     let v = forward_velocities(chain, data, row(q, i, dof), row(qd, i, dof))?;
@@ -888,6 +902,10 @@ fn _compare(
 
 /// Every link asked for of a batch of poses, through the batch kernels (all links, or the one
 /// link's path alone), on the pool when `parallel`.
+/// Configurations per block of a one-link batch: the link's frames (96 bytes per configuration)
+/// and the transposed `q` stay in a core's second-level cache.
+const LINK_BLOCK: usize = 2048;
+
 fn batch_poses(
     chain: &Inner,
     policy: LimitPolicy,
@@ -900,28 +918,46 @@ fn batch_poses(
     let l = ids.len();
     let fail = |e: kinechain::eval::batch::BatchError| Failure::State(Some(e.index), e.source);
     if l == 1 {
-        let mut data = BatchData::new(chain).with_limit_policy(policy);
-        // SAFETY: the whole output, written by this thread alone.
+        // Blocks of configurations small enough for the link's frames to stay in cache, each
+        // written straight into its part of the output; on the pool, each thread with buffers
+        // of its own, and the first bad configuration reported whichever thread meets it.
+        let dof = chain.dof();
+        // SAFETY: the whole output; the blocks below split it into disjoint parts.
         let all = unsafe { out.part(0, n * 16) };
-        let poses = if parallel {
-            forward_kinematics_batch_to_par(chain, &mut data, qs, ids[0])
+        let block = |data: &mut BatchData, (b, (qs, out)): (usize, (&[f64], &mut [f64]))| {
+            let poses = forward_kinematics_batch_to(chain, data, qs, ids[0])
+                .map_err(|e| (b * LINK_BLOCK + e.index, e.source))?;
+            poses.write_matrices(out).map_err(|e| (b * LINK_BLOCK, e))
+        };
+        let make = || BatchData::new(chain).with_limit_policy(policy);
+        let pieces = qs
+            .chunks(LINK_BLOCK * dof)
+            .zip(all.chunks_mut(LINK_BLOCK * 16));
+        let first = if parallel {
+            pieces
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .enumerate()
+                .map_init(make, block)
+                .filter_map(Result::err)
+                .min_by_key(|e| e.0)
         } else {
-            forward_kinematics_batch_to(chain, &mut data, qs, ids[0])
-        }
-        .map_err(fail)?;
-        for (i, dst) in all.chunks_exact_mut(16).enumerate() {
-            write_pose(&poses.world_from_link(i), dst);
+            let mut data = make();
+            pieces
+                .enumerate()
+                .find_map(|piece| block(&mut data, piece).err())
+        };
+        if let Some((index, e)) = first {
+            return Err(Failure::State(Some(index), e));
         }
     } else {
         // Block by block while the frames are in cache, straight into the output.
         let write = |(), first: usize, poses: kinechain::eval::batch::BatchPoses<'_>| {
-            for i in 0..poses.len() {
-                // SAFETY: configuration first + i's range, written by this call alone.
-                let row = unsafe { out.part((first + i) * l * 16, l * 16) };
-                for (k, &id) in ids.iter().enumerate() {
-                    write_pose(&poses.world_from_link(i, id), &mut row[16 * k..16 * k + 16]);
-                }
-            }
+            // SAFETY: the block's configurations' range, written by this call alone.
+            let rows = unsafe { out.part(first * l * 16, poses.len() * l * 16) };
+            poses
+                .write_matrices(ids, rows)
+                .expect("the block's part of the output has its length");
         };
         if parallel {
             forward_kinematics_batch_fold_par(chain, qs, policy, || (), write, |(), ()| ())

@@ -218,6 +218,17 @@ def test_bad_input_raises_exceptions_naming_what_is_wrong():
         chain.fk(qs, np.zeros_like(qs))
     with pytest.raises(kc.StateError, match="configuration 617"):
         chain.jacobian(qs, "panda_hand")
+    # One-link batches run in blocks of configurations: a fault past the first block, on one
+    # thread and on all, and the first of two faults in different blocks.
+    many = np.tile(n, (5000, 1))
+    many[4321, 0] = np.nan
+    many[2500, 1] = 9.0
+    for threads in (1, None):
+        with pytest.raises(kc.StateError, match="configuration 2500: joint 'panda_joint2'"):
+            chain.fk(many, links=["panda_hand"], threads=threads)
+    many[2500, 1] = 0.0
+    with pytest.raises(kc.StateError, match="configuration 4321"):
+        chain.fk(many, links="panda_hand")
     # With the limits unchecked the values are evaluated.
     assert chain.fk(qs, check_limits=False).poses.shape[0] == 1000
     with pytest.raises(KeyError, match="no link named 'x'"):

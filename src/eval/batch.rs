@@ -96,6 +96,7 @@ mod claims;
 mod fold;
 mod jacobians;
 mod lane_rates;
+mod matrices;
 mod rates;
 pub mod single_precision;
 

@@ -145,6 +145,29 @@ pub(crate) fn link_pose_generic<A: Arith>(body: &[C4; 4], offset: &Placement) ->
 
 crate::eval::arith::fma_dispatch!(avx2 pub(crate) fn link_pose(body: &[C4; 4], offset: &Placement) -> Transform => link_pose_generic);
 
+/// [`link_pose_generic`] of each of `links` from the stored body frames, each written as a
+/// row-major homogeneous matrix at `out[16 k..]` (one dispatch for all of them).
+#[inline(always)]
+fn write_link_matrices_generic<A: Arith>(
+    chain: &crate::eval::chain::Chain,
+    frames: &[Stored],
+    links: &[crate::model::chain::LinkId],
+    out: &mut [f64],
+) {
+    for (&link, m) in links.iter().zip(out.chunks_exact_mut(16)) {
+        let carrier = chain.carrier(link);
+        let t = match carrier.body {
+            Some(b) => link_pose_generic::<A>(&frames[b], &carrier.offset),
+            None => carrier.offset.to_transform(),
+        };
+        for (r, row) in t.to_rows().iter().enumerate() {
+            m[4 * r..4 * r + 4].copy_from_slice(row);
+        }
+    }
+}
+
+crate::eval::arith::fma_dispatch!(avx2 pub(crate) fn write_link_matrices(chain: &crate::eval::chain::Chain, frames: &[Stored], links: &[crate::model::chain::LinkId], out: &mut [f64]) => write_link_matrices_generic);
+
 /// [`link_pose_generic`] with the body frame's entries read one by one, `entry(c, i)` being row
 /// `i` of column `c` (a batch's frame, from the lanes of its chunk): each column is put
 /// together in registers. (Written to an array for [`link_pose`], the entries cost a batch read

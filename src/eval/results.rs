@@ -7,6 +7,7 @@
 
 use crate::eval::chain::Chain;
 use crate::eval::data::Data;
+use crate::eval::error::StateError;
 use crate::eval::jacobian::{self, JacobianFrame};
 use crate::eval::layout::{Body, Placement};
 use crate::eval::padded;
@@ -108,6 +109,28 @@ impl<'a> Poses<'a> {
             // (Also for an identity offset: `link_pose` writes the result in whole vectors.)
             Some(b) => padded::link_pose(&self.data.world_from_body[b], &l.offset),
         }
+    }
+
+    /// Writes the pose of each of `links` as a 4 × 4 homogeneous matrix (world frame,
+    /// row-major, last row `0 0 0 1`), link `k`'s 16 entries from `16 k`: a C-ordered
+    /// `(links.len(), 4, 4)` array. The entries are those of
+    /// [`world_from_link`](Poses::world_from_link)`(link).to_rows()` bit for bit, written in one
+    /// pass.
+    ///
+    /// # Errors
+    /// [`StateError::OutputLength`] when `out` does not have `16 · links.len()` entries.
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    pub fn write_matrices(&self, links: &[LinkId], out: &mut [f64]) -> Result<(), StateError> {
+        if out.len() != 16 * links.len() {
+            return Err(StateError::OutputLength {
+                expected: 16 * links.len(),
+                got: out.len(),
+            });
+        }
+        padded::write_link_matrices(self.chain, &self.data.world_from_body, links, out);
+        Ok(())
     }
 
     /// A moving joint's axis in the world frame: a point on it (the joint-frame origin) and its
