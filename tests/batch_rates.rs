@@ -228,3 +228,62 @@ fn bad_rates_are_errors_naming_configuration_and_joint() {
             .is_empty()
     );
 }
+
+/// Rates written out eight configurations at a time hold the bits of each configuration's
+/// `velocity` and `acceleration`, for every link of every bundled robot and reference model
+/// (links fixed to the world and links with offsets from their body included), with a partial
+/// last chunk; poses written from the same evaluation are those of `world_from_link`; buffers
+/// of another length are refused.
+#[test]
+fn written_rates_are_the_link_rates_bit_for_bit() {
+    let bits = |m: &[f64]| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (name, chain) in all_models() {
+        let [qs, qds, qdds] = samples(&chain, 31);
+        let n = qs.len() / chain.dof();
+        let ids = link_ids(&chain);
+        let l = ids.len();
+        let mut data = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let acc = forward_accelerations_batch(&chain, &mut data, &qs, &qds, &qdds).unwrap();
+        let (mut w, mut v, mut al, mut a) = (
+            vec![f64::NAN; n * l * 3],
+            vec![f64::NAN; n * l * 3],
+            vec![f64::NAN; n * l * 3],
+            vec![f64::NAN; n * l * 3],
+        );
+        acc.velocities()
+            .write_velocities(&ids, &mut w, &mut v)
+            .unwrap();
+        acc.write_accelerations(&ids, &mut al, &mut a).unwrap();
+        let mut poses = vec![f64::NAN; n * l * 16];
+        acc.velocities()
+            .poses()
+            .write_matrices(&ids, &mut poses)
+            .unwrap();
+        for i in 0..n {
+            for (k, &id) in ids.iter().enumerate() {
+                let at = 3 * (i * l + k);
+                let (lv, la) = (acc.velocity(i, id), acc.acceleration(i, id));
+                let what = format!("{name} link {k} configuration {i}");
+                assert_eq!(bits(&w[at..at + 3]), bits(lv.omega.as_slice()), "{what}");
+                assert_eq!(bits(&v[at..at + 3]), bits(lv.v.as_slice()), "{what}");
+                assert_eq!(bits(&al[at..at + 3]), bits(la.alpha.as_slice()), "{what}");
+                assert_eq!(bits(&a[at..at + 3]), bits(la.a.as_slice()), "{what}");
+                let rows = acc.world_from_link(i, id).to_rows().concat();
+                assert_eq!(
+                    bits(&poses[16 * (i * l + k)..][..16]),
+                    bits(&rows),
+                    "{what}"
+                );
+            }
+        }
+        assert!(matches!(
+            acc.write_accelerations(&ids, &mut al, &mut a[1..]),
+            Err(StateError::OutputLength { .. })
+        ));
+        assert!(
+            acc.velocities()
+                .write_velocities(&ids, &mut w[1..], &mut v)
+                .is_err()
+        );
+    }
+}

@@ -9,8 +9,9 @@
 
 use kinechain::JacobianFrame;
 use kinechain::eval::batch::{
-    BatchData, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par,
-    forward_kinematics_batch_to, jacobian_batch, jacobian_batch_par,
+    BatchData, forward_accelerations_batch, forward_kinematics_batch_fold,
+    forward_kinematics_batch_fold_par, forward_kinematics_batch_to, forward_velocities_batch,
+    jacobian_batch, jacobian_batch_par,
 };
 use kinechain::regression::{self, variable_names};
 use kinechain::{
@@ -512,13 +513,25 @@ impl Chain {
                 .map_err(|e| Failure::State(None, e))
         } else {
             py.detach(|| {
-                if level == 0 && n > 0 {
-                    on_threads(threads, || {
-                        batch_poses(chain, policy, q, &ids, pose_out, threads != Some(1))
+                let parallel = threads != Some(1);
+                match qd {
+                    _ if n == 0 => Ok(()),
+                    None => on_threads(threads, || {
+                        batch_poses(chain, policy, q, &ids, pose_out, parallel)
                     })
-                    .map_err(Failure::Threads)?
-                } else {
-                    per_row(chain, policy, n, threads, one)
+                    .map_err(Failure::Threads)?,
+                    Some(qd) => on_threads(threads, || {
+                        batch_rates(
+                            chain,
+                            policy,
+                            (q, qd, qdd),
+                            &ids,
+                            &pose_out,
+                            &rate_out,
+                            parallel,
+                        )
+                    })
+                    .map_err(Failure::Threads)?,
                 }
             })
         };
@@ -902,6 +915,40 @@ fn _compare(
 
 /// Every link asked for of a batch of poses, through the batch kernels (all links, or the one
 /// link's path alone), on the pool when `parallel`.
+/// Buffers for one thread's batch blocks.
+fn make_batch(chain: &Inner, policy: LimitPolicy) -> impl Fn() -> BatchData + Sync + Send + '_ {
+    move || BatchData::new(chain).with_limit_policy(policy)
+}
+
+/// Runs `f(data, range)` on the configurations `0..n` in blocks of `block` (on rayon's pool
+/// when `parallel`, each thread with buffers of its own from `make`), and returns the failure
+/// of the lowest configuration among the blocks that fail (every block runs; a block reports
+/// its own first failure).
+fn in_blocks<D>(
+    n: usize,
+    block: usize,
+    parallel: bool,
+    make: impl Fn() -> D + Sync + Send,
+    f: impl Fn(&mut D, std::ops::Range<usize>) -> Result<(), (usize, KStateError)> + Sync + Send,
+) -> Option<(usize, KStateError)> {
+    let range = |b: usize| b * block..((b + 1) * block).min(n);
+    let blocks = n.div_ceil(block);
+    if parallel {
+        (0..blocks)
+            .into_par_iter()
+            .map_init(&make, |data, b| f(data, range(b)))
+            .filter_map(Result::err)
+            .min_by_key(|e| e.0)
+    } else {
+        let mut data = make();
+        (0..blocks).find_map(|b| f(&mut data, range(b)).err())
+    }
+}
+
+/// Configurations per block of a batch with rates: frames, velocities and accelerations
+/// (192 bytes per body and configuration) stay in a core's second-level cache.
+const RATE_BLOCK: usize = 512;
+
 /// Configurations per block of a one-link batch: the link's frames (96 bytes per configuration)
 /// and the transposed `q` stay in a core's second-level cache.
 const LINK_BLOCK: usize = 2048;
@@ -922,31 +969,24 @@ fn batch_poses(
         // written straight into its part of the output; on the pool, each thread with buffers
         // of its own, and the first bad configuration reported whichever thread meets it.
         let dof = chain.dof();
-        // SAFETY: the whole output; the blocks below split it into disjoint parts.
-        let all = unsafe { out.part(0, n * 16) };
-        let block = |data: &mut BatchData, (b, (qs, out)): (usize, (&[f64], &mut [f64]))| {
-            let poses = forward_kinematics_batch_to(chain, data, qs, ids[0])
-                .map_err(|e| (b * LINK_BLOCK + e.index, e.source))?;
-            poses.write_matrices(out).map_err(|e| (b * LINK_BLOCK, e))
-        };
-        let make = || BatchData::new(chain).with_limit_policy(policy);
-        let pieces = qs
-            .chunks(LINK_BLOCK * dof)
-            .zip(all.chunks_mut(LINK_BLOCK * 16));
-        let first = if parallel {
-            pieces
-                .collect::<Vec<_>>()
-                .into_par_iter()
-                .enumerate()
-                .map_init(make, block)
-                .filter_map(Result::err)
-                .min_by_key(|e| e.0)
-        } else {
-            let mut data = make();
-            pieces
-                .enumerate()
-                .find_map(|piece| block(&mut data, piece).err())
-        };
+        let first = in_blocks(
+            n,
+            LINK_BLOCK,
+            parallel,
+            make_batch(chain, policy),
+            |data, at| {
+                let poses = forward_kinematics_batch_to(
+                    chain,
+                    data,
+                    &qs[at.start * dof..at.end * dof],
+                    ids[0],
+                )
+                .map_err(|e| (at.start + e.index, e.source))?;
+                // SAFETY: the block's configurations' range, written by this call alone.
+                let out = unsafe { out.part(at.start * 16, at.len() * 16) };
+                poses.write_matrices(out).map_err(|e| (at.start, e))
+            },
+        );
         if let Some((index, e)) = first {
             return Err(Failure::State(Some(index), e));
         }
@@ -969,32 +1009,61 @@ fn batch_poses(
     Ok(())
 }
 
-/// Runs `one(data, i)` for every configuration `i < n`, on the pool (each thread with a `Data` of
-/// its own), and returns the failure of the first configuration that fails.
-fn per_row(
+/// Poses and rates of `ids` for each configuration, from the batch kernels of rates block by
+/// block: `pose_out` as `(N, L, 4, 4)`, `rate_out` as ω, v (and α, a with `qdds`), each
+/// `(N, L, 3)`.
+#[allow(clippy::too_many_arguments)]
+fn batch_rates(
     chain: &Inner,
     policy: LimitPolicy,
-    n: usize,
-    threads: Option<usize>,
-    one: impl Fn(&mut Data, usize) -> Result<(), KStateError> + Sync + Send,
+    (qs, qds, qdds): (&[f64], &[f64], Option<&[f64]>),
+    ids: &[LinkId],
+    pose_out: &Out,
+    rate_out: &[Out],
+    parallel: bool,
 ) -> Result<(), Failure> {
-    let make = || Data::new(chain).with_limit_policy(policy);
-    let first = on_threads(threads, || {
-        if n < 64 || threads == Some(1) {
-            let mut data = make();
-            (0..n).find_map(|i| one(&mut data, i).err().map(|e| (i, e)))
-        } else {
-            (0..n)
-                .into_par_iter()
-                .with_min_len(32)
-                .map_init(make, |data, i| one(data, i).err().map(|e| (i, e)))
-                .find_map_first(|x| x)
-        }
-    })
-    .map_err(Failure::Threads)?;
+    let dof = chain.dof();
+    let n = qs.len() / dof.max(1);
+    let l = ids.len();
+    let first = in_blocks(
+        n,
+        RATE_BLOCK,
+        parallel,
+        make_batch(chain, policy),
+        |data, at| {
+            let rows = at.start * dof..at.end * dof;
+            let fail = |e: kinechain::eval::batch::BatchError| (at.start + e.index, e.source);
+            // SAFETY: the block's configurations' ranges of each output, written by this call alone.
+            let pose = unsafe { pose_out.part(at.start * l * 16, at.len() * l * 16) };
+            let mut parts = rate_out
+                .iter()
+                .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) });
+            let mut next = || parts.next().expect("ω and v, and α and a with q̈");
+            let (q, qd) = (&qs[rows.clone()], &qds[rows.clone()]);
+            let written = match qdds {
+                None => {
+                    let v = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
+                    v.poses()
+                        .write_matrices(ids, pose)
+                        .and_then(|()| v.write_velocities(ids, next(), next()))
+                }
+                Some(qdds) => {
+                    let a = forward_accelerations_batch(chain, data, q, qd, &qdds[rows])
+                        .map_err(fail)?;
+                    let v = a.velocities();
+                    v.poses()
+                        .write_matrices(ids, pose)
+                        .and_then(|()| v.write_velocities(ids, next(), next()))
+                        .and_then(|()| a.write_accelerations(ids, next(), next()))
+                }
+            };
+            written.map_err(|e| (at.start, e))?;
+            Ok(())
+        },
+    );
     match first {
+        Some((index, e)) => Err(Failure::State(Some(index), e)),
         None => Ok(()),
-        Some((i, e)) => Err(Failure::State(Some(i), e)),
     }
 }
 

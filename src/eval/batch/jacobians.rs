@@ -60,7 +60,7 @@ impl State for Lane<'_> {
 
 /// `R u` with constant `u`, as [`Transform::apply`] computes it (no fused multiply–adds).
 #[inline(always)]
-fn rotate<N: Num>(r: &[[N; 3]; 3], u: [f64; 3]) -> [N; 3] {
+pub(super) fn rotate<N: Num>(r: &[[N; 3]; 3], u: [f64; 3]) -> [N; 3] {
     let u = u.map(N::splat);
     std::array::from_fn(|k| r[0][k] * u[0] + r[1][k] * u[1] + r[2][k] * u[2])
 }

@@ -288,6 +288,15 @@ pub(super) fn velocity(
 }
 
 impl BatchVelocities<'_> {
+    /// The poses of the same evaluation (for [`BatchPoses::write_matrices`]).
+    #[must_use]
+    pub fn poses(&self) -> BatchPoses<'_> {
+        BatchPoses {
+            chain: self.chain,
+            data: self.data,
+        }
+    }
+
     /// Pose of `link` in configuration `index`, world frame.
     ///
     /// # Panics
@@ -311,6 +320,160 @@ impl BatchVelocities<'_> {
     #[inline]
     pub fn velocity(&self, index: usize, link: LinkId) -> LinkVelocity {
         velocity(self.chain, self.data, index, link)
+    }
+}
+
+/// `a × b` on lanes, entry for entry [`cross3`](crate::model::transform::cross3).
+#[inline(always)]
+fn cross<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn plus<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `[ω, v]` (`ACC` false) or `[α, a]` of each of `links` in every configuration of `data`, into
+/// `outs` (each `N × links.len() × 3`): the body's motion carried to the link's origin on the
+/// lanes of a chunk, in the operations of [`link_velocity`] / [`link_acceleration`] (and
+/// [`offset_in_world`] for the origin), so the same bits.
+#[inline(always)]
+fn write_rates_generic<A: Arith, const ACC: bool>(
+    chain: &Chain,
+    data: &BatchData,
+    links: &[LinkId],
+    [first, second]: [&mut [f64]; 2],
+) {
+    type N<A> = <A as Arith>::Lanes;
+    let (n, l) = (data.len, links.len());
+    let zero = N::<A>::splat(0.0);
+    for c in 0..n.div_ceil(LANES) {
+        let count = (n - c * LANES).min(LANES);
+        for (k, &link) in links.iter().enumerate() {
+            let carrier = chain.carrier(link);
+            let mut out = Pair::ZERO;
+            if let Some(b) = carrier.body {
+                let at = c * data.bodies + b;
+                let u = match carrier.offset {
+                    Placement::Identity => None,
+                    offset => Some(offset.to_transform().p),
+                };
+                for part in 0..N::<A>::PARTS {
+                    let f = Frame::<N<A>>::get(&data.frames[at], part);
+                    let r = u.map_or([zero; 3], |u| super::jacobians::rotate(&f.r, u));
+                    let [w, v] = data.velocities[at].get::<N<A>>(part);
+                    let pair = if ACC {
+                        let [al, a] = data.accelerations[at].get::<N<A>>(part);
+                        [al, plus(a, plus(cross(al, r), cross(w, cross(w, r))))]
+                    } else {
+                        [w, plus(v, cross(w, r))]
+                    };
+                    out.put(pair, part);
+                }
+            }
+            for lane in 0..count {
+                let i = (c * LANES + lane) * l + k;
+                for (o, x) in [&mut *first, &mut *second].into_iter().zip(&out.0) {
+                    o[3 * i..3 * i + 3].copy_from_slice(&[
+                        x[0].0[lane],
+                        x[1].0[lane],
+                        x[2].0[lane],
+                    ]);
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn write_velocities_generic<A: Arith>(
+    chain: &Chain,
+    data: &BatchData,
+    links: &[LinkId],
+    outs: [&mut [f64]; 2],
+) {
+    write_rates_generic::<A, false>(chain, data, links, outs);
+}
+
+#[inline(always)]
+fn write_accelerations_generic<A: Arith>(
+    chain: &Chain,
+    data: &BatchData,
+    links: &[LinkId],
+    outs: [&mut [f64]; 2],
+) {
+    write_rates_generic::<A, true>(chain, data, links, outs);
+}
+
+fma_dispatch!(fn write_velocities(chain: &Chain, data: &BatchData, links: &[LinkId], outs: [&mut [f64]; 2]) => write_velocities_generic);
+fma_dispatch!(fn write_accelerations(chain: &Chain, data: &BatchData, links: &[LinkId], outs: [&mut [f64]; 2]) => write_accelerations_generic);
+
+/// [`StateError::OutputLength`] unless each of `outs` holds `N × links × 3` entries.
+fn check_rate_outputs(
+    data: &BatchData,
+    links: &[LinkId],
+    outs: [&[f64]; 2],
+) -> Result<(), StateError> {
+    let expected = 3 * links.len() * data.len;
+    match outs.iter().find(|o| o.len() != expected) {
+        Some(o) => Err(StateError::OutputLength {
+            expected,
+            got: o.len(),
+        }),
+        None => Ok(()),
+    }
+}
+
+impl BatchVelocities<'_> {
+    /// Writes ω and the origin's v of each of `links` in every configuration (world frame):
+    /// configuration `i`'s vectors start at `3 · links.len() · i` of `omega` and `v`, link
+    /// `k`'s three entries after `3 k` more (C-ordered `(N, links.len(), 3)` arrays). The
+    /// entries are those of [`velocity(i, link)`](BatchVelocities::velocity) bit for bit,
+    /// carried to the links eight configurations at a time.
+    ///
+    /// # Errors
+    /// [`StateError::OutputLength`] when `omega` or `v` does not have `3 · links.len() ·
+    /// self.len()` entries (nothing is written then).
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    pub fn write_velocities(
+        &self,
+        links: &[LinkId],
+        omega: &mut [f64],
+        v: &mut [f64],
+    ) -> Result<(), StateError> {
+        check_rate_outputs(self.data, links, [omega, v])?;
+        write_velocities(self.chain, self.data, links, [omega, v]);
+        Ok(())
+    }
+}
+
+impl BatchAccelerations<'_> {
+    /// Writes α and the origin's classical acceleration a of each of `links` in every
+    /// configuration, in the layout of [`BatchVelocities::write_velocities`]; the entries are
+    /// those of [`acceleration(i, link)`](BatchAccelerations::acceleration) bit for bit.
+    ///
+    /// # Errors
+    /// [`StateError::OutputLength`] when `alpha` or `a` does not have `3 · links.len() ·
+    /// self.len()` entries.
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    pub fn write_accelerations(
+        &self,
+        links: &[LinkId],
+        alpha: &mut [f64],
+        a: &mut [f64],
+    ) -> Result<(), StateError> {
+        check_rate_outputs(self.data, links, [alpha, a])?;
+        write_accelerations(self.chain, self.data, links, [alpha, a]);
+        Ok(())
     }
 }
 
