@@ -1922,33 +1922,45 @@ fn batch_lines_with_rates_equal_single_runs() {
     }
     let dir = Scratch::new("cli-batch-rates");
     let batch = dir.write("rates.jsonl", lines.join("\n") + "\n");
-    let out = kinechain(&["fk", "robots/stanford.yaml", "--batch", &batch]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let got = String::from_utf8(out.stdout).unwrap();
-    let got: Vec<&str> = got.lines().collect();
-    assert_eq!(got.len(), 40);
-    for (i, line) in got.iter().enumerate() {
-        let mut args = vec!["fk", "robots/stanford.yaml"];
-        let qi = q(i);
-        args.extend(["--q", &qi]);
-        if i % 5 != 3 {
-            args.extend(["--qd", qd]);
+    // Every link, and with Jacobians (and their rates where the line has qd), which run through
+    // the batch kernels of Jacobians.
+    for extra in [vec![], vec!["--jacobian", "tool", "--jacobian", "link3"]] {
+        let mut batch_args = vec!["fk", "robots/stanford.yaml", "--batch", &batch];
+        batch_args.extend(&extra);
+        let out = kinechain(&batch_args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let got = String::from_utf8(out.stdout).unwrap();
+        let got: Vec<&str> = got.lines().collect();
+        assert_eq!(got.len(), 40);
+        for (i, line) in got.iter().enumerate() {
+            let mut args = vec!["fk", "robots/stanford.yaml"];
+            let qi = q(i);
+            args.extend(["--q", &qi]);
+            if i % 5 != 3 {
+                args.extend(["--qd", qd]);
+            }
+            if i % 5 == 2 || i % 5 == 4 {
+                args.extend(["--qdd", qdd]);
+            }
+            args.extend(&extra);
+            let single = kinechain(&args);
+            let single = String::from_utf8(single.stdout).unwrap();
+            let mut want: Value = serde_json::from_str(single.trim()).unwrap();
+            want.as_object_mut()
+                .unwrap()
+                .insert("line".into(), Value::from(i + 1));
+            let got: Value = serde_json::from_str(line).unwrap();
+            assert_eq!(got.get("jacobians").is_some(), !extra.is_empty());
+            assert_eq!(
+                got.get("jacobian_dots").is_some(),
+                !extra.is_empty() && i % 5 != 3
+            );
+            assert_eq!(got, want, "line {} {extra:?}", i + 1);
         }
-        if i % 5 == 2 || i % 5 == 4 {
-            args.extend(["--qdd", qdd]);
-        }
-        let single = kinechain(&args);
-        let single = String::from_utf8(single.stdout).unwrap();
-        let mut want: Value = serde_json::from_str(single.trim()).unwrap();
-        want.as_object_mut()
-            .unwrap()
-            .insert("line".into(), Value::from(i + 1));
-        let got: Value = serde_json::from_str(line).unwrap();
-        assert_eq!(got, want, "line {}", i + 1);
     }
     let bad = dir.write(
         "bad.jsonl",

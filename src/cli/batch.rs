@@ -17,6 +17,13 @@ pub(super) struct PendingPoses {
     /// The 1-based line number of each.
     pub(super) lines: Vec<usize>,
     pub(super) batch: BatchData,
+    /// The `--jacobian` links' matrices for the line being written, and the batch buffers
+    /// their batches run in (apart from `batch`, whose frames the lines' poses are read from):
+    /// `J` and, with rates, `J̇` of every held line, `N × 6 × dof` row-major.
+    pub(super) jacobians: Vec<JacobianResult>,
+    pub(super) jacobian_batch: BatchData,
+    pub(super) j: Vec<f64>,
+    pub(super) j_dot: Vec<f64>,
     /// One line of output (JSON or a table), reused.
     pub(super) text: Vec<u8>,
 }
@@ -45,6 +52,40 @@ impl PendingPoses {
             at_line(path, line, CliError::State(e.source))
         };
         let (qs, qds, qdds) = (&self.qs, &self.qds, &self.qdds);
+        // Each `--jacobian` link's matrices for every line, from the batch kernels of Jacobians
+        // (the same bits as the single evaluation's).
+        let dof = chain.dof();
+        let size = 6 * dof * lines.len();
+        let with_rate = self.level > 0;
+        self.j.resize(size * self.jacobians.len(), 0.0);
+        self.j_dot
+            .resize(if with_rate { self.j.len() } else { 0 }, 0.0);
+        for (k, r) in self.jacobians.iter().enumerate() {
+            let j = &mut self.j[k * size..(k + 1) * size];
+            jacobian_batch(
+                chain,
+                &mut self.jacobian_batch,
+                qs,
+                r.link,
+                JacobianFrame::World,
+                j,
+            )
+            .map_err(at)?;
+            if with_rate {
+                let j_dot = &mut self.j_dot[k * size..(k + 1) * size];
+                let frame = JacobianFrame::World;
+                jacobian_dot_batch(
+                    chain,
+                    &mut self.jacobian_batch,
+                    qs,
+                    qds,
+                    r.link,
+                    frame,
+                    j_dot,
+                )
+                .map_err(at)?;
+            }
+        }
         let view = match self.level {
             0 => View::Poses(forward_kinematics_batch(chain, &mut self.batch, qs).map_err(at)?),
             1 => View::Velocities(
@@ -60,7 +101,22 @@ impl PendingPoses {
         for (i, &line) in lines.iter().enumerate() {
             results.clear();
             results.extend((0..chain.links().len()).map(|l| view.result(i, LinkId(l))));
-            match check_finite(chain, &results, &[], &[]) {
+            let at_line_i = 6 * dof * i;
+            for (k, r) in self.jacobians.iter_mut().enumerate() {
+                let rows = |all: &[f64]| {
+                    let from = k * size + at_line_i;
+                    nalgebra::Matrix6xX::from_row_slice(&all[from..from + 6 * dof])
+                };
+                r.j.copy_from(&rows(&self.j));
+                r.with_rate = with_rate;
+                if with_rate {
+                    r.j_dot.copy_from(&rows(&self.j_dot));
+                }
+            }
+            let checked = check_finite(chain, &results, &[], &[])
+                .and_then(|()| jacobians_finite(chain, &self.jacobians));
+            let jacobians = &self.jacobians;
+            match checked {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
                         let value = ResultsJson {
@@ -70,13 +126,14 @@ impl PendingPoses {
                             orientation: args.orientation,
                             points: &[],
                             point_results: &[],
-                            jacobians: &[],
+                            jacobians,
                         };
                         write_json_line(out, &mut self.text, &value)?;
                     }
                     OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
                         line_heading(Some(line), buf);
                         results_table(chain, &results, args.orientation, buf);
+                        jacobians_table(chain, jacobians, buf);
                         Ok(())
                     })?,
                     OutputFormat::Csv => write_buffered_line(out, &mut self.text, |buf| {
@@ -208,8 +265,9 @@ pub(super) enum Row {
 
 /// One result per line of `reader` (`path` names it in errors), in line order. Lines asking for
 /// every link (the common case) go through the batch kernels, [`PendingPoses::MAX`] consecutive
-/// lines of one level (poses, with `qd`, with `qd` and `qdd`) at a time; a request with `--link`,
-/// `--point` or `--jacobian` goes line by line. Everything before
+/// lines of one level (poses, with `qd`, with `qd` and `qdd`) at a time, with their `--jacobian`
+/// matrices (and, with `qd`, their rates) from the batch kernels of Jacobians; a request with
+/// `--link` or `--point` goes line by line. Everything before
 /// a bad line is written before its error. Whenever the input read is used up, the results held
 /// are written and the output flushed: reading more may wait for a program that writes a line
 /// at a time and waits for its result.
@@ -222,8 +280,22 @@ pub(super) fn fk_batch<R: std::io::Read>(
     reader: &mut std::io::BufReader<R>,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    let batchable = request.poses_only(chain);
+    let batchable = request.every_link(chain);
     let mut pending = PendingPoses {
+        jacobians: request
+            .outputs
+            .jacobians
+            .iter()
+            .map(|r| JacobianResult {
+                link: r.link,
+                j: r.j.clone(),
+                j_dot: r.j_dot.clone(),
+                with_rate: false,
+            })
+            .collect(),
+        jacobian_batch: BatchData::new(chain).with_limit_policy(data.limit_policy()),
+        j: Vec::new(),
+        j_dot: Vec::new(),
         qs: Vec::new(),
         qds: Vec::new(),
         qdds: Vec::new(),

@@ -99,24 +99,35 @@ pub(super) fn jacobians_from(
     velocities: Option<&Velocities>,
     jacobians: &mut [JacobianResult],
 ) -> Result<(), CliError> {
+    for r in jacobians.iter_mut() {
+        poses.jacobian_into(r.link, &mut r.j);
+        r.with_rate = velocities.is_some();
+        if let Some(v) = velocities {
+            v.jacobian_dot_into(r.link, &mut r.j_dot);
+        }
+    }
+    jacobians_finite(chain, jacobians)
+}
+
+/// An error naming the first link whose Jacobian (or, where current, its rate) has an entry
+/// too large for `f64`.
+pub(super) fn jacobians_finite(
+    chain: &Chain,
+    jacobians: &[JacobianResult],
+) -> Result<(), CliError> {
     for r in jacobians {
         let place = || format!("link '{}'", chain.link(r.link).name());
-        poses.jacobian_into(r.link, &mut r.j);
         if !r.j.iter().all(|x| x.is_finite()) {
             return Err(CliError::NotFinite {
                 what: "jacobian",
                 place: place(),
             });
         }
-        r.with_rate = velocities.is_some();
-        if let Some(v) = velocities {
-            v.jacobian_dot_into(r.link, &mut r.j_dot);
-            if !r.j_dot.iter().all(|x| x.is_finite()) {
-                return Err(CliError::NotFinite {
-                    what: "jacobian rate",
-                    place: place(),
-                });
-            }
+        if r.with_rate && !r.j_dot.iter().all(|x| x.is_finite()) {
+            return Err(CliError::NotFinite {
+                what: "jacobian rate",
+                place: place(),
+            });
         }
     }
     Ok(())
@@ -356,14 +367,11 @@ impl Request {
         })
     }
 
-    /// Whether the request is every link's pose and nothing else, which the batch kernel can
-    /// evaluate (a chain without moving joints has empty configurations, which a flat batch
-    /// cannot count).
-    pub(super) fn poses_only(&self, chain: &Chain) -> bool {
-        self.links.is_empty()
-            && self.points.is_empty()
-            && self.outputs.jacobians.is_empty()
-            && chain.dof() > 0
+    /// Whether the request is every link (and any `--jacobian` links) and no point, which the
+    /// batch kernels can evaluate (a chain without moving joints has empty configurations, which
+    /// a flat batch cannot count).
+    pub(super) fn every_link(&self, chain: &Chain) -> bool {
+        self.links.is_empty() && self.points.is_empty() && chain.dof() > 0
     }
 
     /// Evaluates `c` and writes its results in the format `args` asks for, headed by the batch

@@ -5,9 +5,11 @@ use crate::error::error_chain;
 
 use crate::eval::batch::{
     BatchData, forward_accelerations_batch, forward_kinematics_batch, forward_velocities_batch,
+    jacobian_batch, jacobian_dot_batch,
 };
 use crate::eval::chain::Chain;
 use crate::eval::data::{Data, LimitPolicy};
+use crate::eval::jacobian::JacobianFrame;
 use crate::eval::kinematics::{
     AccelerationParts, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_to, forward_velocities,
