@@ -1,5 +1,6 @@
 """Run time of kinechain from Python on the Panda, with Pinocchio in the same run when it is
-installed (``pip install pin``): ``python python/benchmarks/panda.py``. Prints a markdown table and the CPU.
+installed (``pip install pin``), and pytorch_kinematics on the CPU when it is
+(``pip install pytorch_kinematics``): ``python python/benchmarks/panda.py``. Prints a markdown table and the CPU.
 
 Each row is the median of seven rounds of at least 0.2 s; the methods run in alternation, so
 that they see the same state of the machine."""
@@ -69,6 +70,27 @@ def main():
     rows.append(("kinechain batch of 100 000, end link, 1 thread, `out=` reused", per_call(lambda: chain.fk(qs, links=["panda_hand"], threads=1, out=out1), n, rounds=5), "per configuration"))
     rows.append(("kinechain `chain.fk(q, check_limits=True)`, one configuration", per_call(lambda: chain.fk(q1, check_limits=True)), "the default, passed by keyword"))
     rows.append(("kinechain Jacobian of the hand, one configuration", per_call(lambda: chain.jacobian(q1, "panda_hand")), "6 × 8 numpy"))
+    rows.append(("kinechain Jacobian of the hand, batch of 100 000, 1 thread", per_call(lambda: chain.jacobian(qs, "panda_hand", threads=1), n, rounds=5), "per configuration"))
+    rows.append(("kinechain Jacobian of the hand, batch of 100 000, all threads", per_call(lambda: chain.jacobian(qs, "panda_hand"), n, rounds=5), "per configuration"))
+    try:
+        import pytorch_kinematics as pk
+        import torch
+    except ImportError:
+        pk = None
+    if pk is not None:
+        # The serial chain to the hand (the arm's seven joints; the fingers are not on it), in
+        # float64 on the CPU, as the project's other figures.
+        with open(URDF) as f:
+            serial = pk.build_serial_chain_from_urdf(f.read(), "panda_hand").to(dtype=torch.float64)
+        th = torch.tensor(qs[:, :7])
+        th1 = torch.tensor(q1[:7])
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        rows.append(("pytorch_kinematics, one configuration, hand", per_call(lambda: serial.forward_kinematics(th1, end_only=True).get_matrix()), "1 × 4×4 tensor"))
+        rows.append(("pytorch_kinematics batch of 100 000, hand, 1 thread", per_call(lambda: serial.forward_kinematics(th, end_only=True).get_matrix(), n, rounds=3), "per configuration"))
+        rows.append(("pytorch_kinematics Jacobian of the hand, batch of 100 000, 1 thread", per_call(lambda: serial.jacobian(th), n, rounds=3), "per configuration"))
+        torch.set_num_threads(threads)
+        rows.append(("pytorch_kinematics batch of 100 000, hand, all threads", per_call(lambda: serial.forward_kinematics(th, end_only=True).get_matrix(), n, rounds=3), "per configuration"))
     try:
         import pinocchio as pin
     except ImportError:
@@ -94,7 +116,7 @@ def main():
                 pin.updateFramePlacement(model, data, model.getFrameId("panda_hand"))
 
         rows.append(("Pinocchio, Python loop over 2 000 configurations, hand frame", per_call(loop, m, rounds=5), "per configuration"))
-    print(f"CPU: {cpu()}; {os.cpu_count()} logical CPUs; kinechain {kc.__version__}" + (f", Pinocchio {pin.__version__}" if pin else ", Pinocchio not installed"))
+    print(f"CPU: {cpu()}; {os.cpu_count()} logical CPUs; kinechain {kc.__version__}" + (f", Pinocchio {pin.__version__}" if pin else ", Pinocchio not installed") + (f", pytorch_kinematics {pk.__version__ if hasattr(pk, '__version__') else ''} (torch {torch.__version__}, CPU)" if pk else ", pytorch_kinematics not installed"))
     print()
     print("| method | time | result |")
     print("|---|---:|---|")
