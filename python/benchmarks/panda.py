@@ -9,6 +9,7 @@ import os
 import platform
 import statistics
 import time
+from importlib.metadata import version
 
 import numpy as np
 
@@ -116,7 +117,7 @@ def main():
                 pin.updateFramePlacement(model, data, model.getFrameId("panda_hand"))
 
         rows.append(("Pinocchio, Python loop over 2 000 configurations, hand frame", per_call(loop, m, rounds=5), "per configuration"))
-    print(f"CPU: {cpu()}; {os.cpu_count()} logical CPUs; kinechain {kc.__version__}" + (f", Pinocchio {pin.__version__}" if pin else ", Pinocchio not installed") + (f", pytorch_kinematics {pk.__version__ if hasattr(pk, '__version__') else ''} (torch {torch.__version__}, CPU)" if pk else ", pytorch_kinematics not installed"))
+    print(f"CPU: {cpu()}; {os.cpu_count()} logical CPUs; kinechain {kc.__version__}" + (f", Pinocchio {pin.__version__}" if pin else ", Pinocchio not installed") + (f", pytorch_kinematics {version('pytorch_kinematics')} (torch {torch.__version__}, CPU)" if pk else ", pytorch_kinematics not installed"))
     print()
     print("| method | time | result |")
     print("|---|---:|---|")

@@ -214,10 +214,12 @@ fn write_pose(t: &Transform, out: &mut [f64]) {
     }
 }
 
-/// Runs `f` on rayon's global pool, or on a pool of `threads` threads.
+/// Runs `f` on rayon's global pool, or on a pool of `threads` threads; with one thread, on the
+/// calling thread (whose callers then run no parallel code: starting a pool of one thread for
+/// the call took about 0.1 ms).
 fn on_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T, String> {
     match threads {
-        None => Ok(f()),
+        None | Some(1) => Ok(f()),
         Some(0) => Err("threads must be at least 1".into()),
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
