@@ -740,7 +740,7 @@ fn thread_count(threads: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
 /// `(N, 4, 4)`.
 #[pyclass(module = "kinechain", name = "FkResult", frozen)]
 struct FkResult {
-    #[pyo3(get)]
+    /// Shared by every result of the same links (and by the chain): handed out as a copy.
     links: Py<PyList>,
     index: Arc<HashMap<String, usize>>,
     #[pyo3(get)]
@@ -757,6 +757,13 @@ struct FkResult {
 
 #[pymethods]
 impl FkResult {
+    /// The link names, in the order of the second-to-last axes of the arrays (a new list: the
+    /// result's own order cannot be changed through it).
+    #[getter]
+    fn links<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        PyList::new(py, self.links.bind(py).iter())
+    }
+
     fn __getitem__<'py>(&self, py: Python<'py>, link: &str) -> PyResult<Bound<'py, PyAny>> {
         let Some(&i) = self.index.get(link) else {
             return Err(pyo3::exceptions::PyKeyError::new_err(format!(

@@ -234,6 +234,11 @@ def test_bad_input_raises_exceptions_naming_what_is_wrong():
     assert chain.fk(qs, check_limits=False).poses.shape[0] == 1000
     with pytest.raises(KeyError, match="no link named 'x'"):
         chain.fk(n)["x"]
+    # A result's list of links is its own: changing it changes no other result.
+    r = chain.fk(n)
+    r.links.append("x")
+    r.links.clear()
+    assert chain.fk(n).links == chain.link_names == r.links and len(r) == len(chain.link_names)
 
 
 def test_chains_pickle_and_compare_equal():
