@@ -924,33 +924,33 @@ fn _compare(
 
 /// Every link asked for of a batch of poses, through the batch kernels (all links, or the one
 /// link's path alone), on the pool when `parallel`.
-/// Buffers for one thread's batch blocks.
-fn make_batch(chain: &Inner, policy: LimitPolicy) -> impl Fn() -> BatchData + Sync + Send + '_ {
-    move || BatchData::new(chain).with_limit_policy(policy)
-}
-
 /// Runs `f(data, range)` on the configurations `0..n` in blocks of `block` (on rayon's pool
-/// when `parallel`, each thread with buffers of its own from `make`), and returns the failure
-/// of the lowest configuration among the blocks that fail (every block runs; a block reports
-/// its own first failure).
-fn in_blocks<D>(
+/// when `parallel`, each thread with batch buffers of its own checking under `policy`), and
+/// fails with the failure of the lowest configuration among the blocks that fail (every block
+/// runs; a block reports its own first failure).
+fn in_blocks(
+    (chain, policy): (&Inner, LimitPolicy),
     n: usize,
     block: usize,
     parallel: bool,
-    make: impl Fn() -> D + Sync + Send,
-    f: impl Fn(&mut D, std::ops::Range<usize>) -> Result<(), (usize, KStateError)> + Sync + Send,
-) -> Option<(usize, KStateError)> {
+    f: impl Fn(&mut BatchData, std::ops::Range<usize>) -> Result<(), (usize, KStateError)> + Sync + Send,
+) -> Result<(), Failure> {
+    let make = || BatchData::new(chain).with_limit_policy(policy);
     let range = |b: usize| b * block..((b + 1) * block).min(n);
     let blocks = n.div_ceil(block);
-    if parallel {
+    let first = if parallel {
         (0..blocks)
             .into_par_iter()
-            .map_init(&make, |data, b| f(data, range(b)))
+            .map_init(make, |data, b| f(data, range(b)))
             .filter_map(Result::err)
             .min_by_key(|e| e.0)
     } else {
         let mut data = make();
         (0..blocks).find_map(|b| f(&mut data, range(b)).err())
+    };
+    match first {
+        Some((index, e)) => Err(Failure::State(Some(index), e)),
+        None => Ok(()),
     }
 }
 
@@ -978,27 +978,14 @@ fn batch_poses(
         // written straight into its part of the output; on the pool, each thread with buffers
         // of its own, and the first bad configuration reported whichever thread meets it.
         let dof = chain.dof();
-        let first = in_blocks(
-            n,
-            LINK_BLOCK,
-            parallel,
-            make_batch(chain, policy),
-            |data, at| {
-                let poses = forward_kinematics_batch_to(
-                    chain,
-                    data,
-                    &qs[at.start * dof..at.end * dof],
-                    ids[0],
-                )
-                .map_err(|e| (at.start + e.index, e.source))?;
-                // SAFETY: the block's configurations' range, written by this call alone.
-                let out = unsafe { out.part(at.start * 16, at.len() * 16) };
-                poses.write_matrices(out).map_err(|e| (at.start, e))
-            },
-        );
-        if let Some((index, e)) = first {
-            return Err(Failure::State(Some(index), e));
-        }
+        in_blocks((chain, policy), n, LINK_BLOCK, parallel, |data, at| {
+            let poses =
+                forward_kinematics_batch_to(chain, data, &qs[at.start * dof..at.end * dof], ids[0])
+                    .map_err(|e| (at.start + e.index, e.source))?;
+            // SAFETY: the block's configurations' range, written by this call alone.
+            let out = unsafe { out.part(at.start * 16, at.len() * 16) };
+            poses.write_matrices(out).map_err(|e| (at.start, e))
+        })?;
     } else {
         // Block by block while the frames are in cache, straight into the output.
         let write = |(), first: usize, poses: kinechain::eval::batch::BatchPoses<'_>| {
@@ -1034,46 +1021,36 @@ fn batch_rates(
     let dof = chain.dof();
     let n = qs.len() / dof.max(1);
     let l = ids.len();
-    let first = in_blocks(
-        n,
-        RATE_BLOCK,
-        parallel,
-        make_batch(chain, policy),
-        |data, at| {
-            let rows = at.start * dof..at.end * dof;
-            let fail = |e: kinechain::eval::batch::BatchError| (at.start + e.index, e.source);
-            // SAFETY: the block's configurations' ranges of each output, written by this call alone.
-            let pose = unsafe { pose_out.part(at.start * l * 16, at.len() * l * 16) };
-            let mut parts = rate_out
-                .iter()
-                .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) });
-            let mut next = || parts.next().expect("ω and v, and α and a with q̈");
-            let (q, qd) = (&qs[rows.clone()], &qds[rows.clone()]);
-            let written = match qdds {
-                None => {
-                    let v = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
-                    v.poses()
-                        .write_matrices(ids, pose)
-                        .and_then(|()| v.write_velocities(ids, next(), next()))
-                }
-                Some(qdds) => {
-                    let a = forward_accelerations_batch(chain, data, q, qd, &qdds[rows])
-                        .map_err(fail)?;
-                    let v = a.velocities();
-                    v.poses()
-                        .write_matrices(ids, pose)
-                        .and_then(|()| v.write_velocities(ids, next(), next()))
-                        .and_then(|()| a.write_accelerations(ids, next(), next()))
-                }
-            };
-            written.map_err(|e| (at.start, e))?;
-            Ok(())
-        },
-    );
-    match first {
-        Some((index, e)) => Err(Failure::State(Some(index), e)),
-        None => Ok(()),
-    }
+    in_blocks((chain, policy), n, RATE_BLOCK, parallel, |data, at| {
+        let rows = at.start * dof..at.end * dof;
+        let fail = |e: kinechain::eval::batch::BatchError| (at.start + e.index, e.source);
+        // SAFETY: the block's configurations' ranges of each output, written by this call alone.
+        let pose = unsafe { pose_out.part(at.start * l * 16, at.len() * l * 16) };
+        let mut parts = rate_out
+            .iter()
+            .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) });
+        let mut next = || parts.next().expect("ω and v, and α and a with q̈");
+        let (q, qd) = (&qs[rows.clone()], &qds[rows.clone()]);
+        let written = match qdds {
+            None => {
+                let v = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
+                v.poses()
+                    .write_matrices(ids, pose)
+                    .and_then(|()| v.write_velocities(ids, next(), next()))
+            }
+            Some(qdds) => {
+                let a =
+                    forward_accelerations_batch(chain, data, q, qd, &qdds[rows]).map_err(fail)?;
+                let v = a.velocities();
+                v.poses()
+                    .write_matrices(ids, pose)
+                    .and_then(|()| v.write_velocities(ids, next(), next()))
+                    .and_then(|()| a.write_accelerations(ids, next(), next()))
+            }
+        };
+        written.map_err(|e| (at.start, e))?;
+        Ok(())
+    })
 }
 
 /// Orientation coordinates of every rotation in `r` (shape `(..., 3, 3)`, or `(..., 4, 4)`
