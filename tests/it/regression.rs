@@ -1,9 +1,7 @@
 //! Regression tests on link kinematics: record, verify and compare, in the library and on the
 //! command line.
 
-mod common;
-
-use common::{Scratch, robot_files};
+use crate::common::{Scratch, robot_files};
 use kinechain::Chain;
 use kinechain::regression::{
     Level, Options, RegressionError, Tolerances, compare, read_golden, record, variable_names,
@@ -32,7 +30,7 @@ fn golden_text(chain: &Chain, options: &Options) -> String {
 }
 
 fn panda_text() -> String {
-    std::fs::read_to_string(common::robots_dir().join("panda.urdf")).unwrap()
+    std::fs::read_to_string(crate::common::robots_dir().join("panda.urdf")).unwrap()
 }
 
 #[test]
@@ -72,7 +70,7 @@ fn every_bundled_robot_verifies_against_its_own_record_at_every_level() {
 
 #[test]
 fn records_are_deterministic_and_inside_the_limits() {
-    let chain = common::repo_chain("robots/panda.urdf");
+    let chain = crate::common::repo_chain("robots/panda.urdf");
     let options = Options {
         samples: 50,
         level: Level::Acc,
@@ -111,7 +109,7 @@ fn a_dh_table_and_the_urdf_it_converts_to_compare_equal() {
         "robots/ur5.yaml",
         "robots/panda_mdh.yaml",
     ] {
-        let dh = common::repo_chain(file);
+        let dh = crate::common::repo_chain(file);
         let urdf = Chain::from_urdf_str(&kinechain::io::convert::to_urdf(&dh).unwrap()).unwrap();
         let options = Options {
             samples: 30,
@@ -303,7 +301,7 @@ fn reordered_joints_still_verify_and_a_renamed_joint_is_an_error_listing_it() {
 
 #[test]
 fn damaged_golden_files_are_errors_naming_the_line() {
-    let chain = common::repo_chain("robots/ur5.yaml");
+    let chain = crate::common::repo_chain("robots/ur5.yaml");
     let text = golden_text(
         &chain,
         &Options {
@@ -415,7 +413,7 @@ fn the_command_line_records_the_same_bytes_as_the_library() {
         "link7",
     ]);
     assert_eq!(code, 0, "{err}");
-    let chain = common::repo_chain("robots/iiwa7.yaml");
+    let chain = crate::common::repo_chain("robots/iiwa7.yaml");
     let options = Options {
         samples: 7,
         seed: 9,

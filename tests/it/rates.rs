@@ -2,9 +2,7 @@
 //! robot, the joint's 4×4 forms against their vector forms, points on links (eqs. 2.52, 2.55,
 //! 2.75), link-frame components, algebraic properties, a closed form, and the `k` Jacobian.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::nalgebra::{Matrix3, Vector3, Vector4};
 use kinechain::{
     Chain, Data, LimitPolicy, LinkId, Transform, forward_accelerations, forward_kinematics,

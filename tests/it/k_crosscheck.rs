@@ -4,9 +4,7 @@
 //! `k` pins its own nalgebra and urdf-rs, so results are compared through plain arrays. `k`
 //! counts mimic joints in its joint vector (and overwrites them from their primary).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{Chain, Data, forward_kinematics};
 
 #[test]

@@ -2,9 +2,7 @@
 //! all samples, all links, against answers computed by independent software (Pinocchio, Robotics
 //! Toolbox for Python) and against the 50-digit references.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{Data, LimitPolicy, Transform, forward_kinematics};
 
 /// Poses agree with the double-precision reference to 1e-12 of the chain's reach (the reference

@@ -1,9 +1,7 @@
 //! nalgebra interop (transforms, quaternions) and the chain's limit vectors and neutral
 //! configuration.
 
-mod common;
-
-use common::{MIMIC_GRIPPER, random_q, rng, robot_files};
+use crate::common::{MIMIC_GRIPPER, random_q, rng, robot_files};
 use kinechain::nalgebra::{Isometry3, IsometryMatrix3, Matrix4, UnitQuaternion, Vector3};
 use kinechain::orientation::EulerParameters;
 use kinechain::{Chain, LimitPolicy, StateError, Transform, check_q, forward_kinematics};
@@ -15,13 +13,13 @@ fn max_diff(a: &Matrix4<f64>, b: &Matrix4<f64>) -> f64 {
 
 #[test]
 fn transforms_convert_to_and_from_nalgebra() {
-    let chain = common::repo_chain("robots/panda.urdf");
+    let chain = crate::common::repo_chain("robots/panda.urdf");
     let mut r = rng(7);
     let mut data = kinechain::Data::new(&chain);
     for _ in 0..50 {
         let q = random_q(&chain, &mut r);
         let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
-        for link in common::link_ids(&chain) {
+        for link in crate::common::link_ids(&chain) {
             let t = poses.world_from_link(link);
             let m: Matrix4<f64> = t.into();
             assert_eq!(m, t.to_homogeneous());

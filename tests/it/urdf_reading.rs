@@ -2,9 +2,7 @@
 //! valid robots with content that URDF tools disagree on (`tests/data/urdf_lenient/`) load with
 //! warnings that name their place, and put every link where the plain file does.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{Chain, Data, JointKind, LimitPolicy, Transform, forward_kinematics};
 use std::path::{Path, PathBuf};
 

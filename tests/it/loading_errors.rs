@@ -1,9 +1,7 @@
 //! One bad file per failure mode (`tests/data/bad/`): each load fails with the expected error
 //! kind, naming the file, the joint or link, and the field.
 
-mod common;
-
-use common::Scratch;
+use crate::common::Scratch;
 use kinechain::{
     Chain, Data, FieldProblem, LoadError, LoadErrorKind, ModelError, NotRigid, forward_kinematics,
 };
@@ -1183,7 +1181,7 @@ fn robot_paths_that_are_not_regular_files() {
     assert!(made.success());
     let writer = {
         let fifo = fifo.clone();
-        std::thread::spawn(move || std::fs::write(fifo, common::FIXED_ONLY_URDF).unwrap())
+        std::thread::spawn(move || std::fs::write(fifo, crate::common::FIXED_ONLY_URDF).unwrap())
     };
     let chain = Chain::from_file(&fifo).unwrap();
     writer.join().unwrap();

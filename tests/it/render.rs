@@ -1,9 +1,7 @@
 //! `kinechain render`: the SVG parses, has one group per link, draws every link origin where the
 //! stated projection puts its `fk` position, and is the same bytes every time.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::io::render::{View, svg};
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 

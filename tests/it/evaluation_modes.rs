@@ -1,9 +1,7 @@
 //! The evaluation modes agree bit for bit: one link (only the joints on its path), incremental
 //! (only the joints whose inputs changed), and full evaluation.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{
     Chain, Data, LimitPolicy, Poses, Transform, forward_accelerations, forward_kinematics,
     forward_kinematics_incremental, forward_kinematics_to, forward_velocities,

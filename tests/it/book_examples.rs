@@ -2,8 +2,6 @@
 //! The book prints 4–5 significant digits, so results are compared at half a unit of the last
 //! printed digit.
 
-mod common;
-
 use kinechain::nalgebra::Vector3;
 use kinechain::{
     Chain, ChainBuilder, Data, JointKind, JointSpec, Transform, forward_kinematics,
@@ -20,7 +18,7 @@ fn assert_close(got: [f64; 3], want: [f64; 3], tol: f64, what: &str) {
 }
 
 fn cylindrical_arm() -> Chain {
-    Chain::from_file(common::robots_dir().join("cylindrical.yaml")).unwrap()
+    Chain::from_file(crate::common::robots_dir().join("cylindrical.yaml")).unwrap()
 }
 
 /// Ex. 2.2: cylindrical joint about v = (1,1,1)/√3, θ = 30°, d = 3 m; P at ū = (0,1,0).

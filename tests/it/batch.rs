@@ -1,8 +1,6 @@
 //! Batches give, configuration by configuration, exactly what single evaluations give.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::eval::batch::{
     BatchData, BatchError, BatchPoses, fold_block_len, forward_kinematics_batch,
     forward_kinematics_batch_fold, forward_kinematics_batch_fold_par, forward_kinematics_batch_par,

@@ -10,9 +10,7 @@
 //! cargo test --release --test stress -- --ignored --nocapture
 //! ```
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::nalgebra::Vector3;
 use kinechain::reference::{LinkMotion, link_motion, max_rate_errors};
 use kinechain::{

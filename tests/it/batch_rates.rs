@@ -2,9 +2,7 @@
 //! what single evaluations give; they agree with the reference data's rates and with finite
 //! differences of batched poses; bad rates are errors naming the configuration and joint.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::eval::batch::{
     BatchData, forward_accelerations_batch, forward_accelerations_batch_par,
     forward_kinematics_batch, forward_velocities_batch, forward_velocities_batch_par,

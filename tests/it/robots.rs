@@ -2,9 +2,7 @@
 //! its frames where the file's `# check:` comments say (positions derived by hand from the
 //! tables, so they are independent of the code).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
 #[test]

@@ -2,9 +2,7 @@
 //! `J q̈ + J̇ q̇` give the velocities and accelerations of the recursion; `J̇` is the finite
 //! difference of batched `J`; the batched world Jacobian agrees with the `k` crate's.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::eval::batch::{
     BatchData, jacobian_batch, jacobian_batch_par, jacobian_dot_batch, jacobian_dot_batch_par,
 };

@@ -1,9 +1,7 @@
 //! Joint-space vectors that cannot be evaluated: each rule returns its typed error naming the
 //! joint (and for a cylindrical joint the coordinate), never a panic or a NaN result.
 
-mod common;
-
-use common::limit_probes;
+use crate::common::limit_probes;
 use kinechain::io::input::{
     BatchLine, InputError, csv_header, joint_vector_from_json, joint_vector_from_str,
     parse_batch_line, parse_batch_row,
@@ -15,7 +13,7 @@ use kinechain::{
 use serde_json::json;
 
 fn robot(name: &str) -> Chain {
-    Chain::from_file(common::robots_dir().join(name)).unwrap()
+    Chain::from_file(crate::common::robots_dir().join(name)).unwrap()
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! checks of the AFL targets (`fuzz/fuzz_targets/common.rs`): no panic, no hang, no NaN pose.
 //! The long, coverage-guided runs are described in `fuzz/README.md`.
 
-#[path = "../fuzz/fuzz_targets/common.rs"]
+#[path = "../../fuzz/fuzz_targets/common.rs"]
 mod checks;
 
 use kinechain::Chain;

@@ -2,9 +2,7 @@
 //! kinechain and in the `k` crate, and all link poses agree with the original to 1e-12 at
 //! seeded random configurations. This is how the DH robots are cross-checked against `k`.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 
 /// The robot `name` of `robots/`, and the URDF `convert` writes for it, loaded from a file in

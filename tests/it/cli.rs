@@ -1,8 +1,6 @@
 //! The `kinechain` command line, through the built binary.
 
-mod common;
-
-use common::Scratch;
+use crate::common::Scratch;
 use serde_json::Value;
 use std::process::{Command, Output};
 
@@ -894,7 +892,7 @@ fn batch_reads_standard_input() {
 #[test]
 fn a_chain_without_moving_joints_in_batch_and_bench() {
     let dir = Scratch::new("cli-fixed");
-    let robot = dir.write("fixed.urdf", common::FIXED_ONLY_URDF);
+    let robot = dir.write("fixed.urdf", crate::common::FIXED_ONLY_URDF);
     let batch = dir.write("three.jsonl", "{\"q\": []}\n\n{\"q\": []}\n{\"q\": []}\n");
     let lines = ok_json(&["fk", &robot, "--batch", &batch]);
     assert_eq!(lines.len(), 3);
@@ -940,7 +938,7 @@ fn points_print_in_a_table() {
                     .split(", ")
                     .map(|x| x.parse().unwrap())
                     .collect();
-                let want = common::vec3(&want[field]);
+                let want = crate::common::vec3(&want[field]);
                 assert_eq!(values.len(), 3, "{line}");
                 for (v, w) in values.iter().zip(&want) {
                     assert!((v - w).abs() <= 5e-7, "{field}: {line} against {want:?}");
@@ -1217,14 +1215,14 @@ fn orientation_kinds_recompose_on_the_reference_robots() {
         )
     };
     let mut checked = 0;
-    for path in common::reference_files() {
-        let reference = common::read_json(&path);
+    for path in crate::common::reference_files() {
+        let reference = crate::common::read_json(&path);
         let robot = if reference["model"]["kind"] == "urdf" {
             let urdf = path.with_file_name(reference["model"]["file"].as_str().unwrap());
             urdf.to_str().unwrap().to_string()
         } else {
             let name = format!("{}.yaml", reference["robot"].as_str().unwrap());
-            dir.write(&name, common::model_yaml(&reference))
+            dir.write(&name, crate::common::model_yaml(&reference))
         };
         let lines: Vec<String> = reference["samples"]
             .as_array()

@@ -1,0 +1,36 @@
+//! The integration tests, one module per topic, in one test binary (one link of the library
+//! instead of one per file). Tests that change process-wide state (the forced instruction
+//! set, the global allocator) are test binaries of their own beside this one.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod batch;
+mod batch_jacobians;
+mod batch_rates;
+mod book_examples;
+mod builder;
+#[cfg(feature = "cli")]
+mod cli;
+mod convert;
+#[cfg(feature = "cli")]
+mod csv;
+#[cfg(feature = "cli")]
+mod docs;
+mod evaluation_modes;
+mod fuzz_pass;
+mod interop;
+mod k_crosscheck;
+mod layering;
+mod loading_errors;
+mod rates;
+mod reference;
+#[cfg(feature = "cli")]
+mod regression;
+mod render;
+mod robots;
+mod rotation;
+mod state_errors;
+#[cfg(feature = "reference")]
+mod stress;
+mod urdf_reading;
