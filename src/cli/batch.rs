@@ -316,12 +316,9 @@ pub(super) fn fk_batch<R: std::io::Read>(
             out.flush().map_err(output_error)?;
         }
         // Without --keep-going a line past the cap ends the run, so nothing of it is skipped;
-        // with it, a line is skipped up to 64 times the cap before reading gives up.
-        let skip = if args.keep_going {
-            limit.saturating_mul(64)
-        } else {
-            0
-        };
+        // with it, a line is skipped (it costs no memory) for up to `MAX_SKIPPED_LINE` bytes
+        // before reading gives up on an input without line ends.
+        let skip = if args.keep_going { MAX_SKIPPED_LINE } else { 0 };
         let result = match read_capped_line(reader, &mut bytes, limit, skip) {
             Ok(CappedLine::End) => break,
             Ok(CappedLine::Unended) if args.keep_going => {
@@ -418,6 +415,11 @@ pub(super) fn fk_batch<R: std::io::Read>(
     }
     Ok(())
 }
+
+/// The most bytes of one over-long batch line that `--keep-going` skips to find its end (the line
+/// is an error in its place, and the lines after it are read); past this the input is taken to
+/// have no line ends (`/dev/zero`) and the run stops.
+pub(super) const MAX_SKIPPED_LINE: usize = 1 << 30;
 
 /// The longest batch line read, in bytes: 1 MiB, plus 1 KiB per degree of freedom (a line names
 /// at most three numbers per joint, or three members named after it).

@@ -125,13 +125,18 @@ enum Command {
         #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
         format: OutputFormat,
     },
-    /// Compare two robot files at seeded configurations of the first, over the joints and links
-    /// they share by name; lists what only one has. Exit status as for `verify`.
+    /// Compare two robot files at seeded configurations of the first, joints matched by name
+    /// (both must have the same joints, after --rename), over the links they share; lists the
+    /// links only one has. Exit status as for `verify`.
     Compare {
         /// The first robot file.
         robot_a: PathBuf,
         /// The second robot file.
         robot_b: PathBuf,
+        /// A joint named OLD in the first robot and NEW in the second (repeatable). Both robots
+        /// must otherwise have the same joints.
+        #[arg(long = "rename", value_name = "OLD=NEW", value_parser = rename)]
+        renames: Vec<(String, String)>,
         #[command(flatten)]
         sampling: SampleArgs,
         #[command(flatten)]
@@ -306,18 +311,9 @@ pub enum CliError {
         /// Lines that failed.
         count: usize,
     },
-    /// `convert -o` or `render -o` names the robot file being read.
-    #[error(
-        "the output {} is the robot file {} (the same file): refusing to overwrite it",
-        output.display(),
-        input.display()
-    )]
-    OutputIsInput {
-        /// The output path given.
-        output: PathBuf,
-        /// The robot file.
-        input: PathBuf,
-    },
+    /// An output file could not be written (or would overwrite an input).
+    #[error(transparent)]
+    Output(#[from] crate::io::output::OutputError),
     /// A regression record, verification or comparison could not be made.
     #[error(transparent)]
     Regression(#[from] crate::regression::RegressionError),
@@ -444,84 +440,27 @@ fn warn_dropped(path: &Path) {
     }
 }
 
-/// Writes `text` to `path`, or to `out` when there is no path. A path that names the file
-/// `input` (the same file by path, symbolic link or hard link) is refused, and the file is
-/// written whole to a temporary file beside it and renamed into place, so that a failure leaves
-/// no half-written output and an existing file is replaced only by a complete one.
+/// Writes `text` to `path` by the rules of [`crate::io::output`] (never over `input`; FIFOs and
+/// devices in place, regular files through a temporary file renamed into place, links
+/// followed), or to `out` when there is no path.
 fn write_output(
     path: Option<&PathBuf>,
     input: &Path,
     text: &str,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    let Some(path) = path else {
-        return out.write_all(text.as_bytes()).map_err(output_error);
-    };
-    // (Checked before the robot is read too, so that the refusal comes first; again here, in
-    // case a link was made meanwhile.)
-    refuse_overwrite(Some(path), input)?;
-    let fail = |source| CliError::Io {
-        context: format!("cannot write {}", path.display()),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| {
-        fail(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "the path names no file",
-        ))
-    })?;
-    let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(".kinechain-{}.tmp", std::process::id()));
-    let temp = dir.join(temp_name);
-    let written = (|| {
-        let mut file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&temp)?;
-        file.write_all(text.as_bytes())?;
-        file.sync_all()?;
-        std::fs::rename(&temp, path)
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&temp);
-        return Err(fail(e));
+    match path {
+        None => out.write_all(text.as_bytes()).map_err(output_error),
+        Some(path) => Ok(crate::io::output::write_file(path, text.as_bytes(), &[input])?),
     }
-    Ok(())
 }
 
-/// An error when `output` names the file `input`.
+/// An error when `output` names the file `input` (checked before the robot is read, so that the
+/// refusal comes first; [`write_output`] checks again).
 fn refuse_overwrite(output: Option<&PathBuf>, input: &Path) -> Result<(), CliError> {
     match output {
-        Some(path) if same_file(path, input) => Err(CliError::OutputIsInput {
-            output: path.clone(),
-            input: input.to_path_buf(),
-        }),
-        _ => Ok(()),
-    }
-}
-
-/// Whether `a` and `b` name the same existing file (through symbolic or hard links too).
-fn same_file(a: &Path, b: &Path) -> bool {
-    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
-        return false;
-    };
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        ma.dev() == mb.dev() && ma.ino() == mb.ino()
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = (ma, mb);
-        matches!(
-            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
-            (Ok(x), Ok(y)) if x == y
-        )
+        Some(path) => Ok(crate::io::output::refuse_inputs(path, &[input])?),
+        None => Ok(()),
     }
 }
 
@@ -591,10 +530,18 @@ fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
         Command::Compare {
             robot_a,
             robot_b,
+            renames,
             sampling,
             tolerances,
             format,
-        } => compare([&robot_a, &robot_b], &sampling, &tolerances, format, out),
+        } => compare(
+            [&robot_a, &robot_b],
+            &renames,
+            &sampling,
+            &tolerances,
+            format,
+            out,
+        ),
     }
 }
 

@@ -4,9 +4,6 @@
 use super::*;
 use crate::regression::{self, Options, Report, Tolerances};
 
-/// Largest golden file `verify` reads (bytes).
-const MAX_GOLDEN_BYTES: u64 = 1 << 30;
-
 /// The tolerances of `verify` and `compare`.
 #[derive(Debug, clap::Args)]
 pub(super) struct TolArgs {
@@ -64,6 +61,18 @@ impl SampleArgs {
     }
 }
 
+/// `OLD=NEW`: a joint of the first robot and its name in the second.
+pub(super) fn rename(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((old, new)) if !old.is_empty() && !new.is_empty() => {
+            Ok((old.to_string(), new.to_string()))
+        }
+        _ => Err(format!(
+            "'{s}' is not OLD=NEW (a joint of the first robot, then its name in the second)"
+        )),
+    }
+}
+
 fn tolerance(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
@@ -80,29 +89,11 @@ pub(super) fn record(
     refuse_overwrite(output, robot)?;
     let chain = load(robot)?;
     let golden = regression::record(&chain, &sampling.options())?;
-    let mut text = Vec::new();
-    regression::write_golden(&golden, &mut text).map_err(output_error)?;
-    let text = String::from_utf8(text).map_err(|e| output_error(std::io::Error::other(e)))?;
-    write_output(output, robot, &text, out)
-}
-
-/// Reads a golden file, at most [`MAX_GOLDEN_BYTES`].
-fn read_golden_file(path: &Path) -> Result<regression::Golden, CliError> {
-    use std::io::Read;
-    let fail = |source| CliError::Io {
-        context: format!("cannot read {}", shown(path)),
-        source,
-    };
-    let mut text = String::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_GOLDEN_BYTES + 1).read_to_string(&mut text))
-        .map_err(fail)?;
-    if text.len() as u64 > MAX_GOLDEN_BYTES {
-        return Err(fail(std::io::Error::other(format!(
-            "larger than {MAX_GOLDEN_BYTES} bytes"
-        ))));
+    let bytes = regression::golden_bytes(&golden)?;
+    match output {
+        None => out.write_all(&bytes).map_err(output_error),
+        Some(path) => Ok(crate::io::output::write_file(path, &bytes, &[robot])?),
     }
-    Ok(regression::read_golden(&text, &shown(path))?)
 }
 
 pub(super) fn verify(
@@ -112,7 +103,7 @@ pub(super) fn verify(
     format: OutputFormat,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    let golden = read_golden_file(golden)?;
+    let golden = regression::read_golden_file(golden)?;
     let chain = load(robot)?;
     let report = regression::verify(&chain, &golden, &tol.tolerances())?;
     print_report(&report, format, out)
@@ -120,13 +111,15 @@ pub(super) fn verify(
 
 pub(super) fn compare(
     robots: [&PathBuf; 2],
+    renames: &[(String, String)],
     sampling: &SampleArgs,
     tol: &TolArgs,
     format: OutputFormat,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let (a, b) = (load(robots[0])?, load(robots[1])?);
-    let report = regression::compare(&a, &b, &sampling.options(), &tol.tolerances())?;
+    let report =
+        regression::compare_renamed(&a, &b, &sampling.options(), &tol.tolerances(), renames)?;
     print_report(&report, format, out)
 }
 

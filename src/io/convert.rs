@@ -53,6 +53,16 @@ pub enum ConvertError {
         /// The name.
         name: String,
     },
+    /// The URDF would be larger than [`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES), the most
+    /// kinechain reads back.
+    #[error(
+        "the URDF would be {size} bytes, more than the {limit} bytes that kinechain reads back (MAX_FILE_BYTES): not written",
+        limit = crate::io::MAX_FILE_BYTES
+    )]
+    TooLarge {
+        /// Its size in bytes.
+        size: usize,
+    },
 }
 
 /// `(xyz, rpy)` of a rigid transform, rpy as URDF reads it (`R = Rz(yaw) Ry(pitch) Rx(roll)`);
@@ -214,7 +224,8 @@ fn moving_kind(
 /// # Errors
 /// [`ConvertError`] for a prismatic joint without limits (URDF requires them), a generated
 /// name that clashes with an existing one, or a name holding a character that XML cannot (a
-/// control character other than tab, line feed and carriage return).
+/// control character other than tab, line feed and carriage return), or a URDF larger than
+/// [`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES), which kinechain would not read back.
 pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     let d = chain.description();
     let mut w = Writer {
@@ -242,12 +253,16 @@ pub fn to_urdf(chain: &Chain) -> Result<String, ConvertError> {
     for js in d.joints() {
         write_joint(&mut w, js)?;
     }
-    Ok(format!(
+    let text = format!(
         "<robot name=\"{}\">\n{KINEMATICS_ONLY}{}{}</robot>\n",
         escaped(chain.name())?,
         w.links,
         w.joints
-    ))
+    );
+    if text.len() as u64 > crate::io::MAX_FILE_BYTES {
+        return Err(ConvertError::TooLarge { size: text.len() });
+    }
+    Ok(text)
 }
 
 /// The comment at the top of every file [`to_urdf`] writes, so that a reader of the file alone

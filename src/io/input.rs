@@ -6,6 +6,7 @@ use crate::eval::chain::Chain;
 use crate::model::error::did_you_mean;
 use crate::model::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
+use std::borrow::Cow;
 use serde_json::Value;
 use std::cell::RefCell;
 
@@ -125,6 +126,16 @@ pub enum InputError {
         name: String,
         /// What it takes.
         expected: &'static str,
+    },
+    /// A CSV header's quoted name is not closed, or text follows its closing quote.
+    #[error("{what}: column {column}: {problem} (a quoted name is \"...\", a quote inside it \"\")")]
+    Quoting {
+        /// `header`.
+        what: &'static str,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong.
+        problem: &'static str,
     },
 }
 
@@ -327,14 +338,22 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<CsvHeader, InputEr
     if trimmed.is_empty() || trimmed.starts_with('[') || trimmed.starts_with('{') {
         return None;
     }
-    let names = list_entries(trimmed);
-    if names.clone().any(|n| n.parse::<f64>().is_ok()) {
+    let names: Vec<Cow<'_, str>> = if trimmed.contains('"') {
+        match quoted_entries(trimmed, WHAT) {
+            Ok(names) => names,
+            Err(e) => return Some(Err(e)),
+        }
+    } else {
+        list_entries(trimmed).map(Cow::Borrowed).collect()
+    };
+    if names.iter().any(|n| n.parse::<f64>().is_ok()) {
         return None;
     }
     let read = || {
         let mut order = Vec::with_capacity(chain.dof());
         let mut named = vec![false; chain.dof()];
-        for name in names {
+        for name in &names {
+            let name = name.as_ref();
             let (joint, index) = independent_joint(chain, name, WHAT)?;
             if named[index] {
                 return Err(InputError::DuplicateMember {
@@ -359,6 +378,61 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<CsvHeader, InputEr
         Ok(CsvHeader { columns: order })
     };
     Some(read())
+}
+
+/// The comma-separated entries of a CSV line in which entries may be quoted as RFC 4180 (and
+/// Python's `csv` module) quote them: `"j,2"` is the name `j,2`, and `""` inside quotes is one `"`.
+/// Spaces around an entry are dropped.
+fn quoted_entries<'a>(line: &'a str, what: &'static str) -> Result<Vec<Cow<'a, str>>, InputError> {
+    let mut entries = Vec::new();
+    let mut rest = line;
+    loop {
+        let column = entries.len() + 1;
+        let fail = |problem| InputError::Quoting {
+            what,
+            column,
+            problem,
+        };
+        let start = rest.trim_start();
+        if let Some(quoted) = start.strip_prefix('"') {
+            let mut name = String::new();
+            let mut chars = quoted.char_indices();
+            let after = loop {
+                match chars.next() {
+                    None => return Err(fail("the quote is not closed")),
+                    Some((i, '"')) => {
+                        if quoted[i + 1..].starts_with('"') {
+                            name.push('"');
+                            chars.next();
+                        } else {
+                            break &quoted[i + 1..];
+                        }
+                    }
+                    Some((_, c)) => name.push(c),
+                }
+            };
+            entries.push(Cow::Owned(name));
+            let after = after.trim_start();
+            match after.strip_prefix(',') {
+                Some(next) => rest = next,
+                None if after.is_empty() => return Ok(entries),
+                None => return Err(fail("text follows the closing quote")),
+            }
+        } else {
+            let (entry, next) = match start.split_once(',') {
+                Some((entry, next)) => (entry, Some(next)),
+                None => (start, None),
+            };
+            if entry.contains('"') {
+                return Err(fail("a quote inside a name that is not quoted"));
+            }
+            entries.push(Cow::Borrowed(entry.trim()));
+            match next {
+                Some(next) => rest = next,
+                None => return Ok(entries),
+            }
+        }
+    }
 }
 
 /// Reads a joint-space vector from text: JSON (array or object), or numbers separated by commas

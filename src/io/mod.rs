@@ -4,6 +4,7 @@ pub mod convert;
 mod dh;
 pub mod error;
 pub mod input;
+pub mod output;
 pub mod render;
 mod urdf;
 pub(crate) mod xml;
@@ -54,50 +55,33 @@ impl Chain {
     /// ```
     pub fn from_file(path: impl AsRef<Path>) -> Result<Chain, LoadError> {
         let path = path.as_ref();
+        let text = read_robot_file(path)?;
+        Chain::from_file_text(path, &text)
+    }
+
+    /// The chain of the robot file `path` whose text [`read_robot_file`] read: what
+    /// [`Chain::from_file`] gives, without reading the file again (a FIFO can be read once).
+    ///
+    /// # Errors
+    /// [`LoadError`] naming `path` and, where it applies, the line, joint and field.
+    pub fn from_file_text(path: &Path, text: &str) -> Result<Chain, LoadError> {
         let fail = |kind| LoadError::new(path, kind);
-        let format = Format::from_path(path).ok_or_else(|| {
-            let xacro = path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("xacro"));
-            fail(if xacro {
-                LoadErrorKind::Xacro {
-                    line: None,
-                    column: None,
-                    found: "the file name ends in .xacro".into(),
-                }
-            } else {
-                LoadErrorKind::UnknownFormat
-            })
-        })?;
-        let file = std::fs::File::open(path).map_err(|e| fail(LoadErrorKind::Io(e)))?;
-        let mut bytes = Vec::new();
-        // Read one byte past the limit to tell "at the limit" from "over it" without trusting
-        // metadata (which a pipe or a growing file does not have).
-        file.take(MAX_FILE_BYTES + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|e| fail(LoadErrorKind::Io(e)))?;
-        if bytes.len() as u64 > MAX_FILE_BYTES {
-            // A regular file's size is known; a pipe or a device (`/dev/zero`) was read up to the
-            // limit and no further.
-            let size = std::fs::metadata(path)
-                .ok()
-                .filter(std::fs::Metadata::is_file)
-                .map(|m| m.len());
-            return Err(fail(LoadErrorKind::TooLarge {
-                size,
-                limit: MAX_FILE_BYTES,
-            }));
-        }
-        if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
-            return Err(fail(LoadErrorKind::Utf16));
-        }
-        let text = std::str::from_utf8(&bytes).map_err(|e| {
-            fail(LoadErrorKind::NotText {
-                offset: e.valid_up_to(),
-            })
-        })?;
+        let format = format_of(path)?;
         let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
         parse(text, format, stem).map_err(fail)
+    }
+
+    /// Builds a chain from text in `format`, named `default_name` where the text names no robot
+    /// (a DH table without `name:`; a URDF always names its robot).
+    ///
+    /// # Errors
+    /// [`LoadError`] with path `<string>`.
+    pub fn from_str_named(
+        text: &str,
+        format: Format,
+        default_name: &str,
+    ) -> Result<Chain, LoadError> {
+        parse(text, format, default_name).map_err(|k| LoadError::new(Path::new("<string>"), k))
     }
 
     /// Builds a chain from DH YAML text (see the README for the format).
@@ -115,6 +99,64 @@ impl Chain {
     pub fn from_urdf_str(text: &str) -> Result<Chain, LoadError> {
         parse(text, Format::Urdf, "robot").map_err(|k| LoadError::new(Path::new("<string>"), k))
     }
+}
+
+/// The format of the robot file `path` by its extension; a `.xacro` file is refused with the
+/// hint to expand it.
+fn format_of(path: &Path) -> Result<Format, LoadError> {
+    let fail = |kind| LoadError::new(path, kind);
+    Format::from_path(path).ok_or_else(|| {
+        let xacro = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("xacro"));
+        fail(if xacro {
+            LoadErrorKind::Xacro {
+                line: None,
+                column: None,
+                found: "the file name ends in .xacro".into(),
+            }
+        } else {
+            LoadErrorKind::UnknownFormat
+        })
+    })
+}
+
+/// Reads the robot file `path` once, as text: at most [`MAX_FILE_BYTES`] (a pipe or a device is
+/// read no further), UTF-8. Its extension must name a format kinechain reads.
+///
+/// # Errors
+/// [`LoadError`] naming the file: an unknown extension, a failed read, a file over the limit,
+/// UTF-16 or other text that is not UTF-8.
+pub fn read_robot_file(path: &Path) -> Result<String, LoadError> {
+    let fail = |kind| LoadError::new(path, kind);
+    format_of(path)?;
+    let file = std::fs::File::open(path).map_err(|e| fail(LoadErrorKind::Io(e)))?;
+    let mut bytes = Vec::new();
+    // Read one byte past the limit to tell "at the limit" from "over it" without trusting
+    // metadata (which a pipe or a growing file does not have).
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| fail(LoadErrorKind::Io(e)))?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        // A regular file's size is known; a pipe or a device (`/dev/zero`) was read up to the
+        // limit and no further.
+        let size = std::fs::metadata(path)
+            .ok()
+            .filter(std::fs::Metadata::is_file)
+            .map(|m| m.len());
+        return Err(fail(LoadErrorKind::TooLarge {
+            size,
+            limit: MAX_FILE_BYTES,
+        }));
+    }
+    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+        return Err(fail(LoadErrorKind::Utf16));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        fail(LoadErrorKind::NotText {
+            offset: e.utf8_error().valid_up_to(),
+        })
+    })
 }
 
 fn parse(text: &str, format: Format, default_name: &str) -> Result<Chain, LoadErrorKind> {

@@ -3,7 +3,18 @@
 
 use super::{Level, RegressionError};
 use serde::{Deserialize, Serialize};
-use std::io::Write;
+use std::io::{BufRead, Read, Write};
+use std::path::Path;
+
+/// Largest golden file read or written, in bytes (a record of 100 000 samples of a 13-link arm's
+/// poses is about 350 MB; a regression record is usually a few hundred kB).
+pub const MAX_GOLDEN_BYTES: u64 = 256 << 20;
+
+/// Longest line of a golden file, in bytes: a header naming every joint and link, or one sample
+/// of every link's pose and rates, of robots up to the largest file a robot may be
+/// ([`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES)). A stream without line ends (`/dev/zero`) is
+/// refused once this much of it has been read.
+pub const MAX_GOLDEN_LINE_BYTES: u64 = 32 << 20;
 
 /// The format's version, the header's `kinechain_golden`.
 pub(super) const FORMAT: u32 = 1;
@@ -107,6 +118,100 @@ pub fn write_golden(golden: &Golden, out: &mut dyn Write) -> std::io::Result<()>
         out.write_all(b"\n")?;
     }
     Ok(())
+}
+
+/// The bytes [`write_golden`] writes, refused when the file would be larger than
+/// [`MAX_GOLDEN_BYTES`] or hold a line longer than [`MAX_GOLDEN_LINE_BYTES`], which
+/// [`read_golden_file`] would not read back.
+///
+/// # Errors
+/// [`RegressionError::TooLarge`].
+pub fn golden_bytes(golden: &Golden) -> Result<Vec<u8>, RegressionError> {
+    let mut text = Vec::new();
+    // Writing to a vector cannot fail.
+    let _ = write_golden(golden, &mut text);
+    let longest = text
+        .split(|&b| b == b'\n')
+        .map(<[u8]>::len)
+        .max()
+        .unwrap_or(0);
+    if text.len() as u64 > MAX_GOLDEN_BYTES || longest as u64 > MAX_GOLDEN_LINE_BYTES {
+        return Err(RegressionError::TooLarge {
+            size: text.len(),
+            longest_line: longest,
+        });
+    }
+    Ok(text)
+}
+
+/// Writes `golden` to the file `path` by the rules of [`crate::io::output`] (never over one of
+/// `inputs`; FIFOs and devices in place; regular files replaced whole, links followed).
+///
+/// # Errors
+/// [`RegressionError::TooLarge`] (nothing written) or [`RegressionError::Output`].
+pub fn write_golden_file(
+    golden: &Golden,
+    path: &Path,
+    inputs: &[&Path],
+) -> Result<(), RegressionError> {
+    let bytes = golden_bytes(golden)?;
+    Ok(crate::io::output::write_file(path, &bytes, inputs)?)
+}
+
+/// Reads and checks the golden file `path` ([`read_golden`]), reading no more than
+/// [`MAX_GOLDEN_BYTES`] in all and [`MAX_GOLDEN_LINE_BYTES`] for one line, so that a huge file or
+/// an endless stream is an error after a bounded read.
+///
+/// # Errors
+/// [`RegressionError::Read`] when the file cannot be read or is over a limit,
+/// [`RegressionError::Golden`] naming the line of a damaged file.
+pub fn read_golden_file(path: &Path) -> Result<Golden, RegressionError> {
+    let file = path.display().to_string();
+    let fail = |source| RegressionError::Read {
+        file: file.clone(),
+        source,
+    };
+    let over = |what: String| fail(std::io::Error::other(what));
+    let opened = std::fs::File::open(path).map_err(fail)?;
+    if let Ok(m) = opened.metadata()
+        && m.is_file()
+        && m.len() > MAX_GOLDEN_BYTES
+    {
+        return Err(over(format!(
+            "{} bytes, larger than the {MAX_GOLDEN_BYTES} bytes a golden file may be",
+            m.len()
+        )));
+    }
+    let mut reader = std::io::BufReader::new(opened).take(MAX_GOLDEN_BYTES + 1);
+    let mut bytes = Vec::new();
+    for line in 1.. {
+        let start = bytes.len();
+        let read = (&mut reader)
+            .take(MAX_GOLDEN_LINE_BYTES + 1)
+            .read_until(b'\n', &mut bytes)
+            .map_err(fail)?;
+        if read == 0 {
+            break;
+        }
+        if bytes.len() as u64 > MAX_GOLDEN_BYTES {
+            return Err(over(format!(
+                "larger than the {MAX_GOLDEN_BYTES} bytes a golden file may be"
+            )));
+        }
+        let length = bytes[start..].strip_suffix(b"\n").unwrap_or(&bytes[start..]).len();
+        if length as u64 > MAX_GOLDEN_LINE_BYTES {
+            return Err(over(format!(
+                "line {line} is longer than the {MAX_GOLDEN_LINE_BYTES} bytes a golden file's line may be"
+            )));
+        }
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        over(format!(
+            "byte {} is not UTF-8 text",
+            e.utf8_error().valid_up_to() + 1
+        ))
+    })?;
+    read_golden(&text, &file)
 }
 
 /// Reads a golden file's text (`file` names it in errors), checking every line: the header's

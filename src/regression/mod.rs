@@ -18,7 +18,10 @@
 mod golden;
 mod report;
 
-pub use golden::{Golden, Header, LinkState, Sample, read_golden, write_golden};
+pub use golden::{
+    Golden, Header, LinkState, MAX_GOLDEN_BYTES, MAX_GOLDEN_LINE_BYTES, Sample, golden_bytes,
+    read_golden, read_golden_file, write_golden, write_golden_file,
+};
 pub use report::{LinkReport, Names, Report, Worst};
 
 use crate::eval::chain::Chain;
@@ -165,6 +168,65 @@ pub enum RegressionError {
     /// A chain without joints to move, or a record without samples.
     #[error("{0}")]
     Empty(&'static str),
+    /// A golden file cannot be read, or is larger than the reader takes.
+    #[error("cannot read {file}")]
+    Read {
+        /// The file as named by the caller.
+        file: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The golden file would be larger than [`read_golden_file`] reads back: nothing written.
+    #[error(
+        "the golden file would be {size} bytes with a line of {longest_line}, more than the {} bytes (or {} for a line) that kinechain reads back: record fewer samples or links",
+        golden::MAX_GOLDEN_BYTES,
+        golden::MAX_GOLDEN_LINE_BYTES
+    )]
+    TooLarge {
+        /// Its size in bytes.
+        size: usize,
+        /// Its longest line in bytes.
+        longest_line: usize,
+    },
+    /// The golden file could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::io::output::OutputError),
+    /// `compare`: joints that only one of the robots has, and no mapping for them.
+    #[error("{}", unmatched_problem(only_in_first, only_in_second))]
+    UnmatchedJoints {
+        /// Joint entries of the first robot that the second lacks.
+        only_in_first: Vec<String>,
+        /// Joint entries of the second robot that the first lacks.
+        only_in_second: Vec<String>,
+    },
+    /// `compare`: a rename that names a joint one of the robots does not have, or names one twice.
+    #[error("rename {old}={new}: {problem}")]
+    Rename {
+        /// The first robot's joint name.
+        old: String,
+        /// The second robot's joint name.
+        new: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+fn unmatched_problem(first: &[String], second: &[String]) -> String {
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            return "none".to_string();
+        }
+        v.iter()
+            .map(|n| format!("'{}'", crate::model::error::escape_controls(n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    format!(
+        "the robots' joints differ, and a joint only one robot has cannot be compared: only in the first: {}; only in the second: {} (map a renamed joint with --rename OLD=NEW, OLD of the first robot, NEW of the second)",
+        list(first),
+        list(second)
+    )
 }
 
 fn names_problem(what: &str, missing: &[String], extra: &[String]) -> String {
@@ -441,7 +503,7 @@ pub fn verify(
         .collect();
     check_links(chain, &golden.header.links)?;
     let mut report = Report::new(chain, &golden.header.links, golden.header.level, tolerances);
-    evaluate_against(chain, golden, &mut report, |recorded, _| {
+    evaluate_against(chain, golden, &mut report, |recorded| {
         order.iter().map(|&k| recorded[k]).collect()
     })?;
     Ok(report)
@@ -467,15 +529,15 @@ fn evaluate_against(
     chain: &Chain,
     golden: &Golden,
     report: &mut Report,
-    to_chain: impl Fn(&[f64], bool) -> Vec<f64>,
+    to_chain: impl Fn(&[f64]) -> Vec<f64>,
 ) -> Result<(), RegressionError> {
     let links = chosen_links(chain, &golden.header.links)?;
     let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
     let zero = vec![0.0; golden.header.dof];
     for s in &golden.samples {
-        let q = to_chain(&s.q, true);
-        let qd = to_chain(s.qd.as_deref().unwrap_or(&zero), false);
-        let qdd = to_chain(s.qdd.as_deref().unwrap_or(&zero), false);
+        let q = to_chain(&s.q);
+        let qd = to_chain(s.qd.as_deref().unwrap_or(&zero));
+        let qdd = to_chain(s.qdd.as_deref().unwrap_or(&zero));
         if check_q(chain, &q, LimitPolicy::Enforce).is_err() {
             report.outside_limits += 1;
         }
@@ -493,20 +555,54 @@ fn evaluate_against(
     Ok(())
 }
 
-/// Compares `b` with `a` at configurations drawn for `a` (`options`): joints they share take
-/// the same values, joints only `b` has its neutral values; the links compared are those named
-/// in `options` (each must be in both) or every link they share. The report lists the joints and
-/// links only one of them has.
+/// Compares `b` with `a` at configurations drawn for `a` (`options`), joints matched by name;
+/// the links compared are those named in `options` (each must be in both) or every link they
+/// share. The report lists the links only one of them has. Both robots must have the same joint
+/// entries: a joint only one has would take a value in one robot and none in the other, and the
+/// links below it would seem to move. [`compare_renamed`] maps renamed joints.
 ///
 /// # Errors
-/// A link asked for that one of them lacks; a chain without joints to move; an evaluation that
-/// fails.
+/// [`RegressionError::UnmatchedJoints`] listing the joint entries only one robot has; a link
+/// asked for that one of them lacks; a chain without joints to move; an evaluation that fails.
 pub fn compare(
     a: &Chain,
     b: &Chain,
     options: &Options,
     tolerances: &Tolerances,
 ) -> Result<Report, RegressionError> {
+    compare_renamed(a, b, options, tolerances, &[])
+}
+
+/// [`compare`], with the joint `old` of `a` matched to the joint `new` of `b` for each
+/// `(old, new)` of `renames` (a cylindrical joint's two entries with it).
+///
+/// # Errors
+/// As [`compare`]; [`RegressionError::Rename`] when a rename names a joint that is not in its
+/// robot, or names a joint twice.
+pub fn compare_renamed(
+    a: &Chain,
+    b: &Chain,
+    options: &Options,
+    tolerances: &Tolerances,
+    renames: &[(String, String)],
+) -> Result<Report, RegressionError> {
+    let rename_problem = |(old, new): &(String, String), problem: String| RegressionError::Rename {
+        old: old.clone(),
+        new: new.clone(),
+        problem,
+    };
+    for (i, pair) in renames.iter().enumerate() {
+        let (old, new) = pair;
+        if a.joint_id(old).is_err() {
+            return Err(rename_problem(pair, format!("the first robot has no joint '{old}'")));
+        }
+        if b.joint_id(new).is_err() {
+            return Err(rename_problem(pair, format!("the second robot has no joint '{new}'")));
+        }
+        if renames[..i].iter().any(|(o, n)| o == old || n == new) {
+            return Err(rename_problem(pair, "a joint is renamed twice".into()));
+        }
+    }
     let link_names = |c: &Chain| {
         c.links()
             .iter()
@@ -525,6 +621,36 @@ pub fn compare(
         check_links(b, &options.links)?;
         options.links.clone()
     };
+    // `a`'s entries under `b`'s names.
+    let joints_a: Vec<String> = a
+        .variables()
+        .map(|(j, component)| {
+            let name = a.joint(j).name();
+            let name = renames
+                .iter()
+                .find(|(old, _)| old == name)
+                .map_or(name, |(_, new)| new.as_str());
+            component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
+        })
+        .collect();
+    let joints_b = variable_names(b);
+    let only_in_first: Vec<String> = joints_a
+        .iter()
+        .zip(variable_names(a))
+        .filter(|(j, _)| !joints_b.contains(j))
+        .map(|(_, original)| original)
+        .collect();
+    let only_in_second: Vec<String> = joints_b
+        .iter()
+        .filter(|j| !joints_a.contains(j))
+        .cloned()
+        .collect();
+    if !only_in_first.is_empty() || !only_in_second.is_empty() {
+        return Err(RegressionError::UnmatchedJoints {
+            only_in_first,
+            only_in_second,
+        });
+    }
     let golden = record(
         a,
         &Options {
@@ -532,19 +658,14 @@ pub fn compare(
             ..options.clone()
         },
     )?;
-    let (joints_a, joints_b) = (variable_names(a), variable_names(b));
-    let neutral_b = b.neutral();
-    let from_a: Vec<Option<usize>> = joints_b
+    // Every entry of `b` is one of `a`'s (checked above).
+    let from_a: Vec<usize> = joints_b
         .iter()
-        .map(|n| joints_a.iter().position(|j| j == n))
+        .map(|n| joints_a.iter().position(|j| j == n).unwrap_or(0))
         .collect();
     let mut report = Report::new(b, &shared, options.level, tolerances);
     report.only_in_first = Names {
-        joints: joints_a
-            .iter()
-            .filter(|j| !joints_b.contains(j))
-            .cloned()
-            .collect(),
+        joints: Vec::new(),
         links: links_a
             .iter()
             .filter(|l| !links_b.contains(l))
@@ -552,28 +673,15 @@ pub fn compare(
             .collect(),
     };
     report.only_in_second = Names {
-        joints: joints_b
-            .iter()
-            .filter(|j| !joints_a.contains(j))
-            .cloned()
-            .collect(),
+        joints: Vec::new(),
         links: links_b
             .iter()
             .filter(|l| !links_a.contains(l))
             .cloned()
             .collect(),
     };
-    // Joints only `b` has stand still at their neutral values.
-    evaluate_against(b, &golden, &mut report, |values, positions| {
-        from_a
-            .iter()
-            .enumerate()
-            .map(|(i, k)| match k {
-                Some(k) => values[*k],
-                None if positions => neutral_b[i],
-                None => 0.0,
-            })
-            .collect()
+    evaluate_against(b, &golden, &mut report, |values| {
+        from_a.iter().map(|&k| values[k]).collect()
     })?;
     Ok(report)
 }

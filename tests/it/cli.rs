@@ -1856,7 +1856,7 @@ fn control_characters_in_messages_are_escaped() {
 }
 
 /// A batch input without line ends (`/dev/zero`) ends the run with an error once its first line
-/// passes the cap, rather than reading on forever; with `--keep-going`, after 64 times the cap.
+/// passes the cap, rather than reading on forever; with `--keep-going`, after skipping 1 GiB of it.
 #[test]
 fn an_input_without_line_ends_is_an_error_not_a_hang() {
     let e = error(&["fk", "robots/puma560.yaml", "--batch", "/dev/zero"]);

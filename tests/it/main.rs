@@ -23,6 +23,8 @@ mod interop;
 mod k_crosscheck;
 mod layering;
 mod loading_errors;
+#[cfg(feature = "cli")]
+mod outputs;
 mod rates;
 mod reference;
 #[cfg(feature = "cli")]
