@@ -20,7 +20,8 @@ says otherwise; the values equal ``chain.fk`` on the same rows bit for bit.
 
 from __future__ import annotations
 
-from typing import Any, Iterable, List, Optional
+import re
+from typing import Any, Iterable, List, Optional, Tuple
 
 import numpy as np
 
@@ -77,6 +78,10 @@ def _joint_values(table: Any, chain: Chain, q_column: Optional[str], arrow: bool
             q[i] = row
         return q
     columns = _columns(table, arrow)
+    doubled = sorted({j for j in names if columns.count(j) > 1})
+    if doubled:
+        raise StateError(f"the table has more than one column for joints {', '.join(map(repr, doubled))}: "
+                         "which one holds the joint's values is ambiguous (rename or drop the others)")
     missing = [j for j in names if j not in columns]
     if missing:
         raise StateError(f"no column for joints {', '.join(map(repr, missing))} (give one float64 column per joint, named as chain.joint_names, or q_column=)")
@@ -91,20 +96,60 @@ def _joint_values(table: Any, chain: Chain, q_column: Optional[str], arrow: bool
     return q
 
 
+def _is_pandas(table: Any) -> bool:
+    try:
+        import pandas as pd
+    except ImportError:
+        return False
+    return isinstance(table, pd.DataFrame)
+
+
 def _columns(table: Any, arrow: bool) -> List[Any]:
     return list(table.column_names if arrow else table.columns)
 
 
+_CONFIGURATION = re.compile(r"^configuration (\d+): ")
+
+
+def _chunk_poses(chain: Chain, part: np.ndarray, start: int, links: Optional[List[str]], threads: Optional[int],
+                 rows: np.ndarray, null: bool) -> Tuple[np.ndarray, np.ndarray]:
+    """The poses of the rows ``part`` (the table's rows ``rows[start:]``) and which of them are
+    defined. A row whose poses overflow (finite joint values so large that a position is not)
+    is an error naming the table's row, or with ``null`` a row left undefined."""
+    try:
+        return chain.fk(part, links=links, threads=threads).poses, np.ones(len(part), dtype=bool)
+    except StateError as e:
+        m = _CONFIGURATION.match(str(e))
+        if m is None:
+            raise
+        if not null:
+            raise StateError(f"row {int(rows[start + int(m.group(1))])}: {str(e)[m.end():]}") from None
+    nlinks = len(chain.link_names if links is None else links)
+    # Undefined rows hold the identity until their values are set to NaN (orientation
+    # coordinates are not taken of NaN matrices).
+    p = np.tile(np.eye(4), (len(part), nlinks, 1, 1))
+    defined = np.ones(len(part), dtype=bool)
+    for i, qi in enumerate(part):
+        try:
+            p[i] = chain.fk(qi, links=links).poses
+        except StateError:
+            defined[i] = False
+    return p, defined
+
+
 def _pose_values(chain: Chain, q: np.ndarray, links: Optional[List[str]], orientation: str,
-                 threads: Optional[int]) -> np.ndarray:
-    """``(N, L * k)``: each row's pose columns, in ``pose_columns`` order."""
+                 threads: Optional[int], rows: np.ndarray, null: bool) -> Tuple[np.ndarray, np.ndarray]:
+    """``(N, L * k)``: each row's pose columns, in ``pose_columns`` order; and which rows are
+    defined (see ``_chunk_poses``). ``rows``: each row's number in the table."""
     n = q.shape[0]
     width = 3 + len(_ORIENTATION[orientation])
     nlinks = len(chain.link_names if links is None else links)
     out = np.empty((n, nlinks, width))
+    defined = np.ones(n, dtype=bool)
     for start in range(0, n, CHUNK_ROWS):
         part = q[start:start + CHUNK_ROWS]
-        p = chain.fk(part, links=links, threads=threads).poses  # (m, L, 4, 4)
+        p, d = _chunk_poses(chain, part, start, links, threads, rows, null)
+        defined[start:start + len(part)] = d
         block = out[start:start + len(part)]
         block[..., :3] = p[..., :3, 3]
         if orientation == "quaternion":
@@ -113,7 +158,8 @@ def _pose_values(chain: Chain, q: np.ndarray, links: Optional[List[str]], orient
             block[..., 3:] = _orientation.rpy_from_matrix(p)
         else:
             block[..., 3:] = p[..., :3, :3].reshape(p.shape[:-2] + (9,))
-    return out.reshape(n, nlinks * width)
+        block[~d] = np.nan
+    return out.reshape(n, nlinks * width), defined
 
 
 def poses(
@@ -133,6 +179,9 @@ def poses(
     links = None if links is None else _link_list(links)
     names = pose_columns(chain, links, orientation)
     arrow = _is_arrow(table)
+    if not arrow and not _is_pandas(table):
+        raise TypeError(f"table must be a pandas DataFrame or a pyarrow Table, not {type(table).__name__} "
+                        "(for an array of joint values, use chain.fk)")
     clash = [c for c in names if c in set(map(str, _columns(table, arrow)))]
     if clash:
         raise Error(f"the table already has columns {', '.join(map(repr, clash[:5]))}{' …' if len(clash) > 5 else ''}: "
@@ -147,10 +196,12 @@ def poses(
             label = "" if arrow or table.index[i] == i else f" (index {table.index[i]!r})"
             raise StateError(f"row {i}{label}: {e}") from None
     values = np.full((len(q), len(names)), np.nan)
+    null = on_error == "null"
     if ok.all():
-        values = _pose_values(chain, q, links, orientation, threads)
+        values, ok = _pose_values(chain, q, links, orientation, threads, np.arange(len(q)), null)
     elif ok.any():
-        values[ok] = _pose_values(chain, q[ok], links, orientation, threads)
+        rows = np.flatnonzero(ok)
+        values[ok], ok[rows] = _pose_values(chain, q[ok], links, orientation, threads, rows, null)
     if arrow:
         import pyarrow as pa
 

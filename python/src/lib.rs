@@ -9,9 +9,8 @@
 
 use kinechain::JacobianFrame;
 use kinechain::eval::batch::{
-    BatchData, forward_accelerations_batch, forward_kinematics_batch_fold,
-    forward_kinematics_batch_fold_par, forward_kinematics_batch_to, forward_velocities_batch,
-    jacobian_batch, jacobian_batch_par,
+    BatchError, fold_block_len, forward_accelerations_batch, forward_kinematics_batch,
+    forward_kinematics_batch_to, forward_velocities_batch, jacobian_batch,
 };
 use kinechain::regression::{self, variable_names};
 use kinechain::{
@@ -24,10 +23,13 @@ use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedA
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PySlice, PyTuple};
-use rayon::prelude::*;
+use run::{Failure, in_blocks};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
+
+mod files;
+mod run;
 
 pyo3::create_exception!(
     kinechain,
@@ -52,18 +54,17 @@ fn load_error(e: &dyn std::error::Error) -> PyErr {
     LoadError::new_err(error_chain(e))
 }
 
-fn state_error(e: &dyn std::error::Error) -> PyErr {
-    StateError::new_err(error_chain(e))
-}
-
 /// A robot: links, joints, limits; immutable, shared between threads. Made by `kinechain.load`
 /// or the `from_*` methods.
 #[pyclass(module = "kinechain", name = "Chain", frozen)]
 struct Chain {
     inner: Arc<Inner>,
-    /// The text it was loaded from, and its format (`urdf` or `yaml`): what pickling ships.
+    /// The text it was loaded from, and its format (`urdf` or `yaml`): what pickling ships
+    /// (with the name, which may have come from the file name).
     source: String,
     format: &'static str,
+    /// The file it was loaded from, which the files this package writes never replace.
+    origin: Option<PathBuf>,
     /// Every link's id and, for results of every link, the names as one shared Python list and
     /// their positions.
     all_links: Vec<LinkId>,
@@ -74,7 +75,13 @@ struct Chain {
 }
 
 impl Chain {
-    fn new(py: Python<'_>, inner: Inner, source: String, format: &'static str) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        inner: Inner,
+        source: String,
+        format: &'static str,
+        origin: Option<PathBuf>,
+    ) -> PyResult<Self> {
         let names: Vec<String> = inner.links().iter().map(|l| l.name().to_string()).collect();
         let all_links = names
             .iter()
@@ -90,6 +97,7 @@ impl Chain {
             inner: Arc::new(inner),
             source,
             format,
+            origin,
             all_links,
             link_list: PyList::new(py, &names)?.unbind(),
             link_index: Arc::new(link_index),
@@ -97,18 +105,21 @@ impl Chain {
         })
     }
 
-    fn from_text(py: Python<'_>, text: String, format: &str) -> PyResult<Self> {
-        let (inner, format) = match format {
-            "urdf" => (Inner::from_urdf_str(&text), "urdf"),
-            "yaml" => (Inner::from_dh_yaml_str(&text), "yaml"),
+    /// A chain from `text` in `format` (`urdf` or `yaml`), named `name` where the text names no
+    /// robot.
+    fn from_text(py: Python<'_>, text: String, format: &str, name: &str) -> PyResult<Self> {
+        use kinechain::io::Format;
+        let (kind, format) = match format {
+            "urdf" => (Format::Urdf, "urdf"),
+            "yaml" => (Format::DhYaml, "yaml"),
             other => {
                 return Err(Error::new_err(format!(
                     "unknown format '{other}' (urdf or yaml)"
                 )));
             }
         };
-        let inner = inner.map_err(|e| load_error(&e))?;
-        Chain::new(py, inner, text, format)
+        let inner = Inner::from_str_named(&text, kind, name).map_err(|e| load_error(&e))?;
+        Chain::new(py, inner, text, format, None)
     }
 
     /// The links asked for (every link for `None`): ids, the names as a Python list, and their
@@ -214,37 +225,79 @@ fn write_pose(t: &Transform, out: &mut [f64]) {
     }
 }
 
-/// Runs `f` on rayon's global pool, or on a pool of `threads` threads; with one thread, on the
-/// calling thread (whose callers then run no parallel code: starting a pool of one thread for
-/// the call took about 0.1 ms).
-fn on_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T, String> {
-    match threads {
-        None | Some(1) => Ok(f()),
-        Some(0) => Err("threads must be at least 1".into()),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map(|pool| pool.install(f))
-            .map_err(|e| format!("cannot start {n} threads: {e}")),
-    }
-}
-
-/// What an evaluation failed on: a configuration's state, or the threads.
-enum Failure {
-    State(Option<usize>, KStateError),
-    Threads(String),
-}
-
 impl Failure {
     fn into_py(self, batched: bool) -> PyErr {
+        let at = |index: Option<usize>, m: String| match index {
+            Some(i) if batched => StateError::new_err(format!("configuration {i}: {m}")),
+            _ => StateError::new_err(m),
+        };
         match self {
-            Failure::State(Some(i), e) if batched => {
-                StateError::new_err(format!("configuration {i}: {}", error_chain(&e)))
-            }
-            Failure::State(_, e) => state_error(&e),
+            Failure::State(index, e) => at(index, error_chain(&e)),
+            Failure::Overflow { index, what, link } => at(
+                index,
+                format!(
+                    "{what} of link '{}' overflows f64 (not finite): the joint values or rates are too large",
+                    kinechain::error::escape_controls(&link)
+                ),
+            ),
             Failure::Threads(m) => Error::new_err(m),
+            Failure::Python(e) => e,
         }
     }
+}
+
+/// The first pose among `poses` (rows of `l` links' 4 × 4 matrices) whose position is not
+/// finite: `(row, link)`. The rotations cannot overflow (their entries are products of sines
+/// and cosines of finite angles); positions can, from finite but huge prismatic values.
+fn pose_overflow(poses: &[f64], l: usize) -> Option<(usize, usize)> {
+    let finite = |m: &[f64]| m[3].is_finite() & m[7].is_finite() & m[11].is_finite();
+    if poses.chunks_exact(16).fold(true, |ok, m| ok & finite(m)) {
+        return None;
+    }
+    let k = poses.chunks_exact(16).position(|m| !finite(m))?;
+    Some((k / l.max(1), k % l.max(1)))
+}
+
+/// As [`pose_overflow`], for rows of `l` links' 3-vectors (ω, v, α, a).
+fn rate_overflow(rates: &[f64], l: usize) -> Option<(usize, usize)> {
+    if rates.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return None;
+    }
+    let k = rates.iter().position(|x| !x.is_finite())? / 3;
+    Some((k / l.max(1), k % l.max(1)))
+}
+
+/// [`Failure::Overflow`] for the first pose or rate of `ids` that is not finite in the rows
+/// from `first` on.
+fn check_finite(
+    chain: &Inner,
+    ids: &[LinkId],
+    first: usize,
+    poses: &[f64],
+    rates: &[&[f64]],
+) -> Result<(), Failure> {
+    const RATES: [&str; 4] = ["omega", "v", "alpha", "a"];
+    let found = pose_overflow(poses, ids.len())
+        .map(|at| ("pose", at))
+        .or_else(|| {
+            rates
+                .iter()
+                .zip(RATES)
+                .find_map(|(r, what)| rate_overflow(r, ids.len()).map(|at| (what, at)))
+        });
+    match found {
+        None => Ok(()),
+        Some((what, (row, k))) => Err(Failure::Overflow {
+            index: Some(first + row),
+            what,
+            link: chain.link(ids[k]).name().to_string(),
+        }),
+    }
+}
+
+/// The failure of configuration `first + e.index` of a block that starts at `first`.
+fn at_block(first: usize) -> impl Fn(BatchError) -> Failure {
+    move |e| Failure::State(Some(first + e.index), e.source)
 }
 
 #[pymethods]
@@ -252,50 +305,58 @@ impl Chain {
     /// Loads a robot file: a DH table (`.yaml`, `.yml`) or a URDF file (`.urdf`).
     #[staticmethod]
     fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let inner = Inner::from_file(&path).map_err(|e| load_error(&e))?;
-        let source = std::fs::read_to_string(&path)
-            .map_err(|e| LoadError::new_err(format!("{}: {e}", path.display())))?;
+        // Read once (a FIFO can be read only once), bounded, off the GIL and open to Ctrl-C.
+        let read = path.clone();
+        let source = files::read_interruptibly(py, move || {
+            kinechain::io::read_robot_file(&read).map_err(|e| error_chain(&e))
+        })?
+        .map_err(LoadError::new_err)?;
+        let inner = Inner::from_file_text(&path, &source).map_err(|e| load_error(&e))?;
         let format = match kinechain::io::Format::from_path(&path) {
             Some(kinechain::io::Format::Urdf) => "urdf",
             _ => "yaml",
         };
-        Chain::new(py, inner, source, format)
+        let origin = std::fs::canonicalize(&path).ok().or(Some(path));
+        Chain::new(py, inner, source, format, origin)
     }
 
     /// A robot from URDF text.
     #[staticmethod]
     fn from_urdf_string(py: Python<'_>, text: String) -> PyResult<Self> {
-        Chain::from_text(py, text, "urdf")
+        Chain::from_text(py, text, "urdf", "robot")
     }
 
     /// A robot from DH YAML text.
     #[staticmethod]
     fn from_yaml_string(py: Python<'_>, text: String) -> PyResult<Self> {
-        Chain::from_text(py, text, "yaml")
+        Chain::from_text(py, text, "yaml", "robot")
     }
 
-    /// A robot from its text and format (`urdf` or `yaml`); what unpickling calls.
+    /// A robot from its text, format (`urdf` or `yaml`) and name (where the text names none);
+    /// what unpickling calls.
     #[staticmethod]
-    fn _from_source(py: Python<'_>, text: String, format: &str) -> PyResult<Self> {
-        Chain::from_text(py, text, format)
+    #[pyo3(signature = (text, format, name="robot"))]
+    fn _from_source(py: Python<'_>, text: String, format: &str, name: &str) -> PyResult<Self> {
+        Chain::from_text(py, text, format, name)
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
         let make = slf.get_type().getattr("_from_source")?;
         let me = slf.get();
-        (make, (me.source.clone(), me.format)).into_pyobject(slf.py())
+        (make, (me.source.clone(), me.format, me.inner.name())).into_pyobject(slf.py())
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other
-            .cast::<Chain>()
-            .is_ok_and(|o| o.get().source == self.source && o.get().format == self.format)
+        other.cast::<Chain>().is_ok_and(|o| {
+            let o = o.get();
+            o.source == self.source && o.format == self.format && o.inner.name() == self.inner.name()
+        })
     }
 
     fn __hash__(&self) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        (&self.source, self.format).hash(&mut h);
+        (&self.source, self.format, self.inner.name()).hash(&mut h);
         h.finish()
     }
 
@@ -430,23 +491,35 @@ impl Chain {
                 }
                 a.clone()
             }
-            // SAFETY: every entry is written below before the array is handed out (an error
-            // drops it unread).
-            None => unsafe { PyArrayDyn::<f64>::new(py, dims(&[4, 4]), false) },
+            // Every entry is written below before the array is handed out (an error drops it
+            // unread).
+            None => new_array(py, dims(&[4, 4]))?,
         };
         // Held until the poses are written: `out` is writeable and shares no memory with the
-        // inputs (numpy's borrow checking refuses an overlap with q's read borrow).
+        // inputs (numpy's borrow checking refuses an overlap with q's read borrow when both
+        // are views of one array; `overlaps` finds views of one buffer made otherwise, as by
+        // `np.frombuffer`).
         let _out_borrow = match out {
-            Some(_) => Some(
-                poses
+            Some(_) => {
+                let borrow = poses
                     .try_readwrite()
-                    .map_err(|e| StateError::new_err(format!("out: {e}")))?,
-            ),
+                    .map_err(|e| StateError::new_err(format!("out: {e}")))?;
+                for (a, what) in [(Some(&q), "q"), (qd.as_ref(), "qd"), (qdd.as_ref(), "qdd")] {
+                    if let Some(a) = a
+                        && overlaps(a, &poses)
+                    {
+                        return Err(StateError::new_err(format!(
+                            "out shares memory with {what}: the poses would overwrite the joint values they are computed from"
+                        )));
+                    }
+                }
+                Some(borrow)
+            }
             None => None,
         };
         let rates: Vec<Bound<'py, PyArrayDyn<f64>>> = (0..2 * level)
-            .map(|_| unsafe { PyArrayDyn::<f64>::new(py, dims(&[3]), false) })
-            .collect();
+            .map(|_| new_array(py, dims(&[3])))
+            .collect::<PyResult<_>>()?;
         let policy = if check_limits {
             LimitPolicy::Enforce
         } else {
@@ -509,32 +582,39 @@ impl Chain {
             }
             Ok(())
         };
-        let result = if !batched {
-            // One configuration: too little work to leave the GIL for, buffers reused.
-            self.with_data(policy, |data| one(data, 0))
-                .map_err(|e| Failure::State(None, e))
+        let result = if !batched || dof == 0 {
+            // One configuration: too little work to leave the GIL for, buffers reused. A chain
+            // without moving joints has the same poses in every row (the batch kernels cannot
+            // count the rows of an empty q).
+            self.with_data(policy, |data| {
+                (0..n).try_for_each(|i| {
+                    one(data, i).map_err(|e| Failure::State(batched.then_some(i), e))
+                })
+            })
+            .and_then(|()| {
+                // SAFETY: the whole of each output, written above; nothing else holds them now.
+                let (p, r): (&[f64], Vec<&[f64]>) = unsafe {
+                    (
+                        pose_out.part(0, n * l * 16),
+                        rate_out.iter().map(|o| &*o.part(0, n * l * 3)).collect(),
+                    )
+                };
+                check_finite(chain, &ids, 0, p, &r)
+            })
         } else {
-            py.detach(|| {
-                let parallel = threads != Some(1);
-                match qd {
-                    _ if n == 0 => Ok(()),
-                    None => on_threads(threads, || {
-                        batch_poses(chain, policy, q, &ids, pose_out, parallel)
-                    })
-                    .map_err(Failure::Threads)?,
-                    Some(qd) => on_threads(threads, || {
-                        batch_rates(
-                            chain,
-                            policy,
-                            (q, qd, qdd),
-                            &ids,
-                            &pose_out,
-                            &rate_out,
-                            parallel,
-                        )
-                    })
-                    .map_err(Failure::Threads)?,
-                }
+            py.detach(|| match qd {
+                _ if n == 0 => Ok(()),
+                None => batch_poses(chain, policy, q, n, &ids, pose_out, threads),
+                Some(qd) => batch_rates(
+                    chain,
+                    policy,
+                    (q, qd, qdd),
+                    n,
+                    &ids,
+                    &pose_out,
+                    &rate_out,
+                    threads,
+                ),
             })
         };
         result.map_err(|f| f.into_py(batched))?;
@@ -623,8 +703,8 @@ impl Chain {
         } else {
             vec![6, dof]
         };
-        // SAFETY: every entry is written below before the array is handed out.
-        let out = unsafe { PyArrayDyn::<f64>::new(py, dims, false) };
+        // Every entry is written below before the array is handed out.
+        let out = new_array(py, numpy::ndarray::IxDyn(&dims))?;
         let policy = if check_limits {
             LimitPolicy::Enforce
         } else {
@@ -632,24 +712,25 @@ impl Chain {
         };
         let q = q.as_slice()?;
         let o = Out::new(&out);
-        let result = if batched {
+        let result = if batched && dof > 0 {
             py.detach(|| {
-                // SAFETY: the whole array, written by this call alone.
-                let dst = unsafe { o.part(0, n * 6 * dof) };
-                let mut data = BatchData::new(chain).with_limit_policy(policy);
-                on_threads(threads, || {
-                    if threads == Some(1) {
-                        jacobian_batch(chain, &mut data, q, id, frame, dst)
-                    } else {
-                        jacobian_batch_par(chain, &mut data, q, id, frame, dst)
-                    }
+                in_blocks((chain, policy), n, JACOBIAN_BLOCK, threads, |data, at| {
+                    // SAFETY: the block's configurations' range, written by this call alone.
+                    let dst = unsafe { o.part(at.start * 6 * dof, at.len() * 6 * dof) };
+                    let q = &q[at.start * dof..at.end * dof];
+                    jacobian_batch(chain, data, q, id, frame, dst).map_err(at_block(at.start))?;
+                    jacobian_finite(chain, id, at.start, dst, dof)
                 })
-                .map_err(Failure::Threads)?
-                .map_err(|e| Failure::State(Some(e.index), e.source))
             })
         } else {
+            // A chain without moving joints has Jacobians of no columns: nothing to write.
             self.with_data(policy, |data| {
-                let j = forward_kinematics(chain, data, q)?.jacobian_in(id, frame);
+                if dof == 0 {
+                    return Ok(());
+                }
+                let j = forward_kinematics(chain, data, q)
+                    .map_err(|e| Failure::State(None, e))?
+                    .jacobian_in(id, frame);
                 // SAFETY: the whole array, written by this call alone.
                 let dst = unsafe { o.part(0, 6 * dof) };
                 for r in 0..6 {
@@ -657,9 +738,8 @@ impl Chain {
                         dst[r * dof + c] = j[(r, c)];
                     }
                 }
-                Ok(())
+                jacobian_finite(chain, id, 0, dst, dof)
             })
-            .map_err(|e| Failure::State(None, e))
         };
         result.map_err(|f| f.into_py(batched))?;
         Ok(out)
@@ -682,7 +762,16 @@ impl Chain {
 /// `x` as a C-contiguous float64 array: read as it is when it already is one, converted by numpy
 /// otherwise (a conversion that fails is a `StateError`).
 fn float_array<'py>(x: &Bound<'py, PyAny>, name: &str) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
-    if let Ok(a) = x.cast::<PyArrayDyn<f64>>()
+    let py = x.py();
+    // SAFETY: reads the type of a live object, and numpy's array type from its C API.
+    let plain = unsafe {
+        pyo3::ffi::Py_TYPE(x.as_ptr())
+            == numpy::npyffi::PY_ARRAY_API
+                .get_type_object(py, numpy::npyffi::NpyTypes::PyArray_Type)
+    };
+    // A plain ndarray (not a subclass such as a masked array) read in place.
+    if plain
+        && let Ok(a) = x.cast::<PyArrayDyn<f64>>()
         && a.is_c_contiguous()
         && a.ndim() > 0
     {
@@ -690,8 +779,23 @@ fn float_array<'py>(x: &Bound<'py, PyAny>, name: &str) -> PyResult<PyReadonlyArr
             .try_readonly()
             .map_err(|e| StateError::new_err(format!("{name}: {e}")));
     }
-    let py = x.py();
     let numpy = py.import("numpy")?;
+    // numpy would drop an imaginary part and a mask without a word.
+    if numpy.getattr("iscomplexobj")?.call1((x,))?.is_truthy()? {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name} holds complex numbers: joint values are real (pass the real part if that is what is meant)"
+        )));
+    }
+    if numpy
+        .getattr("ma")?
+        .getattr("is_masked")?
+        .call1((x,))?
+        .is_truthy()?
+    {
+        return Err(StateError::new_err(format!(
+            "{name} is a masked array with masked entries: a joint value is missing (fill them, or drop the rows)"
+        )));
+    }
     let kwargs = pyo3::types::PyDict::new(py);
     kwargs.set_item("dtype", numpy.getattr("float64")?)?;
     let a = numpy
@@ -873,37 +977,37 @@ fn _record_golden(
     links: Option<Vec<String>>,
 ) -> PyResult<()> {
     let options = regression_options(samples, seed, level, links)?;
-    let golden =
-        regression::record(&chain.get().inner, &options).map_err(|e| regression_error(&e))?;
-    let mut text = Vec::new();
-    regression::write_golden(&golden, &mut text).map_err(|e| Error::new_err(e.to_string()))?;
-    std::fs::write(&path, text)
-        .map_err(|e| Error::new_err(format!("cannot write {}: {e}", path.display())))
+    let me = chain.get();
+    let golden = regression::record(&me.inner, &options).map_err(|e| regression_error(&e))?;
+    let inputs: Vec<&std::path::Path> = me.origin.iter().map(PathBuf::as_path).collect();
+    regression::write_golden_file(&golden, &path, &inputs).map_err(|e| regression_error(&e))
 }
 
 /// Verifies `chain` against the golden file `path`: `(passed, table, JSON)`.
 #[pyfunction]
 fn _verify_golden(
+    py: Python<'_>,
     chain: &Bound<'_, Chain>,
     path: PathBuf,
     tol_position: f64,
     tol_rotation: f64,
     tol_rates: f64,
 ) -> PyResult<(bool, String, String)> {
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| Error::new_err(format!("cannot read {}: {e}", path.display())))?;
-    let golden = regression::read_golden(&text, &path.display().to_string())
-        .map_err(|e| regression_error(&e))?;
     let tol = tolerances(tol_position, tol_rotation, tol_rates)?;
+    let golden = files::read_interruptibly(py, move || {
+        regression::read_golden_file(&path).map_err(|e| error_chain(&e))
+    })?
+    .map_err(Error::new_err)?;
     let report =
         regression::verify(&chain.get().inner, &golden, &tol).map_err(|e| regression_error(&e))?;
     report_parts(&report)
 }
 
-/// Compares two chains: `(passed, table, JSON)`.
+/// Compares two chains, joint `old` of `a` matched to joint `new` of `b` for each pair of
+/// `renames`: `(passed, table, JSON)`.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (a, b, samples, seed, level, links, tol_position, tol_rotation, tol_rates))]
+#[pyo3(signature = (a, b, samples, seed, level, links, tol_position, tol_rotation, tol_rates, renames=None))]
 fn _compare(
     a: &Bound<'_, Chain>,
     b: &Bound<'_, Chain>,
@@ -914,44 +1018,19 @@ fn _compare(
     tol_position: f64,
     tol_rotation: f64,
     tol_rates: f64,
+    renames: Option<Vec<(String, String)>>,
 ) -> PyResult<(bool, String, String)> {
     let options = regression_options(samples, seed, level, links)?;
     let tol = tolerances(tol_position, tol_rotation, tol_rates)?;
-    let report = regression::compare(&a.get().inner, &b.get().inner, &options, &tol)
-        .map_err(|e| regression_error(&e))?;
+    let report = regression::compare_renamed(
+        &a.get().inner,
+        &b.get().inner,
+        &options,
+        &tol,
+        &renames.unwrap_or_default(),
+    )
+    .map_err(|e| regression_error(&e))?;
     report_parts(&report)
-}
-
-/// Every link asked for of a batch of poses, through the batch kernels (all links, or the one
-/// link's path alone), on the pool when `parallel`.
-/// Runs `f(data, range)` on the configurations `0..n` in blocks of `block` (on rayon's pool
-/// when `parallel`, each thread with batch buffers of its own checking under `policy`), and
-/// fails with the failure of the lowest configuration among the blocks that fail (every block
-/// runs; a block reports its own first failure).
-fn in_blocks(
-    (chain, policy): (&Inner, LimitPolicy),
-    n: usize,
-    block: usize,
-    parallel: bool,
-    f: impl Fn(&mut BatchData, std::ops::Range<usize>) -> Result<(), (usize, KStateError)> + Sync + Send,
-) -> Result<(), Failure> {
-    let make = || BatchData::new(chain).with_limit_policy(policy);
-    let range = |b: usize| b * block..((b + 1) * block).min(n);
-    let blocks = n.div_ceil(block);
-    let first = if parallel {
-        (0..blocks)
-            .into_par_iter()
-            .map_init(make, |data, b| f(data, range(b)))
-            .filter_map(Result::err)
-            .min_by_key(|e| e.0)
-    } else {
-        let mut data = make();
-        (0..blocks).find_map(|b| f(&mut data, range(b)).err())
-    };
-    match first {
-        Some((index, e)) => Err(Failure::State(Some(index), e)),
-        None => Ok(()),
-    }
 }
 
 /// Configurations per block of a batch with rates: frames, velocities and accelerations
@@ -962,95 +1041,162 @@ const RATE_BLOCK: usize = 512;
 /// and the transposed `q` stay in a core's second-level cache.
 const LINK_BLOCK: usize = 2048;
 
+/// Configurations per block of a batch of Jacobians.
+const JACOBIAN_BLOCK: usize = 512;
+
+/// Every link asked for of the `n` configurations `qs`, through the batch kernels (all links, or
+/// the one link's path alone), block by block while the frames are in cache, each block written
+/// straight into its part of `out` and checked to be finite there.
 fn batch_poses(
     chain: &Inner,
     policy: LimitPolicy,
     qs: &[f64],
+    n: usize,
     ids: &[LinkId],
     out: Out,
-    parallel: bool,
+    threads: Option<usize>,
 ) -> Result<(), Failure> {
-    let n = qs.len() / chain.dof().max(1);
+    let dof = chain.dof();
     let l = ids.len();
-    let fail = |e: kinechain::eval::batch::BatchError| Failure::State(Some(e.index), e.source);
-    if l == 1 {
-        // Blocks of configurations small enough for the link's frames to stay in cache, each
-        // written straight into its part of the output; on the pool, each thread with buffers
-        // of its own, and the first bad configuration reported whichever thread meets it.
-        let dof = chain.dof();
-        in_blocks((chain, policy), n, LINK_BLOCK, parallel, |data, at| {
-            let poses =
-                forward_kinematics_batch_to(chain, data, &qs[at.start * dof..at.end * dof], ids[0])
-                    .map_err(|e| (at.start + e.index, e.source))?;
-            // SAFETY: the block's configurations' range, written by this call alone.
-            let out = unsafe { out.part(at.start * 16, at.len() * 16) };
-            poses.write_matrices(out).map_err(|e| (at.start, e))
-        })?;
+    let block = if l == 1 {
+        LINK_BLOCK
     } else {
-        // Block by block while the frames are in cache, straight into the output.
-        let write = |(), first: usize, poses: kinechain::eval::batch::BatchPoses<'_>| {
-            // SAFETY: the block's configurations' range, written by this call alone.
-            let rows = unsafe { out.part(first * l * 16, poses.len() * l * 16) };
-            poses
-                .write_matrices(ids, rows)
-                .expect("the block's part of the output has its length");
-        };
-        if parallel {
-            forward_kinematics_batch_fold_par(chain, qs, policy, || (), write, |(), ()| ())
+        fold_block_len(chain)
+    };
+    in_blocks((chain, policy), n, block, threads, |data, at| {
+        let q = &qs[at.start * dof..at.end * dof];
+        // SAFETY: the block's configurations' range, written by this call alone.
+        let rows = unsafe { out.part(at.start * l * 16, at.len() * l * 16) };
+        let written = if l == 1 {
+            forward_kinematics_batch_to(chain, data, q, ids[0])
+                .map_err(at_block(at.start))?
+                .write_matrices(rows)
         } else {
-            forward_kinematics_batch_fold(chain, qs, policy, || (), write, |(), ()| ())
-        }
-        .map_err(fail)?;
-    }
-    Ok(())
+            forward_kinematics_batch(chain, data, q)
+                .map_err(at_block(at.start))?
+                .write_matrices(ids, rows)
+        };
+        written.map_err(|e| Failure::State(Some(at.start), e))?;
+        check_finite(chain, ids, at.start, rows, &[])
+    })
 }
 
-/// Poses and rates of `ids` for each configuration, from the batch kernels of rates block by
-/// block: `pose_out` as `(N, L, 4, 4)`, `rate_out` as ω, v (and α, a with `qdds`), each
-/// `(N, L, 3)`.
+/// Poses and rates of `ids` for each of the `n` configurations, from the batch kernels of rates
+/// block by block: `pose_out` as `(N, L, 4, 4)`, `rate_out` as ω, v (and α, a with `qdds`),
+/// each `(N, L, 3)`.
 #[allow(clippy::too_many_arguments)]
 fn batch_rates(
     chain: &Inner,
     policy: LimitPolicy,
     (qs, qds, qdds): (&[f64], &[f64], Option<&[f64]>),
+    n: usize,
     ids: &[LinkId],
     pose_out: &Out,
     rate_out: &[Out],
-    parallel: bool,
+    threads: Option<usize>,
 ) -> Result<(), Failure> {
     let dof = chain.dof();
-    let n = qs.len() / dof.max(1);
     let l = ids.len();
-    in_blocks((chain, policy), n, RATE_BLOCK, parallel, |data, at| {
+    in_blocks((chain, policy), n, RATE_BLOCK, threads, |data, at| {
         let rows = at.start * dof..at.end * dof;
-        let fail = |e: kinechain::eval::batch::BatchError| (at.start + e.index, e.source);
+        let fail = at_block(at.start);
         // SAFETY: the block's configurations' ranges of each output, written by this call alone.
         let pose = unsafe { pose_out.part(at.start * l * 16, at.len() * l * 16) };
-        let mut parts = rate_out
+        let mut parts: Vec<&mut [f64]> = rate_out
             .iter()
-            .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) });
-        let mut next = || parts.next().expect("ω and v, and α and a with q̈");
+            .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) })
+            .collect();
         let (q, qd) = (&qs[rows.clone()], &qds[rows.clone()]);
-        let written = match qdds {
-            None => {
-                let v = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
-                v.poses()
+        let written = match (qdds, parts.as_mut_slice()) {
+            (None, [omega, v]) => {
+                let r = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
+                r.poses()
                     .write_matrices(ids, pose)
-                    .and_then(|()| v.write_velocities(ids, next(), next()))
+                    .and_then(|()| r.write_velocities(ids, omega, v))
             }
-            Some(qdds) => {
-                let a =
+            (Some(qdds), [omega, v, alpha, a]) => {
+                let r =
                     forward_accelerations_batch(chain, data, q, qd, &qdds[rows]).map_err(fail)?;
-                let v = a.velocities();
-                v.poses()
+                let vel = r.velocities();
+                vel.poses()
                     .write_matrices(ids, pose)
-                    .and_then(|()| v.write_velocities(ids, next(), next()))
-                    .and_then(|()| a.write_accelerations(ids, next(), next()))
+                    .and_then(|()| vel.write_velocities(ids, omega, v))
+                    .and_then(|()| r.write_accelerations(ids, alpha, a))
             }
+            _ => return Err(Failure::Threads("the rate outputs do not match qdd".into())),
         };
-        written.map_err(|e| (at.start, e))?;
-        Ok(())
+        written.map_err(|e| Failure::State(Some(at.start), e))?;
+        let parts: Vec<&[f64]> = parts.iter().map(|p| &**p).collect();
+        check_finite(chain, ids, at.start, pose, &parts)
     })
+}
+
+/// A new, uninitialised C-ordered float64 array of shape `dims`; a `MemoryError` (or numpy's
+/// `ValueError` for a shape too large to index) when numpy cannot make it.
+fn new_array<'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    dims: D,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    use numpy::npyffi::{NPY_TYPES, NpyTypes, PY_ARRAY_API, npy_intp};
+    let mut shape: Vec<npy_intp> = dims
+        .slice()
+        .iter()
+        .map(|&d| npy_intp::try_from(d))
+        .collect::<Result<_, _>>()
+        .map_err(|_| pyo3::exceptions::PyMemoryError::new_err("array too large"))?;
+    let nd = std::os::raw::c_int::try_from(shape.len())
+        .map_err(|_| Error::new_err("too many dimensions"))?;
+    // SAFETY: numpy's C API, called as rust-numpy calls it: a float64 descriptor (whose
+    // reference the call takes), a shape of `nd` entries, no strides or data (numpy allocates
+    // them). A null result has set the Python error that `from_owned_ptr_or_err` takes.
+    unsafe {
+        let descr = PY_ARRAY_API.PyArray_DescrFromType(py, NPY_TYPES::NPY_DOUBLE as _);
+        let ptr = PY_ARRAY_API.PyArray_NewFromDescr(
+            py,
+            PY_ARRAY_API.get_type_object(py, NpyTypes::PyArray_Type),
+            descr,
+            nd,
+            shape.as_mut_ptr(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            0,
+            std::ptr::null_mut(),
+        );
+        Ok(Bound::from_owned_ptr_or_err(py, ptr)?.cast_into_unchecked())
+    }
+}
+
+/// [`Failure::Overflow`] for the first of the Jacobians `j` (rows of `6 × dof`, from
+/// configuration `first` on) with an entry that is not finite.
+fn jacobian_finite(
+    chain: &Inner,
+    link: LinkId,
+    first: usize,
+    j: &[f64],
+    dof: usize,
+) -> Result<(), Failure> {
+    if j.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return Ok(());
+    }
+    let k = j.iter().position(|x| !x.is_finite()).unwrap_or(0);
+    Err(Failure::Overflow {
+        index: Some(first + k / (6 * dof).max(1)),
+        what: "jacobian",
+        link: chain.link(link).name().to_string(),
+    })
+}
+
+/// Whether the C-contiguous arrays `a` and `b` share memory.
+fn overlaps(a: &PyReadonlyArrayDyn<'_, f64>, b: &Bound<'_, PyArrayDyn<f64>>) -> bool {
+    let range = |ptr: *const f64, len: usize| {
+        let start = ptr as usize;
+        start..start + len * std::mem::size_of::<f64>()
+    };
+    let (x, y) = (
+        range(a.as_array().as_ptr(), a.len()),
+        range(b.data(), b.len()),
+    );
+    !x.is_empty() && !y.is_empty() && x.start < y.end && y.start < x.end
 }
 
 /// Orientation coordinates of every rotation in `r` (shape `(..., 3, 3)`, or `(..., 4, 4)`
@@ -1094,7 +1240,8 @@ fn _orientation<'py>(
     let n = values.len() / (side * side);
     let mut dims = shape[..shape.len() - 2].to_vec();
     dims.push(width);
-    let out = PyArrayDyn::<f64>::zeros(py, dims, false);
+    // Every entry is written below.
+    let out = new_array(py, numpy::ndarray::IxDyn(&dims))?;
     let o = Out::new(&out);
     // SAFETY: the whole of a new array, written here alone.
     let dst = unsafe { o.part(0, n * width) };
