@@ -117,23 +117,21 @@ impl Arith for Fused512 {
 pub(crate) struct Portable<A>([f64; 4], std::marker::PhantomData<A>);
 
 impl<A: Arith> Portable<A> {
+    /// `[f(0), f(1), f(2), f(3)]`, written out rather than looped (see
+    /// `eval::lanes::each_lane`: these inline into every body step of the baseline build).
     #[inline(always)]
     fn map(f: impl Fn(usize) -> f64) -> Self {
-        Portable(std::array::from_fn(f), std::marker::PhantomData)
+        Portable([f(0), f(1), f(2), f(3)], std::marker::PhantomData)
     }
 }
 
 impl<A: Arith> Col for Portable<A> {
     #[inline(always)]
     fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
-        let mut ok = true;
-        for i in 0..4 {
-            ok &= crate::eval::layout::within(
-                x.0[i],
-                (scale.0[i], offset.0[i], lower.0[i], upper.0[i]),
-            );
-        }
-        ok
+        let ok = |i: usize| {
+            crate::eval::layout::within(x.0[i], (scale.0[i], offset.0[i], lower.0[i], upper.0[i]))
+        };
+        ok(0) & ok(1) & ok(2) & ok(3)
     }
     #[inline(always)]
     fn load(v: &[f64; 4]) -> Self {
@@ -427,7 +425,7 @@ pub fn force_isa(isa: Option<Isa>) {
 /// took about 10 ns longer, whatever the amount of 512-bit work: one 512-bit multiply added to an
 /// evaluation otherwise on 256-bit registers made the Panda, UR5 and Kinova URDFs 15–23% slower.
 /// Eight angles in 512 bits save less than that, more than eight save more
-/// (`docs/performance.md#512-bit-instructions-in-single-evaluations`).
+/// (`docs/performance.md`, "What bounds each figure", and the file's git history).
 #[must_use]
 #[inline]
 pub fn narrow_trig() -> bool {

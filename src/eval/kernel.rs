@@ -365,7 +365,7 @@ pub(crate) fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
 /// rotations and one or three multiply–adds per origin entry; a general `pre` costs a full
 /// product with constant coefficients (broadcast from memory), which measured faster than
 /// composing a local frame `pre · M · post` built off the dependency chain (whose entries must be
-/// broadcast from registers: docs/performance.md, "How a joint is evaluated").
+/// broadcast from registers: the git history of docs/performance.md).
 ///
 /// `pre` and the steps after it take shape codes where the body has them ([`Body::pre_steps`],
 /// [`Body::z_tail`]): the operations of `place` and `apply_motion` without matching on kinds, and

@@ -13,6 +13,8 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 /// Number of configurations a batch kernel evaluates together.
 pub(crate) const LANES: usize = 8;
+// `each_lane!(8, ..)` writes out this many lanes.
+const _: () = assert!(LANES == 8);
 
 /// [`LANES`] values, one per configuration; arithmetic is lane-wise.
 /// Aligned to its size, so that a lane vector never straddles two cache lines (a load that
@@ -41,17 +43,29 @@ impl Lanes {
 
 const _: () = assert!(size_of::<Lanes>() == LANES * size_of::<f64>());
 
+/// `[e(0), e(1), …]` for lane indices `i` of 0..8 or 0..16, written out rather than looped: the
+/// lane-wise operations of the kernels' portable lane types (`Lanes` in the baseline x86-64
+/// build, and the single-precision `F16` in every build) inline into thousands per kernel, and
+/// as loops each one is rotated, then fully unrolled, by the optimiser (most of the crate's
+/// build time). Written out, the optimiser sees the straight-line code it would have unrolled
+/// them into.
+macro_rules! each_lane {
+    (8, |$i:ident| $e:expr) => {
+        [{ let $i = 0; $e }, { let $i = 1; $e }, { let $i = 2; $e }, { let $i = 3; $e }, { let $i = 4; $e }, { let $i = 5; $e }, { let $i = 6; $e }, { let $i = 7; $e }]
+    };
+    (16, |$i:ident| $e:expr) => {
+        [{ let $i = 0; $e }, { let $i = 1; $e }, { let $i = 2; $e }, { let $i = 3; $e }, { let $i = 4; $e }, { let $i = 5; $e }, { let $i = 6; $e }, { let $i = 7; $e }, { let $i = 8; $e }, { let $i = 9; $e }, { let $i = 10; $e }, { let $i = 11; $e }, { let $i = 12; $e }, { let $i = 13; $e }, { let $i = 14; $e }, { let $i = 15; $e }]
+    };
+}
+pub(crate) use each_lane;
+
 macro_rules! lanewise {
     ($trait:ident, $method:ident, $op:tt) => {
         impl $trait for Lanes {
             type Output = Lanes;
             #[inline(always)]
             fn $method(self, rhs: Lanes) -> Lanes {
-                let mut out = [0.0; LANES];
-                for i in 0..LANES {
-                    out[i] = self.0[i] $op rhs.0[i];
-                }
-                Lanes(out)
+                Lanes(each_lane!(8, |i| self.0[i] $op rhs.0[i]))
             }
         }
     };
@@ -64,7 +78,7 @@ impl Neg for Lanes {
     type Output = Lanes;
     #[inline(always)]
     fn neg(self) -> Lanes {
-        Lanes(self.0.map(|x| -x))
+        Lanes(each_lane!(8, |i| -self.0[i]))
     }
 }
 
@@ -75,11 +89,7 @@ impl Num for Lanes {
     }
     #[inline(always)]
     fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        let mut out = [0.0; LANES];
-        for i in 0..LANES {
-            out[i] = A::mul_add(a.0[i], b.0[i], c.0[i]);
-        }
-        Lanes(out)
+        Lanes(each_lane!(8, |i| A::mul_add(a.0[i], b.0[i], c.0[i])))
     }
     #[inline(always)]
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
@@ -181,11 +191,11 @@ impl LaneNum for Lanes {
     }
     #[inline(always)]
     fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        let mut ok = true;
-        for x in x.0 {
-            ok &= crate::eval::layout::within(x, (scale, offset, lower, upper));
-        }
-        ok
+        let ok = each_lane!(8, |i| crate::eval::layout::within(
+            x.0[i],
+            (scale, offset, lower, upper)
+        ));
+        ok[0] & ok[1] & ok[2] & ok[3] & ok[4] & ok[5] & ok[6] & ok[7]
     }
     #[inline(always)]
     fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
@@ -200,9 +210,21 @@ impl<N: LaneNum> Frame<N> {
     /// Part `part` of a stored frame.
     #[inline(always)]
     pub(crate) fn get(f: &Frame<Lanes>, part: usize) -> Self {
+        // Written out rather than looped (see `each_lane`).
+        let r = |i: usize| {
+            [
+                N::get(&f.r[i][0], part),
+                N::get(&f.r[i][1], part),
+                N::get(&f.r[i][2], part),
+            ]
+        };
         Frame {
-            r: std::array::from_fn(|i| std::array::from_fn(|j| N::get(&f.r[i][j], part))),
-            p: std::array::from_fn(|j| N::get(&f.p[j], part)),
+            r: [r(0), r(1), r(2)],
+            p: [
+                N::get(&f.p[0], part),
+                N::get(&f.p[1], part),
+                N::get(&f.p[2], part),
+            ],
         }
     }
     /// Writes the columns of `self` chosen by `COLUMNS` (bit `i` for rotation column `i`, bit 3
