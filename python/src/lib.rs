@@ -349,7 +349,9 @@ impl Chain {
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other.cast::<Chain>().is_ok_and(|o| {
             let o = o.get();
-            o.source == self.source && o.format == self.format && o.inner.name() == self.inner.name()
+            o.source == self.source
+                && o.format == self.format
+                && o.inner.name() == self.inner.name()
         })
     }
 

@@ -57,7 +57,9 @@ static POOLS: Mutex<Option<Pools>> = Mutex::new(None);
 /// The pool of `threads` threads (one per core for `None`) of this process.
 fn pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>, String> {
     let pid = std::process::id();
-    let mut guard = POOLS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let mut guard = POOLS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     if guard.as_ref().is_none_or(|p| p.pid != pid) {
         // Pools inherited through `fork` have no threads in this process: forgotten, not
         // dropped (dropping would wake threads that are not there).

@@ -451,7 +451,11 @@ fn write_output(
 ) -> Result<(), CliError> {
     match path {
         None => out.write_all(text.as_bytes()).map_err(output_error),
-        Some(path) => Ok(crate::io::output::write_file(path, text.as_bytes(), &[input])?),
+        Some(path) => Ok(crate::io::output::write_file(
+            path,
+            text.as_bytes(),
+            &[input],
+        )?),
     }
 }
 

@@ -43,21 +43,48 @@ impl Lanes {
 
 const _: () = assert!(size_of::<Lanes>() == LANES * size_of::<f64>());
 
-/// `[e(0), e(1), …]` for lane indices `i` of 0..8 or 0..16, written out rather than looped: the
-/// lane-wise operations of the kernels' portable lane types (`Lanes` in the baseline x86-64
-/// build, and the single-precision `F16` in every build) inline into thousands per kernel, and
-/// as loops each one is rotated, then fully unrolled, by the optimiser (most of the crate's
-/// build time). Written out, the optimiser sees the straight-line code it would have unrolled
-/// them into.
+/// `[e(0), e(1), …, e(7)]` for the lane index `i`, written out rather than looped: the lane-wise
+/// operations of the baseline build's lane type inline into thousands per kernel, and as loops
+/// each one was rotated, then fully unrolled, by the optimiser (most of the crate's build time).
+/// Written out, the optimiser sees the straight-line code it would have unrolled them into.
 macro_rules! each_lane {
     (8, |$i:ident| $e:expr) => {
-        [{ let $i = 0; $e }, { let $i = 1; $e }, { let $i = 2; $e }, { let $i = 3; $e }, { let $i = 4; $e }, { let $i = 5; $e }, { let $i = 6; $e }, { let $i = 7; $e }]
-    };
-    (16, |$i:ident| $e:expr) => {
-        [{ let $i = 0; $e }, { let $i = 1; $e }, { let $i = 2; $e }, { let $i = 3; $e }, { let $i = 4; $e }, { let $i = 5; $e }, { let $i = 6; $e }, { let $i = 7; $e }, { let $i = 8; $e }, { let $i = 9; $e }, { let $i = 10; $e }, { let $i = 11; $e }, { let $i = 12; $e }, { let $i = 13; $e }, { let $i = 14; $e }, { let $i = 15; $e }]
+        [
+            {
+                let $i = 0;
+                $e
+            },
+            {
+                let $i = 1;
+                $e
+            },
+            {
+                let $i = 2;
+                $e
+            },
+            {
+                let $i = 3;
+                $e
+            },
+            {
+                let $i = 4;
+                $e
+            },
+            {
+                let $i = 5;
+                $e
+            },
+            {
+                let $i = 6;
+                $e
+            },
+            {
+                let $i = 7;
+                $e
+            },
+        ]
     };
 }
-pub(crate) use each_lane;
 
 macro_rules! lanewise {
     ($trait:ident, $method:ident, $op:tt) => {

@@ -6,8 +6,8 @@ use crate::eval::chain::Chain;
 use crate::model::error::did_you_mean;
 use crate::model::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
-use std::borrow::Cow;
 use serde_json::Value;
+use std::borrow::Cow;
 use std::cell::RefCell;
 
 /// How [`InputError::ListEntry`] describes its entry.
@@ -128,7 +128,9 @@ pub enum InputError {
         expected: &'static str,
     },
     /// A CSV header's quoted name is not closed, or text follows its closing quote.
-    #[error("{what}: column {column}: {problem} (a quoted name is \"...\", a quote inside it \"\")")]
+    #[error(
+        "{what}: column {column}: {problem} (a quoted name is \"...\", a quote inside it \"\")"
+    )]
     Quoting {
         /// `header`.
         what: &'static str,

@@ -198,7 +198,10 @@ pub fn read_golden_file(path: &Path) -> Result<Golden, RegressionError> {
                 "larger than the {MAX_GOLDEN_BYTES} bytes a golden file may be"
             )));
         }
-        let length = bytes[start..].strip_suffix(b"\n").unwrap_or(&bytes[start..]).len();
+        let length = bytes[start..]
+            .strip_suffix(b"\n")
+            .unwrap_or(&bytes[start..])
+            .len();
         if length as u64 > MAX_GOLDEN_LINE_BYTES {
             return Err(over(format!(
                 "line {line} is longer than the {MAX_GOLDEN_LINE_BYTES} bytes a golden file's line may be"

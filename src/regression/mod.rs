@@ -594,10 +594,16 @@ pub fn compare_renamed(
     for (i, pair) in renames.iter().enumerate() {
         let (old, new) = pair;
         if a.joint_id(old).is_err() {
-            return Err(rename_problem(pair, format!("the first robot has no joint '{old}'")));
+            return Err(rename_problem(
+                pair,
+                format!("the first robot has no joint '{old}'"),
+            ));
         }
         if b.joint_id(new).is_err() {
-            return Err(rename_problem(pair, format!("the second robot has no joint '{new}'")));
+            return Err(rename_problem(
+                pair,
+                format!("the second robot has no joint '{new}'"),
+            ));
         }
         if renames[..i].iter().any(|(o, n)| o == old || n == new) {
             return Err(rename_problem(pair, "a joint is renamed twice".into()));

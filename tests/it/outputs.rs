@@ -25,8 +25,22 @@ fn stderr(out: &Output) -> String {
 fn writers(output: &str) -> [Vec<&str>; 3] {
     [
         vec!["convert", "robots/planar3.yaml", "-o", output],
-        vec!["render", "robots/planar3.yaml", "--q", "0 0.5 1", "-o", output],
-        vec!["record", "robots/planar3.yaml", "--samples", "3", "-o", output],
+        vec![
+            "render",
+            "robots/planar3.yaml",
+            "--q",
+            "0 0.5 1",
+            "-o",
+            output,
+        ],
+        vec![
+            "record",
+            "robots/planar3.yaml",
+            "--samples",
+            "3",
+            "-o",
+            output,
+        ],
     ]
 }
 
@@ -146,7 +160,12 @@ fn symbolic_links_are_followed() {
         assert!(out.status.success(), "{args:?}: {}", stderr(&out));
         assert_eq!(std::fs::read(&target).unwrap(), expected(&args), "{args:?}");
         for l in [&link, &link2] {
-            assert!(std::fs::symlink_metadata(l).unwrap().file_type().is_symlink());
+            assert!(
+                std::fs::symlink_metadata(l)
+                    .unwrap()
+                    .file_type()
+                    .is_symlink()
+            );
         }
         let mode = std::fs::metadata(&target).unwrap().permissions().mode() & 0o777;
         assert_eq!(mode, 0o600, "{args:?}: the replaced file's mode changed");
@@ -322,9 +341,16 @@ fn compare_refuses_a_joint_only_one_robot_has() {
     // `verify` refuses a robot whose joints differ from the record's.
     let golden = dir.path("panda.jsonl");
     assert!(
-        kinechain(&["record", "robots/panda.urdf", "--samples", "2", "-o", &golden])
-            .status
-            .success()
+        kinechain(&[
+            "record",
+            "robots/panda.urdf",
+            "--samples",
+            "2",
+            "-o",
+            &golden
+        ])
+        .status
+        .success()
     );
     let out = kinechain(&["verify", &b, &golden]);
     assert_eq!(out.status.code(), Some(2));
@@ -405,7 +431,11 @@ fn keep_going_skips_an_over_long_line() {
     );
     assert_eq!(lines[2]["line"], 3);
     assert!(lines[2].get("error").is_none(), "{}", lines[2]);
-    assert!(stderr(&out).contains("1 line(s) failed"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("1 line(s) failed"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 /// A CSV batch whose header row is quoted as Python's `csv` module writes it (a name with a
