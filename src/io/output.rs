@@ -70,16 +70,6 @@ pub enum OutputProblem {
     /// More symbolic links than the system follows, or a loop of them.
     #[error("more than {MAX_LINK_HOPS} symbolic links to follow (a loop?)")]
     LinkLoop,
-    /// The contents are larger than kinechain reads back from such a file.
-    #[error("{what} would be {size} bytes, more than the {limit} bytes kinechain reads back")]
-    TooLarge {
-        /// What the file holds (`the URDF`, `the golden file`).
-        what: &'static str,
-        /// The contents' size.
-        size: usize,
-        /// The limit of the reader.
-        limit: u64,
-    },
     /// The system refused a step.
     #[error(transparent)]
     Io(#[from] std::io::Error),
@@ -271,20 +261,4 @@ fn replace(
         let _ = std::fs::remove_file(&temp);
     }
     renamed
-}
-
-/// [`OutputProblem::TooLarge`] when `contents` is larger than `limit`, the most a reader of
-/// kinechain reads back of `what`.
-///
-/// # Errors
-/// As said.
-pub fn check_size(contents: &[u8], limit: u64, what: &'static str) -> Result<(), OutputProblem> {
-    if contents.len() as u64 > limit {
-        return Err(OutputProblem::TooLarge {
-            what,
-            size: contents.len(),
-            limit,
-        });
-    }
-    Ok(())
 }
