@@ -70,6 +70,9 @@ struct Chain {
     all_links: Vec<LinkId>,
     link_list: Py<PyList>,
     link_index: Arc<HashMap<String, usize>>,
+    /// The positions in `all_links` of the links without a child: the ones a finiteness check
+    /// of every link's results reads (see [`check_finite`]).
+    leaves: Vec<usize>,
     /// Buffers of single evaluations, reused by whichever call finds them free.
     data: Mutex<Option<Data>>,
 }
@@ -93,6 +96,14 @@ impl Chain {
             .enumerate()
             .map(|(i, n)| (n.clone(), i))
             .collect();
+        let parents: std::collections::HashSet<LinkId> =
+            inner.joints().iter().map(|j| j.parent()).collect();
+        let leaves = all_links
+            .iter()
+            .enumerate()
+            .filter(|(_, id)| !parents.contains(id))
+            .map(|(k, _)| k)
+            .collect();
         Ok(Chain {
             inner: Arc::new(inner),
             source,
@@ -101,6 +112,7 @@ impl Chain {
             all_links,
             link_list: PyList::new(py, &names)?.unbind(),
             link_index: Arc::new(link_index),
+            leaves,
             data: Mutex::new(None),
         })
     }
@@ -267,16 +279,42 @@ fn rate_overflow(rates: &[f64], l: usize) -> Option<(usize, usize)> {
     Some((k / l.max(1), k % l.max(1)))
 }
 
+/// Whether the positions and rates of the links at `watch` (positions among the `l` links of
+/// each row) are finite in every row of `poses` and `rates`.
+fn watched_finite(poses: &[f64], rates: &[&[f64]], l: usize, watch: &[usize]) -> bool {
+    let mut ok = true;
+    for row in poses.chunks_exact(16 * l.max(1)) {
+        for &k in watch {
+            let m = &row[16 * k..16 * k + 16];
+            ok &= m[3].is_finite() & m[7].is_finite() & m[11].is_finite();
+        }
+    }
+    for r in rates {
+        for row in r.chunks_exact(3 * l.max(1)) {
+            for &k in watch {
+                let v = &row[3 * k..3 * k + 3];
+                ok &= v[0].is_finite() & v[1].is_finite() & v[2].is_finite();
+            }
+        }
+    }
+    ok
+}
+
 /// [`Failure::Overflow`] for the first pose or rate of `ids` that is not finite in the rows
-/// from `first` on.
+/// from `first` on. Only the links at `watch` are read unless one of them is not finite: those
+/// with no other link of `ids` below them, since a position or rate that is not finite makes
+/// every one below it not finite too (a child's are its parent's plus finite terms).
 fn check_finite(
     chain: &Inner,
-    ids: &[LinkId],
+    (ids, watch): (&[LinkId], &[usize]),
     first: usize,
     poses: &[f64],
     rates: &[&[f64]],
 ) -> Result<(), Failure> {
     const RATES: [&str; 4] = ["omega", "v", "alpha", "a"];
+    if watched_finite(poses, rates, ids.len(), watch) {
+        return Ok(());
+    }
     let found = pose_overflow(poses, ids.len())
         .map(|at| ("pose", at))
         .or_else(|| {
@@ -466,6 +504,15 @@ impl Chain {
         let level = usize::from(qd.is_some()) + usize::from(qdd.is_some());
         let (ids, names, index) = self.link_ids(py, links)?;
         let l = ids.len();
+        // The links a finiteness check reads: every link's leaves, or each link asked for.
+        let every: Vec<usize>;
+        let watch: &[usize] = match &ids {
+            std::borrow::Cow::Borrowed(_) => &self.leaves,
+            std::borrow::Cow::Owned(_) => {
+                every = (0..l).collect();
+                &every
+            }
+        };
         // The shape `(N, L, *tail)` or `(L, *tail)`, built on the stack (`IxDyn` keeps up to
         // four axes inline).
         let dims = |tail: &[usize]| {
@@ -601,18 +648,18 @@ impl Chain {
                         rate_out.iter().map(|o| &*o.part(0, n * l * 3)).collect(),
                     )
                 };
-                check_finite(chain, &ids, 0, p, &r)
+                check_finite(chain, (&ids, watch), 0, p, &r)
             })
         } else {
             py.detach(|| match qd {
                 _ if n == 0 => Ok(()),
-                None => batch_poses(chain, policy, q, n, &ids, pose_out, threads),
+                None => batch_poses(chain, policy, q, n, (&ids, watch), pose_out, threads),
                 Some(qd) => batch_rates(
                     chain,
                     policy,
                     (q, qd, qdd),
                     n,
-                    &ids,
+                    (&ids, watch),
                     &pose_out,
                     &rate_out,
                     threads,
@@ -1054,7 +1101,7 @@ fn batch_poses(
     policy: LimitPolicy,
     qs: &[f64],
     n: usize,
-    ids: &[LinkId],
+    (ids, watch): (&[LinkId], &[usize]),
     out: Out,
     threads: Option<usize>,
 ) -> Result<(), Failure> {
@@ -1079,7 +1126,7 @@ fn batch_poses(
                 .write_matrices(ids, rows)
         };
         written.map_err(|e| Failure::State(Some(at.start), e))?;
-        check_finite(chain, ids, at.start, rows, &[])
+        check_finite(chain, (ids, watch), at.start, rows, &[])
     })
 }
 
@@ -1092,7 +1139,7 @@ fn batch_rates(
     policy: LimitPolicy,
     (qs, qds, qdds): (&[f64], &[f64], Option<&[f64]>),
     n: usize,
-    ids: &[LinkId],
+    (ids, watch): (&[LinkId], &[usize]),
     pose_out: &Out,
     rate_out: &[Out],
     threads: Option<usize>,
@@ -1129,7 +1176,7 @@ fn batch_rates(
         };
         written.map_err(|e| Failure::State(Some(at.start), e))?;
         let parts: Vec<&[f64]> = parts.iter().map(|p| &**p).collect();
-        check_finite(chain, ids, at.start, pose, &parts)
+        check_finite(chain, (ids, watch), at.start, pose, &parts)
     })
 }
 
