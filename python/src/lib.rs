@@ -1149,21 +1149,24 @@ fn batch_rates(
     in_blocks((chain, policy), n, RATE_BLOCK, threads, |data, at| {
         let rows = at.start * dof..at.end * dof;
         let fail = at_block(at.start);
-        // SAFETY: the block's configurations' ranges of each output, written by this call alone.
+        // SAFETY: the block's configurations' ranges of each output, written by this call alone
+        // (each rate array taken once per block).
         let pose = unsafe { pose_out.part(at.start * l * 16, at.len() * l * 16) };
-        let mut parts: Vec<&mut [f64]> = rate_out
-            .iter()
-            .map(|o| unsafe { o.part(at.start * l * 3, at.len() * l * 3) })
-            .collect();
+        let part = |k: usize| unsafe { rate_out[k].part(at.start * l * 3, at.len() * l * 3) };
         let (q, qd) = (&qs[rows.clone()], &qds[rows.clone()]);
-        let written = match (qdds, parts.as_mut_slice()) {
-            (None, [omega, v]) => {
+        let written = |e| Failure::State(Some(at.start), e);
+        match qdds {
+            None => {
+                let (omega, v) = (part(0), part(1));
                 let r = forward_velocities_batch(chain, data, q, qd).map_err(fail)?;
                 r.poses()
                     .write_matrices(ids, pose)
                     .and_then(|()| r.write_velocities(ids, omega, v))
+                    .map_err(written)?;
+                check_finite(chain, (ids, watch), at.start, pose, &[omega, v])
             }
-            (Some(qdds), [omega, v, alpha, a]) => {
+            Some(qdds) => {
+                let (omega, v, alpha, a) = (part(0), part(1), part(2), part(3));
                 let r =
                     forward_accelerations_batch(chain, data, q, qd, &qdds[rows]).map_err(fail)?;
                 let vel = r.velocities();
@@ -1171,12 +1174,10 @@ fn batch_rates(
                     .write_matrices(ids, pose)
                     .and_then(|()| vel.write_velocities(ids, omega, v))
                     .and_then(|()| r.write_accelerations(ids, alpha, a))
+                    .map_err(written)?;
+                check_finite(chain, (ids, watch), at.start, pose, &[omega, v, alpha, a])
             }
-            _ => return Err(Failure::Threads("the rate outputs do not match qdd".into())),
-        };
-        written.map_err(|e| Failure::State(Some(at.start), e))?;
-        let parts: Vec<&[f64]> = parts.iter().map(|p| &**p).collect();
-        check_finite(chain, (ids, watch), at.start, pose, &parts)
+        }
     })
 }
 
