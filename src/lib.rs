@@ -56,18 +56,18 @@ pub mod reference;
 pub mod regression;
 
 #[doc(hidden)]
-pub use eval::arith::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};
+pub use eval::{Isa, force_isa, force_narrow_trig, isa, narrow_trig};
 pub use nalgebra;
 
 pub use error::{Error, FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
-pub use eval::chain::Chain;
-pub use eval::data::{Data, LimitPolicy};
-pub use eval::jacobian::JacobianFrame;
-pub use eval::kinematics::{
+pub use eval::Chain;
+pub use eval::JacobianFrame;
+pub use eval::{
     Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_incremental,
     forward_kinematics_to, forward_velocities,
 };
+pub use eval::{Data, LimitPolicy};
 pub use model::builder::{ChainBuilder, JointSpec, MimicSpec};
 pub use model::chain::{Joint, JointId, JointScrew, Link, LinkId, Mimic, Model};
 pub use model::joint::{JointKind, Limits};

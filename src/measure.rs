@@ -2,7 +2,7 @@
 //! benchmarks use, so that every figure they print is measured the same way (and so that a user
 //! timing their own code can do likewise).
 
-use crate::eval::chain::Chain;
+use crate::eval::Chain;
 use std::f64::consts::{PI, TAU};
 use std::time::{Duration, Instant};
 

@@ -7,8 +7,8 @@
 //! kernels is their evaluation error; rounding made while loading a file (e.g. `rpy` to a matrix)
 //! is not part of it (the 50-digit files of the reference data measure that too).
 
-use crate::eval::chain::Chain;
-use crate::eval::layout::{Body, Placement};
+use crate::eval::Chain;
+use crate::eval::layout::body::{Body, Placement};
 use crate::measure::worse;
 use crate::model::chain::LinkId;
 use crate::model::joint::Term;
@@ -246,7 +246,7 @@ struct BigMotion {
 }
 
 /// Link poses, velocities and accelerations at `(q, q_dot, q_ddot)` (in [`Chain::links`](crate::Model::links)
-/// order), by the recursion of [`crate::eval::kinematics`] in [`PRECISION_BITS`]-bit arithmetic.
+/// order), by the recursion of `eval::single::kinematics` in [`PRECISION_BITS`]-bit arithmetic.
 ///
 /// # Panics
 /// If a vector does not have [`Chain::dof`](crate::Model::dof) entries.

@@ -1,9 +1,28 @@
 //! `kinechain fk --batch`: one result per input line; lines of poses, of poses and velocities, and
 //! of poses, velocities and accelerations through the batch kernels.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
-use crate::eval::kinematics::check_values;
+use crate::cli::args::{FkArgs, OutputFormat};
+use crate::cli::common::{output_error, write_line};
+use crate::cli::error::CliError;
+use crate::cli::format::{
+    Configuration, JacobianResult, LinkResult, ResultsJson, check_finite, csv_field, csv_links,
+    csv_row, orientation_columns, results_table, write_buffered_line, write_json_line,
+};
+use crate::cli::query::{Request, at_line, jacobians_finite, jacobians_table, line_heading};
+use crate::error::error_chain;
+use crate::eval::Chain;
+use crate::eval::Data;
+use crate::eval::JacobianFrame;
+use crate::eval::batch::{
+    BatchData, forward_accelerations_batch, forward_kinematics_batch, forward_velocities_batch,
+    jacobian_batch, jacobian_dot_batch,
+};
+use crate::eval::check_q;
+use crate::eval::checks::check_values;
+use crate::model::chain::LinkId;
+use serde_json::json;
+use std::io::{BufRead, Write};
+use std::path::Path;
 
 /// Consecutive lines of a batch file that ask for every link at the same level (poses, with
 /// velocities, with accelerations), evaluated together by the batch kernels.

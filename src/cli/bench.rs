@@ -1,11 +1,21 @@
 //! `kinechain bench`: the evaluation modes timed against each other and the `k` crate, with
 //! their errors against the 256-bit evaluation.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
-
-/// The most configurations `bench` takes.
-pub(super) const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
+use crate::cli::args::Level;
+use crate::cli::common::{load, write_line};
+use crate::cli::error::CliError;
+use crate::cli::limits::MAX_BENCH_FRAMES;
+use crate::eval::Chain;
+use crate::eval::{Data, LimitPolicy};
+use crate::eval::{
+    forward_accelerations, forward_kinematics, forward_kinematics_to, forward_velocities,
+};
+use crate::measure::worse;
+use crate::model::chain::LinkId;
+use crate::model::transform::Transform;
+use std::hint::black_box;
+use std::io::Write;
+use std::path::PathBuf;
 
 /// Joint evaluations of the batch that `bench`'s two-thread rows time (≈70 µs of one thread's
 /// work, some 5 000 configurations of a seven-joint arm): well above
@@ -13,33 +23,15 @@ pub(super) const MAX_BENCH_CONFIGURATIONS: usize = 1 << 16;
 /// cache.
 pub(super) const THREADED_ROWS_WORK: usize = 40_000;
 
-/// `--configurations`: a whole number from 2 to [`MAX_BENCH_CONFIGURATIONS`].
-/// The most link frames (configurations times links) `bench` keeps: 2²³, 768 MiB of frames, so
-/// that a robot with many links cannot make the batch rows exhaust memory.
-pub(super) const MAX_BENCH_FRAMES: usize = 1 << 23;
-
-pub(super) fn configuration_count(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(n) if n < 2 => {
-            Err("at least 2 are needed (the incremental row moves between them)".into())
-        }
-        Ok(n) if n > MAX_BENCH_CONFIGURATIONS => Err(format!(
-            "at most {MAX_BENCH_CONFIGURATIONS} (each is checked against a 256-bit evaluation, and the batch rows keep every link's frame)"
-        )),
-        Ok(n) => Ok(n),
-        Err(e) => Err(e.to_string()),
-    }
-}
-
 /// One timed method of `kinechain bench`: its label, one call, and how many configurations a
 /// call evaluates.
 pub(super) type Method<'a> = (String, Box<dyn FnMut() + 'a>, usize);
 
 /// The instruction set of the kernels, and for AVX-512 how single evaluations of at most eight
-/// angles compute their `sin`/`cos` ([`crate::eval::arith::narrow_trig`]).
+/// angles compute their `sin`/`cos` ([`crate::eval::narrow_trig`]).
 pub(super) fn kernels_name() -> String {
-    match crate::eval::arith::isa() {
-        crate::eval::arith::Isa::Avx512 if crate::eval::arith::narrow_trig() => {
+    match crate::eval::isa() {
+        crate::eval::Isa::Avx512 if crate::eval::narrow_trig() => {
             "avx512 (single evaluations of up to 8 angles: sin/cos on 256 bits)".to_string()
         }
         isa => isa.name().to_string(),
@@ -170,13 +162,13 @@ impl<'a> Workload<'a> {
     /// Every link's pose of each configuration, on the kernels of `isa` (`None`: the machine's),
     /// with `wide` the `sin`/`cos` forced into one 512-bit register where `narrow_trig` would
     /// split them; the end link read after each.
-    fn all_links(&self, isa: Option<crate::eval::arith::Isa>, wide: bool) -> Box<dyn FnMut() + 'a> {
+    fn all_links(&self, isa: Option<crate::eval::Isa>, wide: bool) -> Box<dyn FnMut() + 'a> {
         let Workload { chain, qs, end, .. } = *self;
         let mut d = self.data();
         Box::new(move || {
-            crate::eval::arith::force_isa(isa);
+            crate::eval::force_isa(isa);
             if wide {
-                crate::eval::arith::force_narrow_trig(Some(false));
+                crate::eval::force_narrow_trig(Some(false));
             }
             for q in qs {
                 black_box(
@@ -185,9 +177,9 @@ impl<'a> Workload<'a> {
                         .map(|p| p.world_from_link(end)),
                 );
             }
-            crate::eval::arith::force_isa(None);
+            crate::eval::force_isa(None);
             if wide {
-                crate::eval::arith::force_narrow_trig(None);
+                crate::eval::force_narrow_trig(None);
             }
         })
     }
@@ -212,8 +204,8 @@ impl<'a> Workload<'a> {
         methods.extend(self.batch_methods());
         // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
         // `kernel::all_sin_cos` makes), what it saves.
-        if crate::eval::arith::isa() == crate::eval::arith::Isa::Avx512
-            && crate::eval::arith::narrow_trig()
+        if crate::eval::isa() == crate::eval::Isa::Avx512
+            && crate::eval::narrow_trig()
             && chain.theta_gather.len() == 1
         {
             methods.push((
@@ -224,7 +216,7 @@ impl<'a> Workload<'a> {
         }
         methods.push((
             "kinechain, baseline x86-64 path".into(),
-            self.all_links(Some(crate::eval::arith::Isa::Baseline), false),
+            self.all_links(Some(crate::eval::Isa::Baseline), false),
             n,
         ));
         if let Some((label, k)) = k_method(path, chain, qs) {
@@ -324,7 +316,7 @@ impl<'a> Workload<'a> {
     /// The incremental update moving only the last entry of `q` on the end link's path, from
     /// the first configuration's other entries; `None` if no joint moves the end link.
     fn incremental_method(&self) -> Option<Method<'a>> {
-        use crate::eval::kinematics::forward_kinematics_incremental;
+        use crate::eval::forward_kinematics_incremental;
         let Workload { chain, qs, end, .. } = *self;
         let last = last_variable_to(chain, end)?;
         let (joint, component) = chain.variables().nth(last)?;
@@ -469,7 +461,7 @@ impl<'a> Workload<'a> {
             (
                 format!("{BATCH_JACOBIAN} {name}, 1 thread"),
                 Box::new(move || {
-                    let frame = crate::eval::jacobian::JacobianFrame::World;
+                    let frame = crate::eval::JacobianFrame::World;
                     black_box(
                         jacobian_batch(chain, &mut b, black_box(flat), end, frame, &mut out).ok(),
                     );
@@ -648,14 +640,23 @@ pub(super) fn rate_errors(
 /// compares: the incremental update with a full evaluation of poses (`--level pose`), and the
 /// evaluation with rates with poses alone (`--level vel|acc`).
 pub(super) const INCREMENTAL: &str = "kinechain, incremental";
+
 pub(super) const WITH_RATES: &str = "kinechain, poses + velocities";
+
 pub(super) const ALL_LINKS: &str = "kinechain, all links";
+
 pub(super) const POSES_ONLY: &str = "kinechain, poses only";
+
 pub(super) const BATCH_PREFIX: &str = "kinechain, batch, ";
+
 pub(super) const BATCH_WITH_RATES: &str = "kinechain, batch, poses + velocities";
+
 pub(super) const BATCH_POSES_ONLY: &str = "kinechain, batch, poses only";
+
 pub(super) const JACOBIAN: &str = "kinechain, Jacobian of";
+
 pub(super) const BATCH_JACOBIAN: &str = "kinechain, batch, Jacobian of";
+
 pub(super) const BATCH_LINK_POSE: &str = "kinechain, batch, pose only of";
 
 /// The last entry of `q` that moves `link`: the largest read by the nearest body on its path that

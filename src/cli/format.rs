@@ -1,23 +1,45 @@
 //! How `fk` prints its results: JSON objects and aligned tables, orientation coordinates.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
+use crate::cli::args::{FkArgs, Orientation, Point};
+use crate::cli::common::output_error;
+use crate::cli::error::CliError;
+use crate::eval::Chain;
+use crate::eval::{AccelerationParts, LinkAcceleration, LinkVelocity};
+use crate::model::chain::LinkId;
+use crate::model::transform::Transform;
+use nalgebra::Vector3;
+use serde::{Serialize, Serializer, ser::SerializeMap};
+use std::io::Write;
 
-/// How `fk` prints each link's orientation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(super) enum Orientation {
-    /// The 4×4 pose matrix (`"pose"`).
-    Matrix,
-    /// Euler parameters, `"quaternion": {"w", "x", "y", "z"}`.
-    Quat,
-    /// `"rpy": {"roll", "pitch", "yaw"}`, `R = Rz(yaw) Ry(pitch) Rx(roll)`.
-    Rpy,
-    /// `"euler_zxz": {"phi", "theta", "psi"}`, `R = Rz(φ) Rx(θ) Rz(ψ)` (eq. 2.96).
-    Zxz,
-    /// `"axis_angle": {"axis": [x, y, z], "angle"}`.
-    AxisAngle,
-    /// Rodriguez parameters `"rodrigues": [γ1, γ2, γ3]` (eq. 2.77).
-    Rodrigues,
+/// One configuration to evaluate.
+pub(super) struct Configuration {
+    pub(super) q: Vec<f64>,
+    pub(super) qd: Option<Vec<f64>>,
+    pub(super) qdd: Option<Vec<f64>>,
+}
+
+/// Per link: pose, and velocity/acceleration when asked for.
+pub(super) type LinkResult = (
+    LinkId,
+    Transform,
+    Option<LinkVelocity>,
+    Option<LinkAcceleration>,
+);
+
+/// Per point: position, velocity, acceleration and its parts, as far as asked for.
+pub(super) struct PointResult {
+    pub(super) position: Vector3<f64>,
+    pub(super) velocity: Option<Vector3<f64>>,
+    pub(super) acceleration: Option<(Vector3<f64>, AccelerationParts)>,
+}
+
+/// One `--jacobian` link's matrices, in buffers reused from one configuration to the next.
+pub(super) struct JacobianResult {
+    pub(super) link: LinkId,
+    pub(super) j: nalgebra::Matrix6xX<f64>,
+    /// `J̇`, current when `with_rate` (the configuration has `qd`).
+    pub(super) j_dot: nalgebra::Matrix6xX<f64>,
+    pub(super) with_rate: bool,
 }
 
 /// The coordinates of `a` that `--orientation` names, in the order the README gives (the matrix

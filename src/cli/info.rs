@@ -1,7 +1,11 @@
 //! `kinechain info`: the joints in `q` order, their limits, and the links.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
+use crate::cli::args::OutputFormat;
+use crate::cli::common::write_line;
+use crate::cli::error::CliError;
+use crate::eval::Chain;
+use serde_json::{Map, Value, json};
+use std::io::Write;
 
 pub(super) fn limits_json(joint: &crate::model::chain::Joint) -> Value {
     let one = |l: &Option<crate::model::joint::Limits>| match l {

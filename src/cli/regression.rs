@@ -1,84 +1,11 @@
 //! `kinechain record`, `verify` and `compare`: regression tests on link kinematics.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
-use crate::regression::{self, Options, Report, Tolerances};
-
-/// The tolerances of `verify` and `compare`.
-#[derive(Debug, clap::Args)]
-pub(super) struct TolArgs {
-    /// Largest distance a link origin may move (m).
-    #[arg(long, default_value_t = 1e-9, value_parser = tolerance)]
-    tol_position: f64,
-    /// Largest angle a link may turn (rad).
-    #[arg(long, default_value_t = 1e-9, value_parser = tolerance)]
-    tol_rotation: f64,
-    /// Largest change of ω, v, α or a (levels vel and acc).
-    #[arg(long, default_value_t = 1e-9, value_parser = tolerance)]
-    tol_rates: f64,
-}
-
-impl TolArgs {
-    fn tolerances(&self) -> Tolerances {
-        Tolerances {
-            position: self.tol_position,
-            rotation: self.tol_rotation,
-            rates: self.tol_rates,
-        }
-    }
-}
-
-/// How `record` and `compare` draw configurations.
-#[derive(Debug, clap::Args)]
-pub(super) struct SampleArgs {
-    /// Random configurations within the limits, besides zero and the two limit corners where
-    /// the limits admit them.
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(0..=1_000_000))]
-    samples: u32,
-    /// Seed of the configurations (the same seed draws the same ones).
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// What to record: poses, poses and velocities, or poses, velocities and accelerations.
-    #[arg(long, value_enum, default_value_t = Level::Pose)]
-    level: Level,
-    /// Only these links (repeatable; default: every link).
-    #[arg(long = "link", value_name = "NAME")]
-    links: Vec<String>,
-}
-
-impl SampleArgs {
-    fn options(&self) -> Options {
-        Options {
-            samples: self.samples as usize,
-            seed: self.seed,
-            level: match self.level {
-                Level::Pose => regression::Level::Pose,
-                Level::Vel => regression::Level::Vel,
-                Level::Acc => regression::Level::Acc,
-            },
-            links: self.links.clone(),
-        }
-    }
-}
-
-/// `OLD=NEW`: a joint of the first robot and its name in the second.
-pub(super) fn rename(s: &str) -> Result<(String, String), String> {
-    match s.split_once('=') {
-        Some((old, new)) if !old.is_empty() && !new.is_empty() => {
-            Ok((old.to_string(), new.to_string()))
-        }
-        _ => Err(format!(
-            "'{s}' is not OLD=NEW (a joint of the first robot, then its name in the second)"
-        )),
-    }
-}
-
-fn tolerance(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
-        _ => Err(format!("'{s}' is not a finite number ≥ 0")),
-    }
-}
+use crate::cli::args::{OutputFormat, SampleArgs, TolArgs};
+use crate::cli::common::{load, output_error, refuse_overwrite};
+use crate::cli::error::CliError;
+use crate::regression::{self, Report};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 pub(super) fn record(
     robot: &PathBuf,

@@ -3,10 +3,11 @@
 //! of a batch. Both read the same stored frames and rates and run this code, so a batched
 //! Jacobian equals the single one bit for bit.
 
-use crate::eval::arith::{Arith, Col};
-use crate::eval::chain::Chain;
-use crate::eval::layout::Body;
-use crate::eval::padded::{Frame4, Stored, place};
+use crate::eval::kernel::pose_columns::{Frame4, place};
+use crate::eval::layout::body::Body;
+use crate::eval::layout::chain::Chain;
+use crate::eval::layout::stored::Stored;
+use crate::eval::simd::traits::{Arith, Col};
 use crate::model::chain::LinkId;
 use crate::model::transform::{Transform, add3, cross3, sub3};
 
@@ -338,7 +339,7 @@ fn stored_jacobian_generic<A: Arith>(
     }
 }
 
-crate::eval::arith::fma_dispatch!(avx2 pub(crate) fn stored_jacobian(chain: &Chain, frames: &[Stored], link: LinkId, frame: JacobianFrame, j: &mut [f64]) => stored_jacobian_generic);
+crate::eval::simd::isa::fma_dispatch!(avx2 pub(crate) fn stored_jacobian(chain: &Chain, frames: &[Stored], link: LinkId, frame: JacobianFrame, j: &mut [f64]) => stored_jacobian_generic);
 
 #[cfg(test)]
 mod tests {

@@ -14,7 +14,7 @@
 //! frame), and a `<limit>`'s required effort and velocity as 0, which a comment at the top of the
 //! file states. Fixed and continuous joints get no `<limit>`, and fixed joints no `<axis>`.
 
-use crate::eval::chain::Chain;
+use crate::eval::Chain;
 
 use crate::model::builder::JointSpec;
 use crate::model::joint::{JointKind, Limits};

@@ -2,7 +2,7 @@
 //! or an object keyed by joint name that names every independent joint exactly once
 //! (`{"j1": 0.1, "j5": [0.2, 0.05]}`; a cylindrical joint takes `[θ, d]`).
 
-use crate::eval::chain::Chain;
+use crate::eval::Chain;
 use crate::model::error::did_you_mean;
 use crate::model::joint::JointKind;
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};

@@ -9,7 +9,7 @@ pub mod render;
 mod urdf;
 pub(crate) mod xml;
 
-use crate::eval::chain::Chain;
+use crate::eval::Chain;
 use crate::io::error::{LoadError, LoadErrorKind};
 use std::io::Read;
 use std::path::Path;

@@ -13,8 +13,8 @@
 //! with the limits ignored): the geometry is laid out in units of a power of two near the largest
 //! coordinate, which scales every step exactly and keeps squares and spans within `f64`.
 
-use crate::eval::chain::Chain;
-use crate::eval::kinematics::Poses;
+use crate::eval::Chain;
+use crate::eval::Poses;
 use crate::io::xml::escape_shown;
 use crate::model::chain::LinkId;
 use nalgebra::{Point3, Vector3};

@@ -12,19 +12,13 @@ use crate::model::builder::{ChainBuilder, JointSpec};
 use crate::model::joint::{JointKind, Limits};
 use crate::model::transform::Transform;
 use roxmltree::{Document, Node, ParsingOptions};
-use xml_errors::{too_many_nodes, xml_error};
+use xml_errors::{BYTES_PER_NODE, line_column, too_many_nodes, xml_error};
 
 mod links;
 mod xml_errors;
 
 /// Deepest element nesting accepted (real URDFs nest about 6 deep).
 pub(crate) const MAX_XML_DEPTH: usize = 100;
-
-/// File bytes per XML node the parser may build. Each node of the tree costs about 70 bytes
-/// (and the parser reserves room for one per `<` before it starts, so a file may have at most two
-/// `<` per node allowed), which bounds a load's memory to about 15 times the file's size whatever
-/// the file holds; real URDFs spend 30 to 45 bytes on a `<`.
-const BYTES_PER_NODE: usize = 12;
 
 /// Nodes any file may hold, however short.
 const MIN_NODES: usize = 4096;
@@ -198,18 +192,6 @@ fn late_declaration(source: &str) -> Option<usize> {
     let body = source.trim_start_matches('\u{feff}');
     let at = source.len() - body.trim_start().len();
     (at > source.len() - body.len() && source[at..].starts_with("<?xml")).then_some(at)
-}
-
-/// The 1-based line and column (in characters) of byte `offset`.
-fn line_column(source: &str, offset: usize) -> (u32, u32) {
-    let before = &source[..offset];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before[line_start..].chars().count() + 1;
-    (
-        u32::try_from(line).unwrap_or(u32::MAX),
-        u32::try_from(column).unwrap_or(u32::MAX),
-    )
 }
 
 /// The 1-based line and column of byte `offset` of the document.

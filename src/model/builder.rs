@@ -119,7 +119,7 @@ impl JointSpec {
         self
     }
 }
-/// Collects links and joints and builds a validated [`Chain`](crate::eval::chain::Chain).
+/// Collects links and joints and builds a validated [`Chain`](crate::eval::Chain).
 ///
 /// # Examples
 /// ```

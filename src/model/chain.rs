@@ -187,7 +187,7 @@ impl Link {
 }
 
 /// A validated kinematic chain (or tree): its joints, links, names, the layout of `q` and the
-/// description it was built from. Every [`Chain`](crate::eval::chain::Chain) has one (and
+/// description it was built from. Every [`Chain`](crate::eval::Chain) has one (and
 /// dereferences to it), so these methods are the chain's.
 #[derive(Clone, Debug)]
 pub struct Model {

@@ -1,7 +1,7 @@
 //! Euler angles (sec. 2.6): z-x-z, x-y-z, and URDF roll–pitch–yaw, with the maps between their
 //! rates and the angular velocity.
 
-use super::{EulerParameters, RATE_SINGULARITY, Singular, rot_x, rot_y, rot_z};
+use super::parameters::{EulerParameters, RATE_SINGULARITY, Singular, rot_x, rot_y, rot_z};
 use nalgebra::{Matrix3, Vector3};
 use std::f64::consts::{PI, TAU};
 

@@ -1,20 +1,11 @@
 //! The golden file: its records, how it is written, and how it is read back with every line
 //! checked, so that a truncated or damaged file is an error naming the line, never a pass.
 
-use super::{Level, RegressionError};
+use super::error::RegressionError;
+use super::options::{Level, MAX_GOLDEN_BYTES, MAX_GOLDEN_LINE_BYTES};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
-
-/// Largest golden file read or written, in bytes (a record of 100 000 samples of a 13-link arm's
-/// poses is about 350 MB; a regression record is usually a few hundred kB).
-pub const MAX_GOLDEN_BYTES: u64 = 256 << 20;
-
-/// Longest line of a golden file, in bytes: a header naming every joint and link, or one sample
-/// of every link's pose and rates, of robots up to the largest file a robot may be
-/// ([`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES)). A stream without line ends (`/dev/zero`) is
-/// refused once this much of it has been read.
-pub const MAX_GOLDEN_LINE_BYTES: u64 = 32 << 20;
 
 /// The format's version, the header's `kinechain_golden`.
 pub(super) const FORMAT: u32 = 1;

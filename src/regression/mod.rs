@@ -15,243 +15,27 @@
 //!
 //! This layer may use [`crate::model`], [`crate::eval`], [`crate::io`] and [`crate::measure`].
 
+mod error;
 mod golden;
+mod options;
 mod report;
 
+pub use error::RegressionError;
+pub use options::{Level, MAX_GOLDEN_BYTES, MAX_GOLDEN_LINE_BYTES, Options, Tolerances};
+
 pub use golden::{
-    Golden, Header, LinkState, MAX_GOLDEN_BYTES, MAX_GOLDEN_LINE_BYTES, Sample, golden_bytes,
-    read_golden, read_golden_file, write_golden, write_golden_file,
+    Golden, Header, LinkState, Sample, golden_bytes, read_golden, read_golden_file, write_golden,
+    write_golden_file,
 };
 pub use report::{LinkReport, Names, Report, Worst};
 
-use crate::eval::chain::Chain;
-use crate::eval::data::{Data, LimitPolicy};
-use crate::eval::error::StateError;
-use crate::eval::kinematics::{
-    check_q, forward_accelerations, forward_kinematics, forward_velocities,
-};
+use crate::eval::Chain;
+use crate::eval::{Data, LimitPolicy};
+use crate::eval::{check_q, forward_accelerations, forward_kinematics, forward_velocities};
 use crate::measure::{SplitMix, between};
 use crate::model::chain::LinkId;
-use crate::model::error::NameError;
 use crate::model::transform::Transform;
 use std::f64::consts::PI;
-
-/// What a record holds for each link: poses, poses and velocities (ω, v), or poses, velocities
-/// and accelerations (α, classical a).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Level {
-    /// Poses.
-    Pose,
-    /// Poses, ω and v.
-    Vel,
-    /// Poses, ω, v, α and a.
-    Acc,
-}
-
-impl Level {
-    /// `pose`, `vel` or `acc`, as written in a golden file and on the command line.
-    #[must_use]
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Level::Pose => "pose",
-            Level::Vel => "vel",
-            Level::Acc => "acc",
-        }
-    }
-}
-
-impl std::fmt::Display for Level {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-/// How configurations are drawn and which links are recorded.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Options {
-    /// Random configurations, drawn uniformly within the limits (entries without limits from
-    /// `[−π, π]`), besides the zero configuration and the two limit corners where the limits
-    /// admit them.
-    pub samples: usize,
-    /// Seed of the draw: the same seed gives the same configurations.
-    pub seed: u64,
-    /// What is recorded.
-    pub level: Level,
-    /// The links recorded, by name; empty: every link.
-    pub links: Vec<String>,
-}
-
-impl Default for Options {
-    fn default() -> Self {
-        Options {
-            samples: 100,
-            seed: 1,
-            level: Level::Pose,
-            links: Vec::new(),
-        }
-    }
-}
-
-/// The largest differences a link may show and still pass.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Tolerances {
-    /// Distance between the two positions of a link origin (m).
-    pub position: f64,
-    /// Angle of the rotation between the two orientations of a link (rad).
-    pub rotation: f64,
-    /// Norm of the difference of ω, v, α or a (rad/s, m/s, rad/s², m/s²).
-    pub rates: f64,
-}
-
-impl Default for Tolerances {
-    /// 1e-9 m, 1e-9 rad, 1e-9 for the rates.
-    fn default() -> Self {
-        Tolerances {
-            position: 1e-9,
-            rotation: 1e-9,
-            rates: 1e-9,
-        }
-    }
-}
-
-/// Why a record, a verification or a comparison could not be made.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum RegressionError {
-    /// A golden file is not what [`write_golden`] writes.
-    #[error("{file}:{line}: {problem}")]
-    Golden {
-        /// The file as named by the caller.
-        file: String,
-        /// 1-based line number.
-        line: usize,
-        /// What is wrong there.
-        problem: String,
-    },
-    /// The robot lacks joints the record has, or has joints the record lacks.
-    #[error("{}", names_problem("joints", missing, extra))]
-    Joints {
-        /// Recorded joint entries the robot does not have.
-        missing: Vec<String>,
-        /// The robot's joint entries the record does not have.
-        extra: Vec<String>,
-    },
-    /// The robot lacks links the record has (or that were asked for).
-    #[error("{}", names_problem("links", missing, &[]))]
-    Links {
-        /// The link names missing.
-        missing: Vec<String>,
-    },
-    /// A link name asked for is not in the robot.
-    #[error(transparent)]
-    Name(#[from] NameError),
-    /// A configuration could not be evaluated.
-    #[error("sample {sample}")]
-    State {
-        /// The sample.
-        sample: usize,
-        /// Why.
-        #[source]
-        source: StateError,
-    },
-    /// A recorded or evaluated quantity is not finite (limits so wide that poses overflow).
-    #[error("sample {sample}: the {what} of link '{link}' is not finite")]
-    NotFinite {
-        /// The sample.
-        sample: usize,
-        /// The link.
-        link: String,
-        /// `pose`, `omega`, `v`, `alpha` or `a`.
-        what: &'static str,
-    },
-    /// A chain without joints to move, or a record without samples.
-    #[error("{0}")]
-    Empty(&'static str),
-    /// A golden file cannot be read, or is larger than the reader takes.
-    #[error("cannot read {file}")]
-    Read {
-        /// The file as named by the caller.
-        file: String,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The golden file would be larger than [`read_golden_file`] reads back: nothing written.
-    #[error(
-        "the golden file would be {size} bytes with a line of {longest_line}, more than the {} bytes (or {} for a line) that kinechain reads back: record fewer samples or links",
-        golden::MAX_GOLDEN_BYTES,
-        golden::MAX_GOLDEN_LINE_BYTES
-    )]
-    TooLarge {
-        /// Its size in bytes.
-        size: usize,
-        /// Its longest line in bytes.
-        longest_line: usize,
-    },
-    /// The golden file could not be written.
-    #[error(transparent)]
-    Output(#[from] crate::io::output::OutputError),
-    /// `compare`: joints that only one of the robots has, and no mapping for them.
-    #[error("{}", unmatched_problem(only_in_first, only_in_second))]
-    UnmatchedJoints {
-        /// Joint entries of the first robot that the second lacks.
-        only_in_first: Vec<String>,
-        /// Joint entries of the second robot that the first lacks.
-        only_in_second: Vec<String>,
-    },
-    /// `compare`: a rename that names a joint one of the robots does not have, or names one twice.
-    #[error("rename {old}={new}: {problem}")]
-    Rename {
-        /// The first robot's joint name.
-        old: String,
-        /// The second robot's joint name.
-        new: String,
-        /// What is wrong.
-        problem: String,
-    },
-}
-
-fn unmatched_problem(first: &[String], second: &[String]) -> String {
-    let list = |v: &[String]| {
-        if v.is_empty() {
-            return "none".to_string();
-        }
-        v.iter()
-            .map(|n| format!("'{}'", crate::model::error::escape_controls(n)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    format!(
-        "the robots' joints differ, and a joint only one robot has cannot be compared: only in the first: {}; only in the second: {} (map a renamed joint with --rename OLD=NEW, OLD of the first robot, NEW of the second)",
-        list(first),
-        list(second)
-    )
-}
-
-fn names_problem(what: &str, missing: &[String], extra: &[String]) -> String {
-    let list = |v: &[String]| {
-        v.iter()
-            .map(|n| format!("'{}'", crate::model::error::escape_controls(n)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    match (missing.is_empty(), extra.is_empty()) {
-        (false, true) => format!(
-            "{what} of the record missing from the robot: {}",
-            list(missing)
-        ),
-        (true, false) => format!(
-            "{what} of the robot missing from the record: {}",
-            list(extra)
-        ),
-        _ => format!(
-            "{what} of the record missing from the robot: {}; {what} of the robot missing from the record: {}",
-            list(missing),
-            list(extra)
-        ),
-    }
-}
 
 /// The name of each entry of `q`: the joint's, or `NAME.theta` / `NAME.d` for a cylindrical
 /// joint's two.

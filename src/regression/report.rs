@@ -1,8 +1,9 @@
 //! The report of a verification or comparison: per link, the largest differences and where they
 //! occur, and the verdict.
 
-use super::{Level, LinkState, Tolerances};
-use crate::eval::chain::Chain;
+use super::golden::LinkState;
+use super::options::{Level, Tolerances};
+use crate::eval::Chain;
 use crate::model::error::escape_controls;
 use serde::Serialize;
 use std::fmt;

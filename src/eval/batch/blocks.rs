@@ -1,8 +1,17 @@
 //! The batch kernels: one chunk of configurations (a SIMD lane each) through the bodies, in
 //! blocks of bodies whose frames stay in registers.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
+use crate::eval::batch::data::BLOCK;
+use crate::eval::batch::data::LaneCheck;
+use crate::eval::kernel::frame::Frame;
+use crate::eval::kernel::joint::by_shape;
+use crate::eval::layout::body::{Body, CheapPlacement, ZTail};
+use crate::eval::layout::chain::Chain;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum, Num};
+use crate::model::joint::Term;
+use crate::model::transform::Transform;
 
 /// One chunk: configurations `8c .. 8c + 8` (the last chunk repeats its last configuration in
 /// the unused lanes). False if `check` rejects one (the frames are then meaningless).
@@ -10,10 +19,10 @@ use super::*;
 /// With `stream` (and a lane type of one part), the frames are written around the caches
 /// ([`LaneNum::stream`]), and the frames of bodies that [`Body::branches`] are kept in `kept` (at
 /// least up to the last such body) to be read again, instead of being read back from `frames`; the
-/// caller then calls [`kernel::fence_streams`] before `frames` is used.
+/// caller then calls [`crate::eval::simd::lanes::fence_streams`] before `frames` is used.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn chunk_poses_generic<A: Arith>(
+pub(crate) fn chunk_poses_generic<A: Arith>(
     chain: &Chain,
     check: Option<LaneCheck<'_>>,
     frames: &mut [Frame<Lanes>],
@@ -37,7 +46,7 @@ pub(super) fn chunk_poses_generic<A: Arith>(
 /// The frames of [`chunk_poses_generic`], its joint values transposed into `q`; `STREAM` as its
 /// `stream`.
 #[inline(always)]
-pub(super) fn chunk_frames<A: Arith, const STREAM: bool>(
+pub(crate) fn chunk_frames<A: Arith, const STREAM: bool>(
     chain: &Chain,
     frames: &mut [Frame<Lanes>],
     q: &[Lanes],
@@ -51,16 +60,24 @@ pub(super) fn chunk_frames<A: Arith, const STREAM: bool>(
     for (part, qp) in A::Lanes::cast(q).chunks_exact(dof).enumerate() {
         let mut f = Frame::splat(&Transform::IDENTITY);
         for (k, body) in chain.bodies.iter().enumerate() {
-            let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+            let sin_cos = crate::eval::kernel::joint::body_sin_cos::<A::Lanes, A>(body, qp);
             f = match body.parent {
-                _ if body.follows_previous => {
-                    kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
-                }
+                _ if body.follows_previous => crate::eval::kernel::pose_lanes::pose_step::<
+                    A::Lanes,
+                    A,
+                >(Some(&f), body, qp, sin_cos),
                 Some(p) => {
                     let parent = Frame::get(if STREAM { &kept[p] } else { &frames[p] }, part);
-                    kernel::pose_step::<A::Lanes, A>(Some(&parent), body, qp, sin_cos)
+                    crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                        Some(&parent),
+                        body,
+                        qp,
+                        sin_cos,
+                    )
                 }
-                None => kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos),
+                None => crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                    None, body, qp, sin_cos,
+                ),
             };
             if STREAM {
                 f.stream(&mut frames[k]);
@@ -103,7 +120,7 @@ pub(super) fn prefetch(x: &[f64], len: usize) {
 /// configuration in the unused lanes) transposed into `q` in the layout [`LaneNum::cast`]
 /// reads, and checked with `check`. False if a configuration is rejected.
 #[inline(always)]
-pub(super) fn transpose_chunk<N: LaneNum>(
+pub(crate) fn transpose_chunk<N: LaneNum>(
     check: Option<LaneCheck<'_>>,
     q: &mut [Lanes],
     qs: &[f64],
@@ -126,7 +143,7 @@ pub(super) fn transpose_chunk<N: LaneNum>(
 
 /// `(sin θ, cos θ)` of `body` in all eight lanes of a chunk (`q` its joint values as
 /// [`transpose_chunk`] wrote them, `dof` per part), in one go: the values of
-/// [`kernel::body_sin_cos`], lane for lane.
+/// [`crate::eval::kernel::joint::body_sin_cos`], lane for lane.
 #[inline(always)]
 pub(super) fn chunk_sin_cos<A: Arith>(body: &Body, q: &[Lanes], dof: usize) -> (Lanes, Lanes) {
     if let Term::Const(_) = body.motion.theta {
@@ -134,26 +151,13 @@ pub(super) fn chunk_sin_cos<A: Arith>(body: &Body, q: &[Lanes], dof: usize) -> (
     }
     let mut theta = Lanes::splat(0.0);
     for (part, qp) in A::Lanes::cast(q).chunks_exact(dof).enumerate() {
-        kernel::term_value::<A::Lanes, A>(&body.motion.theta, qp).put(&mut theta, part);
+        crate::eval::kernel::joint::term_value::<A::Lanes, A>(&body.motion.theta, qp)
+            .put(&mut theta, part);
     }
     Lanes::sin_cos::<A>(theta)
 }
 
 fma_dispatch!(#[allow(clippy::too_many_arguments)] pub(super) fn chunk_poses(chain: &Chain, check: Option<LaneCheck<'_>>, frames: &mut [Frame<Lanes>], q: &mut [Lanes], qs: &[f64], c: usize, stream: bool, kept: &mut [Frame<Lanes>]) -> bool => chunk_poses_generic);
-
-/// Chunks of [`LANES`] configurations per block of [`forward_kinematics_batch_to`]: with four
-/// lanes per value its kernel goes through the path once per block, each body over all chunks of
-/// the block (sixteen values of four lanes), rather than through the whole path once per chunk
-/// (with eight lanes per register it does the latter, see [`block_path_generic`]). The
-/// code for a body's shape and its constants are then chosen once per block, and each of its
-/// steps is a loop over independent frames instead of a link of one dependency chain; the frames
-/// go through memory (a block's 6 KiB stay in the first-level cache), and each step rewrites only
-/// the columns it changes.
-///
-/// The all-links kernel keeps one chunk at a time: there every body's frame is written anyway,
-/// and writing it once per step instead of once per body cost more than it saved (Panda 45.6 →
-/// 47.5 ns per configuration, modified DH Panda 37.5 → 39.3; UR5 34.2 → 32.8).
-pub(super) const BLOCK: usize = 8;
 
 /// The frame of the last body of `path` (base first, each body the parent of the next) for
 /// chunks `c0 .. c0 + out.len()` of `qs` (at most [`BLOCK`]), built in `out`. False if `check`
@@ -186,12 +190,19 @@ pub(super) fn block_path_generic<A: Arith>(
             let mut f = Frame::<A::Lanes>::splat(&Transform::IDENTITY);
             for (i, &k) in path.iter().enumerate() {
                 let body = &chain.bodies[k];
-                let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+                let sin_cos = crate::eval::kernel::joint::body_sin_cos::<A::Lanes, A>(body, qp);
                 // The first body hangs from the world, each next one from the one before it.
                 f = if i == 0 {
-                    kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos)
+                    crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                        None, body, qp, sin_cos,
+                    )
                 } else {
-                    kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
+                    crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                        Some(&f),
+                        body,
+                        qp,
+                        sin_cos,
+                    )
                 };
             }
             f.put(f_out, 0);
@@ -208,19 +219,26 @@ fma_dispatch!(pub(super) fn block_path(chain: &Chain, check: Option<LaneCheck<'_
 
 /// `f ← f · body` for the frames `out` of a block's chunks (`q` their joint values, `dof` per
 /// chunk; a body that hangs from the world starts from the identity): the operations of
-/// [`kernel::pose_step`], so the frames are those of a single evaluation, bit for bit.
+/// [`crate::eval::kernel::pose_lanes::pose_step`], so the frames are those of a single evaluation, bit for bit.
 #[inline(always)]
 pub(super) fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<Lanes>]) {
     let (Some(pre), Some(tail)) = (&body.pre_steps, &body.z_tail) else {
         for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
             for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
-                let sin_cos = kernel::body_sin_cos::<A::Lanes, A>(body, qp);
+                let sin_cos = crate::eval::kernel::joint::body_sin_cos::<A::Lanes, A>(body, qp);
                 let f = match body.parent {
                     Some(_) => {
                         let f = Frame::get(f_out, part);
-                        kernel::pose_step::<A::Lanes, A>(Some(&f), body, qp, sin_cos)
+                        crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                            Some(&f),
+                            body,
+                            qp,
+                            sin_cos,
+                        )
                     }
-                    None => kernel::pose_step::<A::Lanes, A>(None, body, qp, sin_cos),
+                    None => crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
+                        None, body, qp, sin_cos,
+                    ),
                 };
                 f.put(f_out, part);
             }
@@ -244,7 +262,7 @@ pub(super) fn block_place<A: Arith, const SHAPE: u8>(out: &mut [Frame<Lanes>], p
     for f_out in out.iter_mut() {
         for part in 0..A::Lanes::PARTS {
             let mut f = Frame::<A::Lanes>::get(f_out, part);
-            kernel::cheap_steps::<A::Lanes, A, SHAPE>(&mut f, p);
+            crate::eval::kernel::pose_lanes::cheap_steps::<A::Lanes, A, SHAPE>(&mut f, p);
             match (SHAPE & 3 != 0, CheapPlacement::turn(SHAPE) != 0) {
                 (true, true) => f.put_columns::<0b1110>(f_out, part),
                 (true, false) => f.put_columns::<0b1000>(f_out, part),
@@ -276,7 +294,9 @@ pub(super) fn block_motion<A: Arith, const MOTION: u8>(
         for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
             let sin_cos = (A::Lanes::get(&sin, part), A::Lanes::get(&cos, part));
             let mut f = Frame::<A::Lanes>::get(f_out, part);
-            kernel::z_motion::<A::Lanes, A, MOTION>(&mut f, body, qp, sin_cos);
+            crate::eval::kernel::pose_lanes::z_motion::<A::Lanes, A, MOTION>(
+                &mut f, body, qp, sin_cos,
+            );
             match (slides, turns) {
                 (true, true) => f.put_columns::<0b1011>(f_out, part),
                 (true, false) => f.put_columns::<0b1000>(f_out, part),

@@ -1,8 +1,15 @@
 //! Large batches folded block by block: each block's frames are evaluated into a buffer that
 //! stays in cache and handed to the caller's fold before the next block overwrites it.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
+use crate::eval::batch::data::BatchData;
+use crate::eval::batch::data::{BatchError, configurations};
+use crate::eval::batch::poses::BatchPoses;
+use crate::eval::batch::poses::forward_kinematics_batch;
+use crate::eval::batch::threads::worth_parallel;
+use crate::eval::checks::LimitPolicy;
+use crate::eval::kernel::frame::Frame;
+use crate::eval::layout::chain::Chain;
+use crate::eval::simd::lanes::{LANES, Lanes};
 
 /// Bytes of frames a block of [`forward_kinematics_batch_fold`] writes at most (unless one chunk
 /// of configurations needs more): they stay in a core's second-level cache while the block is
@@ -56,7 +63,7 @@ pub fn fold_block_len(chain: &Chain) -> usize {
 /// keeps every frame of the batch (96 bytes per body and configuration), and beyond a few
 /// thousand configurations it is bound by writing them to memory, which two threads share; here
 /// the frames never leave the cache. The poses are those of [`forward_kinematics_batch`], bit for
-/// bit. [`single_precision::forward_kinematics_batch_fold`] is the same in `f32`.
+/// bit. [`crate::eval::batch::single_precision::forward_kinematics_batch_fold`] is the same in `f32`.
 ///
 /// # Errors
 /// As [`forward_kinematics_batch`] (the first bad configuration is named). Blocks before it may
@@ -97,7 +104,7 @@ pub fn forward_kinematics_batch_fold<T: Send>(
 /// rayon's pool in runs of consecutive blocks (about 32 runs per thread), each thread evaluating
 /// into buffers of its own; each run is folded from `identity()`, and the runs' results are
 /// combined with `reduce` in the order of their blocks (so `reduce` must be associative, and
-/// `identity()` neutral for it). Batches of fewer than [`PARALLEL_WORK`] joint evaluations stay
+/// `identity()` neutral for it). Batches of fewer than [`PARALLEL_WORK`](crate::eval::batch::PARALLEL_WORK) joint evaluations stay
 /// on the calling thread.
 ///
 /// # Errors
@@ -149,9 +156,9 @@ pub(crate) fn fold_blocks<E: BlockEval, T: Send>(
     // Claims of whole blocks; each thread evaluates into one set of buffers, each claim folds
     // from `identity()`.
     let blocks = qs.len().div_ceil(rows);
-    let per_claim = claims::claim_len(blocks, 1);
+    let per_claim = crate::eval::batch::claims::claim_len(blocks, 1);
     let claim_rows = per_claim * rows;
-    let folded = claims::claimed_in_order(
+    let folded = crate::eval::batch::claims::claimed_in_order(
         blocks.div_ceil(per_claim),
         || E::data(chain, policy),
         |data: &mut E::Data, c| {

@@ -4,9 +4,20 @@
 //! [`Poses::jacobian_in`](crate::Poses::jacobian_in) /
 //! [`Velocities::jacobian_dot_in`](crate::Velocities::jacobian_dot_in) bit for bit.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
-use crate::eval::jacobian::{self, JacobianFrame, State};
+use crate::eval::batch::blocks::transpose_chunk;
+use crate::eval::batch::data::{BatchData, BatchError, LaneCheck, batch_rows, configurations};
+use crate::eval::batch::poses::BatchPoses;
+use crate::eval::batch::threads::worth_parallel;
+use crate::eval::error::StateError;
+use crate::eval::jacobian::{JacobianFrame, State};
+use crate::eval::kernel::frame::{Frame, rotate};
+use crate::eval::layout::body::Placement;
+use crate::eval::layout::chain::Chain;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum, Num};
+use crate::model::chain::LinkId;
+use crate::model::transform::Transform;
 
 /// Configuration `index` of an evaluated batch, as the state a Jacobian is computed from.
 struct Lane<'a> {
@@ -53,23 +64,16 @@ impl State for Lane<'_> {
     }
     #[inline(always)]
     fn link_rates(&self, link: LinkId) -> [[f64; 3]; 2] {
-        let v = rates::velocity(self.chain, self.data, self.index, link);
+        let v = crate::eval::batch::rates::velocity(self.chain, self.data, self.index, link);
         [v.omega.into(), v.v.into()]
     }
-}
-
-/// `R u` with constant `u`, as [`Transform::apply`] computes it (no fused multiply–adds).
-#[inline(always)]
-pub(super) fn rotate<N: Num>(r: &[[N; 3]; 3], u: [f64; 3]) -> [N; 3] {
-    let u = u.map(N::splat);
-    std::array::from_fn(|k| r[0][k] * u[0] + r[1][k] * u[1] + r[2][k] * u[2])
 }
 
 /// The world Jacobian (or the one [`JacobianFrame`] names) of the link whose body path is
 /// `path` and whose offset from its body is `offset`, for one chunk (`q` transposed into lanes),
 /// into `columns` (6 × dof, row-major, lanes) and then `out` (each configuration's matrix after
 /// the other's), with `axes` room for each path body's joint
-/// origin and direction: the operations of [`jacobian::jacobian`] on lanes, so that each lane
+/// origin and direction: the operations of [`crate::eval::jacobian::jacobian`] on lanes, so that each lane
 /// holds the single evaluation's matrix bit for bit.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -92,8 +96,8 @@ fn chunk_jacobian_generic<A: Arith>(
         let mut f = Frame::<N<A>>::splat(&Transform::IDENTITY);
         for (i, &k) in path.iter().enumerate() {
             let body = &chain.bodies[k];
-            let sin_cos = kernel::body_sin_cos::<N<A>, A>(body, qp);
-            // The joint axis from the frame before the joint (`jacobian::axis_parts`).
+            let sin_cos = crate::eval::kernel::joint::body_sin_cos::<N<A>, A>(body, qp);
+            // The joint axis from the frame before the joint (`crate::eval::jacobian::axis_parts`).
             let (origin, z) = if i == 0 {
                 (
                     body.pre_frame.p.map(|x| zero + N::<A>::splat(x)),
@@ -112,12 +116,12 @@ fn chunk_jacobian_generic<A: Arith>(
                 }
             }
             f = if i == 0 {
-                kernel::pose_step::<N<A>, A>(None, body, qp, sin_cos)
+                crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(None, body, qp, sin_cos)
             } else {
-                kernel::pose_step::<N<A>, A>(Some(&f), body, qp, sin_cos)
+                crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(Some(&f), body, qp, sin_cos)
             };
         }
-        kernel::place::<N<A>, A>(&mut f, offset);
+        crate::eval::kernel::frame::place::<N<A>, A>(&mut f, offset);
         let p: [N<A>; 3] = match frame {
             JacobianFrame::Point(u) => {
                 let u = rotate(&f.r, u);
@@ -230,14 +234,14 @@ fn piece(
 ) -> Result<(), BatchError> {
     match qds {
         None => return piece_jacobian(chain, data, qs, link, frame, out),
-        Some(qds) => rates::evaluate(chain, data, qs, qds, None, false)?,
+        Some(qds) => crate::eval::batch::rates::evaluate(chain, data, qs, qds, None, false)?,
     }
     let dof = chain.dof();
     let mut columns = std::mem::take(&mut data.jacobian);
     columns.resize(6 * dof, 0.0);
     for (index, rows) in out.chunks_exact_mut(6 * dof).enumerate() {
         let state = Lane { chain, data, index };
-        jacobian::jacobian_dot(&state, link, frame, &mut columns);
+        crate::eval::jacobian::jacobian_dot(&state, link, frame, &mut columns);
         for (c, column) in columns.chunks_exact(6).enumerate() {
             for (r, &x) in column.iter().enumerate() {
                 rows[r * dof + c] = x;
@@ -285,7 +289,7 @@ fn run(
         true,
     )?;
     if let Some(qds) = qds {
-        rates::check_rates(chain, qds, "q_dot", n)?;
+        crate::eval::batch::rates::check_rates(chain, qds, "q_dot", n)?;
     }
     use rayon::prelude::*;
     out.par_chunks_mut(PIECE * 6 * dof)
@@ -312,7 +316,7 @@ fn run(
 /// [`Poses::jacobian_in`](crate::Poses::jacobian_in) of the configuration, bit for bit.
 ///
 /// # Errors
-/// As [`forward_kinematics_batch`], and [`StateError::OutputLength`] for an `out` of another
+/// As [`forward_kinematics_batch`](crate::eval::batch::forward_kinematics_batch), and [`StateError::OutputLength`] for an `out` of another
 /// length than `N × 6 × dof`.
 ///
 /// # Panics
@@ -367,7 +371,7 @@ pub fn jacobian_batch_par(
 /// configuration, bit for bit.
 ///
 /// # Errors
-/// As [`jacobian_batch`], and as [`forward_velocities_batch`] for `qds`.
+/// As [`jacobian_batch`], and as [`forward_velocities_batch`](crate::eval::batch::forward_velocities_batch) for `qds`.
 ///
 /// # Panics
 /// As [`jacobian_batch`].

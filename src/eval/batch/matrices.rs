@@ -5,8 +5,15 @@
 //! their configurations' places, instead of one [`BatchPoses::world_from_link`] per
 //! configuration and link. The values are the same bits as `world_from_link(i, link).to_rows()`.
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
+use crate::eval::batch::poses::{BatchLinkPoses, BatchPoses};
+use crate::eval::error::StateError;
+use crate::eval::kernel::frame::Frame;
+use crate::eval::layout::body::Placement;
+use crate::eval::layout::chain::Chain;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum};
+use crate::model::chain::LinkId;
 
 /// The first `count` lanes of `f` followed by `offset`, each written as the 16 entries of a
 /// row-major homogeneous matrix at `out[l * stride..]` for lane `l`.
@@ -22,7 +29,7 @@ fn write_lanes<A: Arith>(
     let mut placed = *f;
     for part in 0..N::<A>::PARTS {
         let mut g = Frame::<N<A>>::get(f, part);
-        kernel::place::<N<A>, A>(&mut g, offset);
+        crate::eval::kernel::frame::place::<N<A>, A>(&mut g, offset);
         g.put(&mut placed, part);
     }
     let (r, p) = (&placed.r, &placed.p);
@@ -90,6 +97,7 @@ fn write_link_generic<A: Arith>(poses: &BatchLinkPoses<'_>, out: &mut [f64]) {
 }
 
 fma_dispatch!(fn write_poses(poses: &BatchPoses<'_>, links: &[LinkId], out: &mut [f64]) => write_poses_generic);
+
 fma_dispatch!(fn write_link(poses: &BatchLinkPoses<'_>, out: &mut [f64]) => write_link_generic);
 
 /// [`StateError::OutputLength`] unless `out` has `expected` entries.

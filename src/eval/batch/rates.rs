@@ -6,44 +6,24 @@
 //! [`forward_velocities`]: crate::forward_velocities
 //! [`forward_accelerations`]: crate::forward_accelerations
 
-#[allow(clippy::wildcard_imports)]
-use super::*;
-use crate::eval::kinematics::check_values;
-use crate::eval::results::{
+use crate::eval::batch::blocks::chunk_frames;
+use crate::eval::batch::data::{BatchData, BatchError, Pair};
+use crate::eval::batch::poses::BatchPoses;
+use crate::eval::batch::threads::{TASK_WORK, worth_parallel};
+use crate::eval::checks::check_values;
+use crate::eval::error::StateError;
+use crate::eval::kernel::frame::{Frame, V3};
+use crate::eval::kernel::rates_lanes::{Motion, body_motion};
+use crate::eval::layout::body::Placement;
+use crate::eval::layout::chain::Chain;
+use crate::eval::link_rates::{
     LinkAcceleration, LinkVelocity, link_acceleration, link_velocity, offset_in_world,
 };
-use lane_rates::{Motion, body_motion};
-
-/// Two vectors of every body's motion for one chunk, lane-major: `[ω, v]` or `[α, a]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C)]
-pub(crate) struct Pair(pub(crate) [[Lanes; 3]; 2]);
-
-impl Pair {
-    const ZERO: Pair = Pair([[Lanes([0.0; LANES]); 3]; 2]);
-
-    #[inline(always)]
-    fn get<N: LaneNum>(&self, part: usize) -> [V3<N>; 2] {
-        self.0.map(|v| v.map(|x| N::get(&x, part)))
-    }
-
-    #[inline(always)]
-    fn put<N: LaneNum>(&mut self, [a, b]: [V3<N>; 2], part: usize) {
-        for (out, v) in self.0.iter_mut().zip([a, b]) {
-            for (o, x) in out.iter_mut().zip(v) {
-                x.put(o, part);
-            }
-        }
-    }
-
-    /// The two vectors of lane `lane`.
-    #[inline]
-    fn lane(&self, lane: usize) -> [[f64; 3]; 2] {
-        self.0.map(|v| v.map(|x| x.0[lane]))
-    }
-}
-
-use crate::eval::kernel::V3;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum, Num};
+use crate::model::chain::LinkId;
+use crate::model::transform::Transform;
 
 /// The frames and motions of one chunk's bodies (`q`, `q̇`, `q̈` transposed into lanes as
 /// [`LaneNum::transpose`] writes them); α and a only when `ACC`.
@@ -139,7 +119,7 @@ fma_dispatch!(fn chunk(chain: &Chain, rows: [&[f64]; 3], c: usize, lanes: &mut [
 
 /// Checks a batch's `q̇` or `q̈` (`values`, named `what`) against the `n` configurations of its
 /// `q`: one row per configuration, every entry finite.
-pub(super) fn check_rates(
+pub(crate) fn check_rates(
     chain: &Chain,
     values: &[f64],
     what: &'static str,
@@ -167,7 +147,7 @@ pub(super) fn check_rates(
 
 /// Evaluates the batch into `data` (α and a when `qdds` is given), on rayon's pool when
 /// `parallel` and the batch is worth it.
-pub(super) fn evaluate(
+pub(crate) fn evaluate(
     chain: &Chain,
     data: &mut BatchData,
     qs: &[f64],
@@ -272,7 +252,7 @@ fn carrier(
 
 /// `[ω, v]` of `link` in configuration `index`.
 #[inline]
-pub(super) fn velocity(
+pub(crate) fn velocity(
     chain: &Chain,
     data: &BatchData,
     index: usize,
@@ -365,7 +345,7 @@ fn write_rates_generic<A: Arith, const ACC: bool>(
                 };
                 for part in 0..N::<A>::PARTS {
                     let f = Frame::<N<A>>::get(&data.frames[at], part);
-                    let r = u.map_or([zero; 3], |u| super::jacobians::rotate(&f.r, u));
+                    let r = u.map_or([zero; 3], |u| crate::eval::kernel::frame::rotate(&f.r, u));
                     let [w, v] = data.velocities[at].get::<N<A>>(part);
                     let pair = if ACC {
                         let [al, a] = data.accelerations[at].get::<N<A>>(part);
@@ -411,6 +391,7 @@ fn write_accelerations_generic<A: Arith>(
 }
 
 fma_dispatch!(fn write_velocities(chain: &Chain, data: &BatchData, links: &[LinkId], outs: [&mut [f64]; 2]) => write_velocities_generic);
+
 fma_dispatch!(fn write_accelerations(chain: &Chain, data: &BatchData, links: &[LinkId], outs: [&mut [f64]; 2]) => write_accelerations_generic);
 
 /// [`StateError::OutputLength`] unless each of `outs` holds `N × links × 3` entries.
@@ -535,7 +516,7 @@ impl BatchAccelerations<'_> {
 /// Kept per body and configuration: 96 bytes of frame and 48 of velocities.
 ///
 /// # Errors
-/// As [`forward_kinematics_batch`], and [`StateError::WrongRows`] when `qds` does not hold one
+/// As [`forward_kinematics_batch`](crate::eval::batch::forward_kinematics_batch), and [`StateError::WrongRows`] when `qds` does not hold one
 /// row per configuration, [`StateError::NonFinite`] naming the configuration and joint of a
 /// non-finite rate.
 ///
@@ -566,7 +547,7 @@ pub fn forward_velocities_batch<'a>(
 }
 
 /// As [`forward_velocities_batch`], the batch shared between the calling thread and rayon's
-/// pool (batches of fewer than [`PARALLEL_WORK`] joint evaluations stay on the calling thread).
+/// pool (batches of fewer than [`PARALLEL_WORK`](crate::eval::batch::PARALLEL_WORK) joint evaluations stay on the calling thread).
 /// The results are the same, bit for bit.
 ///
 /// # Errors

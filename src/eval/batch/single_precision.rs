@@ -32,21 +32,20 @@
 //! assert!((y - 9.0).abs() < 1e-5);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-
-// Index loops over lanes are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
 
-use super::{
-    BatchError, LaneCheck, batch_rows, block_len, first_error, fold_blocks, lane_pose,
-    par_chunks_checked, transpose_chunk, worth_parallel,
-};
-use crate::eval::arith::{Arith, fma_dispatch};
-use crate::eval::chain::Chain;
-use crate::eval::data::LimitPolicy;
-use crate::eval::kernel::{self, Frame, LANES, LaneNum, Lanes, Num};
-use crate::eval::layout::{Body, Placement};
-use crate::eval::padded;
-use crate::eval::trig;
+use crate::eval::batch::blocks::transpose_chunk;
+use crate::eval::batch::data::{BatchError, LaneCheck, batch_rows, first_error};
+use crate::eval::batch::fold::{block_len, fold_blocks};
+use crate::eval::batch::poses::lane_pose;
+use crate::eval::batch::threads::{par_chunks_checked, worth_parallel};
+use crate::eval::checks::LimitPolicy;
+use crate::eval::kernel::frame::Frame;
+use crate::eval::layout::body::{Body, Placement};
+use crate::eval::layout::chain::Chain;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum, Num};
 use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;
@@ -76,8 +75,11 @@ macro_rules! lanewise {
         }
     };
 }
+
 lanewise!(Add, add, +);
+
 lanewise!(Sub, sub, -);
+
 lanewise!(Mul, mul, *);
 
 impl Neg for F16 {
@@ -123,21 +125,26 @@ impl Num for F16 {
 // sin r ≈ r + r³ (S1 + r² (S2 + r² S3)) and cos r ≈ 1 − r²/2 + r⁴ (C1 + r² (C2 + r² C3)) on
 // |r| ≤ π/4: minimax fits for single precision (those of the Cephes library's `sinf`/`cosf`).
 const S1: f32 = -1.666_665_5e-1;
+
 const S2: f32 = 8.332_161e-3;
+
 const S3: f32 = -1.951_529_6e-4;
+
 const C1: f32 = 4.166_664_6e-2;
+
 const C2: f32 = -1.388_731_6e-3;
+
 const C3: f32 = 2.443_315_7e-5;
 
 /// `(sin θ, cos θ)` in `f32` of sixteen angles given in `f64`: reduced in `f64`
-/// ([`trig::reduce`]), the remainder rounded to `f32` and the polynomials evaluated there.
+/// ([`crate::eval::simd::trig::reduce`]), the remainder rounded to `f32` and the polynomials evaluated there.
 /// Angles beyond the reduction's range take the standard library's `f64` functions.
 #[inline(always)]
 fn sin_cos<A: Arith>(theta: [f64; WIDTH]) -> (F16, F16) {
     let (mut s, mut c) = ([0.0_f32; WIDTH], [0.0_f32; WIDTH]);
     let mut big = false;
     for i in 0..WIDTH {
-        let (r64, _, quadrant) = trig::reduce::<A>(theta[i]);
+        let (r64, _, quadrant) = crate::eval::simd::trig::reduce::<A>(theta[i]);
         // r = r₃₂ + r_lo: the rounding of the remainder to f32 is kept, to first order.
         let r = r64 as f32;
         let r_lo = (r64 - f64::from(r)) as f32;
@@ -169,11 +176,11 @@ fn sin_cos<A: Arith>(theta: [f64; WIDTH]) -> (F16, F16) {
         let quadrant = quadrant as u32;
         s[i] = f32::from_bits(sr.to_bits() ^ ((quadrant & 2) << 30));
         c[i] = f32::from_bits(cr.to_bits() ^ ((quadrant.wrapping_add(1) & 2) << 30));
-        big |= theta[i].abs() >= trig::REDUCTION_LIMIT;
+        big |= theta[i].abs() >= crate::eval::simd::trig::REDUCTION_LIMIT;
     }
     if big {
         for i in 0..WIDTH {
-            if theta[i].abs() >= trig::REDUCTION_LIMIT {
+            if theta[i].abs() >= crate::eval::simd::trig::REDUCTION_LIMIT {
                 let (sw, cw) = theta[i].sin_cos();
                 (s[i], c[i]) = (sw as f32, cw as f32);
             }
@@ -190,8 +197,8 @@ fn body_sin_cos<A: Arith>(body: &Body, q_lo: &[Lanes], q_hi: &[Lanes]) -> (F16, 
     if let Term::Const(_) = theta {
         return (F16::splat(0.0), F16::splat(1.0));
     }
-    let lo = kernel::term_value::<Lanes, A>(theta, q_lo);
-    let hi = kernel::term_value::<Lanes, A>(theta, q_hi);
+    let lo = crate::eval::kernel::joint::term_value::<Lanes, A>(theta, q_lo);
+    let hi = crate::eval::kernel::joint::term_value::<Lanes, A>(theta, q_hi);
     sin_cos::<A>(std::array::from_fn(|i| {
         if i < LANES { lo.0[i] } else { hi.0[i - LANES] }
     }))
@@ -221,16 +228,16 @@ impl Scratch {
 #[derive(Clone, Debug, Default)]
 pub struct BatchData {
     /// Chunk-major: `frames[c * bodies + k]` holds body `k` of configurations `16c..16c+16`.
-    frames: Vec<Frame<F16>>,
+    pub(crate) frames: Vec<Frame<F16>>,
     /// [`forward_kinematics_batch_to`]: the link's body frame of each chunk, and the bodies from
     /// the base to it.
-    link_frames: Vec<Frame<F16>>,
-    path: Vec<usize>,
+    pub(crate) link_frames: Vec<Frame<F16>>,
+    pub(crate) path: Vec<usize>,
     scratch: Scratch,
-    len: usize,
-    bodies: usize,
-    dof: usize,
-    limit_policy: LimitPolicy,
+    pub(crate) len: usize,
+    pub(crate) bodies: usize,
+    pub(crate) dof: usize,
+    pub(crate) limit_policy: LimitPolicy,
 }
 
 impl BatchData {
@@ -263,7 +270,7 @@ impl BatchData {
         let shape = (self.bodies, self.dof);
         // The parallel path's tasks check their own rows when the kernels cannot.
         let check_rows = check.is_none() && !parallel;
-        let what = "single_precision::BatchData";
+        let what = "crate::eval::batch::single_precision::BatchData";
         self.len = batch_rows(what, shape, self.limit_policy, chain, qs, check_rows)?;
         Ok(self.len.div_ceil(WIDTH))
     }
@@ -536,8 +543,8 @@ batch_len!(BatchPoses, BatchLinkPoses);
 /// Link poses of every configuration of a single-precision batch.
 #[derive(Clone, Copy, Debug)]
 pub struct BatchPoses<'a> {
-    chain: &'a Chain,
-    data: &'a BatchData,
+    pub(crate) chain: &'a Chain,
+    pub(crate) data: &'a BatchData,
 }
 
 impl BatchPoses<'_> {
@@ -558,9 +565,9 @@ impl BatchPoses<'_> {
 /// One link's pose in every configuration of a single-precision batch.
 #[derive(Clone, Copy, Debug)]
 pub struct BatchLinkPoses<'a> {
-    chain: &'a Chain,
-    data: &'a BatchData,
-    link: LinkId,
+    pub(crate) chain: &'a Chain,
+    pub(crate) data: &'a BatchData,
+    pub(crate) link: LinkId,
 }
 
 impl BatchLinkPoses<'_> {
@@ -578,12 +585,15 @@ impl BatchLinkPoses<'_> {
 }
 
 /// `f`'s frame in lane `lane`, widened to `f64`, followed by `offset`, as
-/// [`padded::link_pose`] composes it.
+/// [`crate::eval::kernel::pose_columns::link_pose`] composes it.
 #[inline(always)]
 fn lane_link_pose_generic<A: Arith>(f: &Frame<F16>, lane: usize, offset: &Placement) -> Transform {
     let lane = lane % WIDTH;
     let column = |c: usize| if c < 3 { &f.r[c] } else { &f.p };
-    padded::link_pose_from_entries::<A>(|c, i| f64::from(column(c)[i].0[lane]), offset)
+    crate::eval::kernel::pose_columns::link_pose_from_entries::<A>(
+        |c, i| f64::from(column(c)[i].0[lane]),
+        offset,
+    )
 }
 
 fma_dispatch!(avx2 fn lane_link_pose(f: &Frame<F16>, lane: usize, offset: &Placement) -> Transform => lane_link_pose_generic);
@@ -649,9 +659,16 @@ fn chunk_poses_generic<A: Arith>(
     for (k, body) in chain.bodies.iter().enumerate() {
         let sin_cos = body_sin_cos::<A>(body, lo, hi);
         f = match body.parent {
-            _ if body.follows_previous => kernel::pose_step::<F16, A>(Some(&f), body, q, sin_cos),
-            Some(p) => kernel::pose_step::<F16, A>(Some(&frames[p]), body, q, sin_cos),
-            None => kernel::pose_step::<F16, A>(None, body, q, sin_cos),
+            _ if body.follows_previous => {
+                crate::eval::kernel::pose_lanes::pose_step::<F16, A>(Some(&f), body, q, sin_cos)
+            }
+            Some(p) => crate::eval::kernel::pose_lanes::pose_step::<F16, A>(
+                Some(&frames[p]),
+                body,
+                q,
+                sin_cos,
+            ),
+            None => crate::eval::kernel::pose_lanes::pose_step::<F16, A>(None, body, q, sin_cos),
         };
         frames[k] = f;
     }
@@ -689,7 +706,12 @@ fn chunk_path_generic<A: Arith>(
         let body = &chain.bodies[k];
         let sin_cos = body_sin_cos::<A>(body, lo, hi);
         // The first body hangs from the world, each next one from the one before it.
-        *out = kernel::pose_step::<F16, A>((i > 0).then_some(&*out), body, q, sin_cos);
+        *out = crate::eval::kernel::pose_lanes::pose_step::<F16, A>(
+            (i > 0).then_some(&*out),
+            body,
+            q,
+            sin_cos,
+        );
     }
     ok
 }
@@ -697,104 +719,4 @@ fn chunk_path_generic<A: Arith>(
 fma_dispatch!(#[allow(clippy::too_many_arguments)] fn chunk_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &[usize], raw: &mut [Lanes], q64: &mut [Lanes], q32: &mut [F16], qs: &[f64], c: usize, out: &mut Frame<F16>) -> bool => chunk_path_generic);
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::eval::arith::Separate;
-    use crate::measure::worse;
-
-    /// Sixteen angles uniform in `[−scale, scale)`, from the xorshift generator `state`.
-    fn angles(state: &mut u64, scale: f64) -> [f64; WIDTH] {
-        std::array::from_fn(|_| {
-            *state ^= *state << 13;
-            *state ^= *state >> 7;
-            *state ^= *state << 17;
-            scale * ((*state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
-        })
-    }
-
-    /// The single-precision `sin`/`cos` against the standard library's `f64` ones, over angles
-    /// from 10⁻⁸ to 10⁵ rad: within 2⁻²³ absolutely (one `f32` ulp near 1; measured 9.2·10⁻⁸,
-    /// at values near 0.74, where that is 1.5 ulp), as accurate at 10⁵ rad as near 0 since the
-    /// reduction is done in `f64`.
-    #[test]
-    fn agrees_with_the_standard_library() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut worst_abs = 0.0_f64;
-        for scale in [1e-8, 1e-3, 1.0, 3.0, 10.0, 1e3, 1e5] {
-            for _ in 0..20_000 {
-                let theta = angles(&mut state, scale);
-                let (s, c) = sin_cos::<Separate>(theta);
-                for i in 0..WIDTH {
-                    let (sw, cw) = theta[i].sin_cos();
-                    worst_abs = worse(worst_abs, (f64::from(s.0[i]) - sw).abs());
-                    worst_abs = worse(worst_abs, (f64::from(c.0[i]) - cw).abs());
-                }
-            }
-        }
-        assert!(worst_abs <= 2f64.powi(-23), "worst {worst_abs:e}");
-        // Beyond the reduction's range, the library's values rounded to f32.
-        let (s, c) = sin_cos::<Separate>([1e7; WIDTH]);
-        assert_eq!(
-            (s.0[0], c.0[0]),
-            (1e7_f64.sin() as f32, 1e7_f64.cos() as f32)
-        );
-    }
-
-    /// The remainder's rounding to `f32` (`r_lo`) is carried into `sin`: over 8·10⁵ angles in
-    /// [−10, 10] rad the mean error of `sin` is 0.3356 `f32` ulps of the correctly rounded value
-    /// with the term, 0.3383 without it and 0.3463 with its sign flipped (the worst case stays
-    /// within one ulp in all three, which is all the test above sees).
-    #[test]
-    fn the_remainders_rounding_makes_sin_more_accurate() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let (mut sum, mut count) = (0.0_f64, 0u64);
-        for _ in 0..50_000 {
-            let theta = angles(&mut state, 10.0);
-            let (s, _) = sin_cos::<Separate>(theta);
-            for i in 0..WIDTH {
-                let want = theta[i].sin();
-                let rounded = (want as f32).abs();
-                let ulp = f64::from(rounded.next_up() - rounded);
-                sum += (f64::from(s.0[i]) - want).abs() / ulp;
-                count += 1;
-            }
-        }
-        let mean = sum / count as f64;
-        assert!(mean <= 0.337, "mean error {mean:.5} f32 ulp");
-    }
-
-    /// Multiples of π/2 as doubles leave residues of about 10⁻¹⁶ after the reduction; those are
-    /// taken as zero, so `sin`/`cos` are exactly 0 and ±1 there (as `f32`, the residues would
-    /// be 1.2·10⁻¹⁶ and, cubed in the polynomial, subnormal). An angle just past the threshold
-    /// keeps its sine.
-    #[test]
-    fn quarter_turns_are_exact() {
-        use std::f64::consts::{FRAC_PI_2, PI};
-        let angles = [
-            0.0,
-            FRAC_PI_2,
-            PI,
-            -PI,
-            3.0 * FRAC_PI_2,
-            -FRAC_PI_2,
-            2.0 * PI,
-            1e-13,
-        ];
-        let expected = [
-            (0.0, 1.0),
-            (1.0, 0.0),
-            (0.0, -1.0),
-            (0.0, -1.0),
-            (-1.0, 0.0),
-            (-1.0, 0.0),
-            (0.0, 1.0),
-            (0.0, 1.0),
-        ];
-        let theta: [f64; WIDTH] = std::array::from_fn(|i| angles.get(i).copied().unwrap_or(1e-11));
-        let (s, c) = sin_cos::<Separate>(theta);
-        for (i, &(sin, cos)) in expected.iter().enumerate() {
-            assert_eq!((s.0[i], c.0[i]), (sin, cos), "θ = {}", theta[i]);
-        }
-        assert_eq!(s.0[WIDTH - 1], 1e-11);
-    }
-}
+mod tests;

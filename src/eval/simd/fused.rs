@@ -1,313 +1,177 @@
-//! The lane types of the batch kernels: [`Lanes`] (eight configurations, as stored between
-//! kernels) and the register-sized views a kernel computes with ([`LaneNum`]: `Lanes` itself, and
-//! on x86-64 the AVX2 `Y4` and AVX-512 `Z8`), with the transposition of joint rows into lanes and
-//! the streaming stores of results.
+//! Fused multiply–add: the [`Fused`] and [`Fused512`] policies and the x86-64 vector types they
+//! compute with ([`Avx`] columns, [`Y4`] and [`Z8`] lanes). Only instantiated inside functions
+//! compiled with the matching target features (see [`crate::eval::simd::isa`]).
 
 // Index loops over lanes and rows are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
 
-use crate::eval::arith::Arith;
-use crate::eval::kernel::{Frame, Num};
-use crate::eval::trig;
+use crate::eval::simd::lanes::{LANES, Lanes, assert_rows_within};
+use crate::eval::simd::portable::lanes_sin_cos;
+use crate::eval::simd::traits::{Arith, Col, LaneNum, Num};
 use std::ops::{Add, Mul, Neg, Sub};
 
-/// Number of configurations a batch kernel evaluates together.
-pub(crate) const LANES: usize = 8;
-// `each_lane!(8, ..)` writes out this many lanes.
-const _: () = assert!(LANES == 8);
+/// One rounding (hardware FMA). Only instantiated inside functions compiled with the `fma`
+/// and `avx2` target features, or (tests) after [`isa`] has reported them.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fused;
 
-/// [`LANES`] values, one per configuration; arithmetic is lane-wise.
-/// Aligned to its size, so that a lane vector never straddles two cache lines (a load that
-/// does cannot be forwarded from the store before it, and spilled frames are stored and reloaded
-/// once per joint).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(64))]
-pub(crate) struct Lanes(pub(crate) [f64; LANES]);
-
-impl Lanes {
-    /// The values of `chunks`, one chunk after the other.
+impl Arith for Fused {
+    #[cfg(target_arch = "x86_64")]
+    type Col = Avx;
+    #[cfg(not(target_arch = "x86_64"))]
+    type Col = Portable<Fused>;
+    #[cfg(target_arch = "x86_64")]
+    type Lanes = crate::eval::simd::fused::Y4;
+    #[cfg(not(target_arch = "x86_64"))]
+    type Lanes = Lanes;
+    const FUSED: bool = true;
     #[inline(always)]
-    pub(crate) fn flat(chunks: &[Lanes]) -> &[f64] {
-        // SAFETY: `Lanes` is `repr(C)` around `[f64; LANES]`, of size `8 · LANES` (a multiple of
-        // its alignment, so no padding): a slice of it is `LANES · len` initialised `f64`.
-        unsafe { std::slice::from_raw_parts(chunks.as_ptr().cast(), LANES * chunks.len()) }
-    }
-
-    /// [`Lanes::flat`], writable.
-    #[inline(always)]
-    pub(crate) fn flat_mut(chunks: &mut [Lanes]) -> &mut [f64] {
-        // SAFETY: as in `flat`; every bit pattern is a valid `f64`.
-        unsafe { std::slice::from_raw_parts_mut(chunks.as_mut_ptr().cast(), LANES * chunks.len()) }
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
     }
 }
 
-const _: () = assert!(size_of::<Lanes>() == LANES * size_of::<f64>());
+/// [`Fused`] with the batch lanes in AVX-512 registers ([`Z8`]): only instantiated inside
+/// functions compiled with the `avx512f` target feature. Every operation is the one [`Fused`]
+/// performs, so results are the same bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Fused512;
 
-/// `[e(0), e(1), …, e(7)]` for the lane index `i`, written out rather than looped: the lane-wise
-/// operations of the baseline build's lane type inline into thousands per kernel, and as loops
-/// each one was rotated, then fully unrolled, by the optimiser (most of the crate's build time).
-/// Written out, the optimiser sees the straight-line code it would have unrolled them into.
-macro_rules! each_lane {
-    (8, |$i:ident| $e:expr) => {
-        [
-            {
-                let $i = 0;
-                $e
-            },
-            {
-                let $i = 1;
-                $e
-            },
-            {
-                let $i = 2;
-                $e
-            },
-            {
-                let $i = 3;
-                $e
-            },
-            {
-                let $i = 4;
-                $e
-            },
-            {
-                let $i = 5;
-                $e
-            },
-            {
-                let $i = 6;
-                $e
-            },
-            {
-                let $i = 7;
-                $e
-            },
-        ]
-    };
-}
-
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for Lanes {
-            type Output = Lanes;
-            #[inline(always)]
-            fn $method(self, rhs: Lanes) -> Lanes {
-                Lanes(each_lane!(8, |i| self.0[i] $op rhs.0[i]))
-            }
-        }
-    };
-}
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
-
-impl Neg for Lanes {
-    type Output = Lanes;
+#[cfg(target_arch = "x86_64")]
+impl Arith for Fused512 {
+    type Col = Avx;
+    type Lanes = Z8;
+    const FUSED: bool = true;
+    const WIDE: bool = true;
     #[inline(always)]
-    fn neg(self) -> Lanes {
-        Lanes(each_lane!(8, |i| -self.0[i]))
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
     }
 }
 
-impl Num for Lanes {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        Lanes([x; LANES])
-    }
-    #[inline(always)]
-    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        Lanes(each_lane!(8, |i| A::mul_add(a.0[i], b.0[i], c.0[i])))
-    }
-    #[inline(always)]
-    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        let (s, c) = lanes_sin_cos::<A, LANES>(x.0);
-        (Lanes(s), Lanes(c))
-    }
-}
+/// [`Col`] in an AVX register, with FMA.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx(std::arch::x86_64::__m256d);
 
-/// `sin` and `cos` lane by lane (a loop the compiler vectorises to the lane width).
-#[inline(always)]
-pub(crate) fn lanes_sin_cos<A: Arith, const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
-    let (mut s, mut c) = ([0.0; W], [0.0; W]);
-    let mut big = false;
-    for i in 0..W {
-        (s[i], c[i]) = trig::sin_cos_reduced::<A>(x[i]);
-        big |= x[i].abs() >= trig::REDUCTION_LIMIT;
-    }
-    // Rare: arguments beyond the fast reduction (or NaN never reaches here: inputs are checked).
-    if big {
-        for i in 0..W {
-            if x[i].abs() >= trig::REDUCTION_LIMIT {
-                (s[i], c[i]) = x[i].sin_cos();
-            }
-        }
-    }
-    (s, c)
-}
-
-/// Panics unless every row `rows[l]` of `dof` entries lies within `qs` (what the vector loads of
-/// a transposition rely on).
+/// [`crate::eval::simd::traits::within`] for four values at once, each against the same entry of
+/// `(scale, offset, lower, upper)`: the product and the sum rounded separately, then three
+/// compares. Used by [`Avx`] and the AVX2 batch lanes.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn assert_rows_within(qs: &[f64], rows: &[usize; LANES], dof: usize) {
-    // The last row decides: one check rather than one per row.
-    let last = rows.iter().fold(0, |m, &r| m.max(r));
-    let in_bounds = last
-        .checked_mul(dof)
-        .and_then(|o| o.checked_add(dof))
-        .is_some_and(|e| e <= qs.len());
-    assert!(in_bounds, "rows {rows:?} of {} entries", qs.len());
-}
-
-/// The lane number of a batch kernel: one [`Lanes`] as `PARTS` values of `LANES / PARTS`
-/// configurations each (a kernel evaluates the parts one after the other, so that a frame of
-/// this type fits the registers). Stored between kernels as [`Lanes`].
-pub(crate) trait LaneNum: Num {
-    /// Number of values of this type in one [`Lanes`].
-    const PARTS: usize;
-    /// `q` (as [`LaneNum::transpose`] wrote it) read as `PARTS` runs of `q.len()` values, the
-    /// run of part 0 first.
-    fn cast(q: &[Lanes]) -> &[Self];
-    /// Part `part` of `x`.
-    fn get(x: &Lanes, part: usize) -> Self;
-    /// Writes `self` as part `part` of `x`.
-    fn put(self, x: &mut Lanes, part: usize);
-    /// Writes `self` as the whole of `x` (a type of one part: a whole [`Lanes`] is one cache
-    /// line), around the caches where the type can (a non-temporal store: the line is not read
-    /// first and does not evict other data); the writing thread must then call
-    /// [`fence_streams`] before the memory is read or written again. By default, and on other
-    /// architectures, an ordinary store.
-    #[inline(always)]
-    fn stream(self, x: &mut Lanes) {
-        self.put(x, 0);
-    }
-    /// Whether every lane `x` is [`crate::eval::layout::within`] `(scale, offset, lower, upper)`.
-    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool;
-    /// Transposes rows of `qs` (row-major, `q.len()` entries per row) into lanes: entry `j` of
-    /// rows `rows[0..8]`, in the layout [`LaneNum::cast`] reads.
-    ///
-    /// # Panics
-    /// If a row is not within `qs`.
-    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]);
-}
-
-impl LaneNum for Lanes {
-    const PARTS: usize = 1;
-    #[inline(always)]
-    fn cast(q: &[Lanes]) -> &[Self] {
-        q
-    }
-    #[inline(always)]
-    fn get(x: &Lanes, _: usize) -> Self {
-        *x
-    }
-    #[inline(always)]
-    fn put(self, x: &mut Lanes, _: usize) {
-        *x = self;
-    }
-    /// Four SSE2 non-temporal stores (part of baseline x86-64), which fill one line.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    fn stream(self, x: &mut Lanes) {
-        use std::arch::x86_64::{_mm_loadu_pd, _mm_stream_pd};
-        for (pair, out) in self.0.chunks_exact(2).zip(x.0.chunks_exact_mut(2)) {
-            // SAFETY: SSE2 is part of x86-64; `out` is two `f64` of a `Lanes` (aligned to 64
-            // bytes), so 16-byte aligned as the store requires, and `pair` two readable `f64`.
-            unsafe { _mm_stream_pd(out.as_mut_ptr(), _mm_loadu_pd(pair.as_ptr())) }
-        }
-    }
-    #[inline(always)]
-    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
-        let ok = each_lane!(8, |i| crate::eval::layout::within(
-            x.0[i],
-            (scale, offset, lower, upper)
-        ));
-        ok[0] & ok[1] & ok[2] & ok[3] & ok[4] & ok[5] & ok[6] & ok[7]
-    }
-    #[inline(always)]
-    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
-        let dof = q.len();
-        for (j, qj) in q.iter_mut().enumerate() {
-            *qj = Lanes(std::array::from_fn(|l| qs[rows[l] * dof + j]));
-        }
-    }
-}
-
-impl<N: LaneNum> Frame<N> {
-    /// Part `part` of a stored frame.
-    #[inline(always)]
-    pub(crate) fn get(f: &Frame<Lanes>, part: usize) -> Self {
-        // Written out rather than looped (see `each_lane`).
-        let r = |i: usize| {
-            [
-                N::get(&f.r[i][0], part),
-                N::get(&f.r[i][1], part),
-                N::get(&f.r[i][2], part),
-            ]
-        };
-        Frame {
-            r: [r(0), r(1), r(2)],
-            p: [
-                N::get(&f.p[0], part),
-                N::get(&f.p[1], part),
-                N::get(&f.p[2], part),
-            ],
-        }
-    }
-    /// Writes the columns of `self` chosen by `COLUMNS` (bit `i` for rotation column `i`, bit 3
-    /// for the origin) as part `part` of `f`.
-    #[inline(always)]
-    pub(crate) fn put_columns<const COLUMNS: u8>(&self, f: &mut Frame<Lanes>, part: usize) {
-        for i in 0..3 {
-            if COLUMNS & (1 << i) != 0 {
-                for j in 0..3 {
-                    self.r[i][j].put(&mut f.r[i][j], part);
-                }
-            }
-        }
-        if COLUMNS & 8 != 0 {
-            for j in 0..3 {
-                self.p[j].put(&mut f.p[j], part);
-            }
-        }
-    }
-    /// Writes `self` as part `part` of `f`.
-    #[inline(always)]
-    pub(crate) fn put(&self, f: &mut Frame<Lanes>, part: usize) {
-        for i in 0..3 {
-            for j in 0..3 {
-                self.r[i][j].put(&mut f.r[i][j], part);
-            }
-            self.p[i].put(&mut f.p[i], part);
-        }
-    }
-    /// Writes `self` as the whole of `f` with [`LaneNum::stream`] (a type of one part), in
-    /// memory order: twelve whole lines.
-    #[inline(always)]
-    pub(crate) fn stream(&self, f: &mut Frame<Lanes>) {
-        for i in 0..3 {
-            for j in 0..3 {
-                self.r[i][j].stream(&mut f.r[i][j]);
-            }
-        }
-        for j in 0..3 {
-            self.p[j].stream(&mut f.p[j]);
-        }
-    }
-}
-
-/// Orders the calling thread's [`LaneNum::stream`] stores before its later memory accesses (and
-/// so before anything it then synchronises with): required before streamed memory is used.
-#[inline(always)]
-pub(crate) fn fence_streams() {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE is part of x86-64; a fence has no other effect.
+pub(crate) fn within_all_256(
+    x: std::arch::x86_64::__m256d,
+    [scale, offset, lower, upper]: [std::arch::x86_64::__m256d; 4],
+) -> bool {
+    use std::arch::x86_64::{
+        _CMP_GE_OQ, _CMP_LE_OQ, _CMP_LT_OQ, _mm256_add_pd, _mm256_and_pd, _mm256_andnot_pd,
+        _mm256_cmp_pd, _mm256_movemask_pd, _mm256_mul_pd, _mm256_set1_pd,
+    };
+    // SAFETY: only called from code compiled with, or dispatched to after detecting, AVX.
     unsafe {
-        std::arch::x86_64::_mm_sfence();
+        let value = _mm256_add_pd(_mm256_mul_pd(scale, x), offset);
+        let abs = _mm256_andnot_pd(_mm256_set1_pd(-0.0), x);
+        let finite = _mm256_cmp_pd::<_CMP_LT_OQ>(abs, _mm256_set1_pd(f64::INFINITY));
+        let low = _mm256_cmp_pd::<_CMP_GE_OQ>(value, lower);
+        let high = _mm256_cmp_pd::<_CMP_LE_OQ>(value, upper);
+        _mm256_movemask_pd(_mm256_and_pd(finite, _mm256_and_pd(low, high))) == 0b1111
     }
 }
 
-/// Four `f64` in one AVX register: the lane type of [`crate::eval::arith::Fused`] (AVX2), two per
+// SAFETY (every `unsafe` block below): `Avx` is the column type of `Fused` only, and `Fused` runs
+// only where `isa()` has reported AVX2 and FMA (inside the `fma_dispatch!` functions, or in tests
+// guarded by that check); the pointer operations read and write through references of the
+// stated sizes.
+#[cfg(target_arch = "x86_64")]
+impl Col for Avx {
+    #[inline(always)]
+    fn admitted(x: Self, [scale, offset, lower, upper]: [Self; 4]) -> bool {
+        within_all_256(x.0, [scale.0, offset.0, lower.0, upper.0])
+    }
+    #[inline(always)]
+    fn load(v: &[f64; 4]) -> Self {
+        use std::arch::x86_64::_mm256_loadu_pd;
+        Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
+    }
+    #[inline(always)]
+    fn store_frame([r0, r1, r2, p]: [Self; 4], out: &mut [f64; 12]) {
+        use std::arch::x86_64::_mm256_storeu_pd as store;
+        use std::arch::x86_64::{_mm256_blend_pd as blend, _mm256_permute4x64_pd as permute};
+        // Three vectors of four entries, each a blend of two permuted columns (the compiler
+        // chooses the shuffles: six on AVX-512, where it has two-source permutes).
+        unsafe {
+            // [r0x r0y r0z r1x]
+            let a = blend::<0b1000>(r0.0, permute::<0b00_00_00_00>(r1.0));
+            // [r1y r1z r2x r2y]
+            let b = blend::<0b1100>(
+                permute::<0b00_00_10_01>(r1.0),
+                permute::<0b01_00_00_00>(r2.0),
+            );
+            // [r2z px py pz]
+            let c = blend::<0b0001>(
+                permute::<0b10_01_00_00>(p.0),
+                permute::<0b00_00_00_10>(r2.0),
+            );
+            let out = out.as_mut_ptr();
+            store(out, a);
+            store(out.add(4), b);
+            store(out.add(8), c);
+        }
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f64; 4]) {
+        use std::arch::x86_64::_mm256_storeu_pd;
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), self.0) }
+    }
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        use std::arch::x86_64::_mm256_set1_pd;
+        Avx(unsafe { _mm256_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn from_entries(e: [f64; 4]) -> Self {
+        use std::arch::x86_64::_mm256_set_pd;
+        Avx(unsafe { _mm256_set_pd(e[3], e[2], e[1], e[0]) })
+    }
+    #[inline(always)]
+    fn mul_add(a: Self, b: Self, c: Self) -> Self {
+        use std::arch::x86_64::_mm256_fmadd_pd;
+        Avx(unsafe { _mm256_fmadd_pd(a.0, b.0, c.0) })
+    }
+    #[inline(always)]
+    fn mul(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_mul_pd;
+        Avx(unsafe { _mm256_mul_pd(a.0, b.0) })
+    }
+    #[inline(always)]
+    fn add(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_add_pd;
+        Avx(unsafe { _mm256_add_pd(a.0, b.0) })
+    }
+    #[inline(always)]
+    fn sub(a: Self, b: Self) -> Self {
+        use std::arch::x86_64::_mm256_sub_pd;
+        Avx(unsafe { _mm256_sub_pd(a.0, b.0) })
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        use std::arch::x86_64::{_mm256_set1_pd, _mm256_xor_pd};
+        Avx(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+    }
+    #[inline(always)]
+    fn yzx(self) -> Self {
+        use std::arch::x86_64::_mm256_permute4x64_pd;
+        Avx(unsafe { _mm256_permute4x64_pd::<0b11_00_10_01>(self.0) })
+    }
+    #[inline(always)]
+    fn zxy(self) -> Self {
+        use std::arch::x86_64::_mm256_permute4x64_pd;
+        Avx(unsafe { _mm256_permute4x64_pd::<0b11_01_00_10>(self.0) })
+    }
+}
+
+/// Four `f64` in one AVX register: the lane type of [`crate::eval::simd::fused::Fused`] (AVX2), two per
 /// [`Lanes`]. A frame of eight-lane values would be 24 of the 16 registers, and spilled at
 /// every step; one of four fits.
 #[cfg(target_arch = "x86_64")]
@@ -351,7 +215,7 @@ impl LaneNum for Y4 {
             Y4::splat(lower).0,
             Y4::splat(upper).0,
         ];
-        crate::eval::arith::within_all_256(x.0, limits)
+        crate::eval::simd::fused::within_all_256(x.0, limits)
     }
     /// Part 0 (rows 0..4) of every entry, then part 1: four entries of four rows at a time,
     /// read as whole vectors (masked past the end of a row) and transposed in registers.
@@ -424,7 +288,7 @@ impl Y4 {
 
 /// Eight `f64` in one AVX-512 register: [`Lanes`] for kernels compiled with `avx512f`, where an
 /// array of eight would be assembled and spilled through memory (a frame is twelve of them, and
-/// fits the 32 registers). Only the lane type of [`crate::eval::arith::Fused512`].
+/// fits the 32 registers). Only the lane type of [`crate::eval::simd::fused::Fused512`].
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 #[repr(transparent)]
@@ -617,6 +481,7 @@ macro_rules! simd_num {
         }
     };
 }
+
 #[cfg(target_arch = "x86_64")]
 simd_num!(
     Y4,
@@ -628,6 +493,7 @@ simd_num!(
     _mm256_set1_pd,
     _mm256_fmadd_pd
 );
+
 #[cfg(target_arch = "x86_64")]
 simd_num!(
     Z8,

@@ -3,9 +3,9 @@
 //! chunk, so that batched velocities and accelerations equal single evaluations bit for bit.
 //! A padded column's shuffles (`yzx`, `zxy`) become index permutations of three lane values.
 
-use crate::eval::arith::Arith;
-use crate::eval::kernel::{self, Frame, Num, V3};
-use crate::eval::layout::{Body, RateTerm};
+use crate::eval::kernel::frame::{Frame, V3};
+use crate::eval::layout::body::{Body, RateTerm};
+use crate::eval::simd::traits::{Arith, Num};
 
 /// Motion of a body in the world frame: ω, v (origin), α, a (origin, classical).
 #[derive(Clone, Copy, Debug)]
@@ -49,14 +49,14 @@ fn sub<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-/// `a × b` as `padded::cross` computes it.
+/// `a × b` as `crate::eval::kernel::rates_columns::cross` computes it.
 #[inline(always)]
 fn cross<N: Num>(a: V3<N>, b: V3<N>) -> V3<N> {
     let (a1, b1, a2, b2) = (yzx(a), zxy(b), zxy(a), yzx(b));
     std::array::from_fn(|k| a1[k] * b1[k] - a2[k] * b2[k])
 }
 
-/// `a × b + c` as `padded::cross_add` computes it.
+/// `a × b + c` as `crate::eval::kernel::rates_columns::cross_add` computes it.
 #[inline(always)]
 fn cross_add<N: Num, A: Arith>(a: V3<N>, b: V3<N>, c: V3<N>) -> V3<N> {
     let (a1, b1, a2, b2) = (yzx(a), zxy(b), zxy(a), yzx(b));
@@ -92,7 +92,7 @@ fn angular_acceleration<N: Num, A: Arith>(
 /// The frame and motion of a body's parent (`None`: the world, at rest).
 pub(crate) type Parent<'a, N> = Option<(&'a Frame<N>, &'a Motion<N>)>;
 
-/// `padded::rates_on_parent_z` on lanes.
+/// `crate::eval::kernel::rates_columns::rates_on_parent_z` on lanes.
 #[inline(always)]
 fn on_parent_z<N: Num, A: Arith, const ACC: bool>(
     parent: Parent<'_, N>,
@@ -109,7 +109,7 @@ fn on_parent_z<N: Num, A: Arith, const ACC: bool>(
     let slides = body.rate_shape & Body::SLIDES != 0;
     let th_d = term_rate(body.theta_rate, q_dot);
     let r = sub(f.p, p_parent);
-    let omega = kernel::axpy::<N, A>(th_d, z, parent.omega);
+    let omega = crate::eval::kernel::frame::axpy::<N, A>(th_d, z, parent.omega);
     let w_r = cross(omega, r);
     let mut out = Motion {
         omega,
@@ -118,7 +118,7 @@ fn on_parent_z<N: Num, A: Arith, const ACC: bool>(
         a: zero,
     };
     if slides {
-        out.v = kernel::axpy::<N, A>(term_rate(body.d_rate, q_dot), z, out.v);
+        out.v = crate::eval::kernel::frame::axpy::<N, A>(term_rate(body.d_rate, q_dot), z, out.v);
     }
     if ACC {
         let th_dd = term_rate(body.theta_rate, q_ddot);
@@ -127,7 +127,7 @@ fn on_parent_z<N: Num, A: Arith, const ACC: bool>(
         if slides {
             let d_d = term_rate(body.d_rate, q_dot);
             a = cross_add::<N, A>(omega, scale(N::splat(2.0) * d_d, z), a);
-            a = kernel::axpy::<N, A>(term_rate(body.d_rate, q_ddot), z, a);
+            a = crate::eval::kernel::frame::axpy::<N, A>(term_rate(body.d_rate, q_ddot), z, a);
         }
         out.alpha = alpha;
         out.a = add(parent.a, a);
@@ -135,7 +135,7 @@ fn on_parent_z<N: Num, A: Arith, const ACC: bool>(
     out
 }
 
-/// `padded::rates_sliding` on lanes.
+/// `crate::eval::kernel::rates_columns::rates_sliding` on lanes.
 #[inline(always)]
 fn sliding<N: Num, A: Arith, const ACC: bool>(
     parent: Parent<'_, N>,
@@ -178,8 +178,8 @@ fn sliding<N: Num, A: Arith, const ACC: bool>(
     out
 }
 
-/// The motion of a body whose frame is `f` (from [`kernel::pose_step`]), from its parent's:
-/// `padded::body_rates` on lanes. With `ACC = false`, α and a are zero.
+/// The motion of a body whose frame is `f` (from [`crate::eval::kernel::pose_lanes::pose_step`]), from its parent's:
+/// `crate::eval::kernel::rates_columns::body_rates` on lanes. With `ACC = false`, α and a are zero.
 #[inline(always)]
 pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
     parent: Parent<'_, N>,
@@ -194,7 +194,7 @@ pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
         let z = if shape & Body::ABOUT_Z != 0 {
             f.r[2]
         } else {
-            kernel::axis_of::<N, A>(&f.r, &body.motion.axis)
+            crate::eval::kernel::pose_lanes::axis_of::<N, A>(&f.r, &body.motion.axis)
         };
         if shape & Body::TURNS == 0 {
             return sliding::<N, A, ACC>(parent, body, f, z, q_dot, q_ddot);
@@ -206,8 +206,16 @@ pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
         }
         let (p_joint, z) = match parent {
             Some((frame, _)) => (
-                kernel::apply_const_add::<N, A>(&frame.r, body.pre_frame.p, frame.p),
-                kernel::apply_const_add::<N, A>(&frame.r, body.axis_in_parent, zero),
+                crate::eval::kernel::frame::apply_const_add::<N, A>(
+                    &frame.r,
+                    body.pre_frame.p,
+                    frame.p,
+                ),
+                crate::eval::kernel::frame::apply_const_add::<N, A>(
+                    &frame.r,
+                    body.axis_in_parent,
+                    zero,
+                ),
             ),
             None => (
                 body.pre_frame.p.map(N::splat),
@@ -235,7 +243,7 @@ pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
     let w_r = cross(parent.omega, r);
     let v = add(parent.v, w_r);
     let mut out = Motion {
-        omega: kernel::axpy::<N, A>(th_d, z, parent.omega),
+        omega: crate::eval::kernel::frame::axpy::<N, A>(th_d, z, parent.omega),
         v: v_rel.map_or(v, |v_rel| add(v, v_rel)),
         alpha: zero,
         a: zero,
@@ -248,10 +256,10 @@ pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
         if let Some(v_rel) = v_rel {
             a = cross_add::<N, A>(parent.omega, scale(N::splat(2.0), v_rel), a);
             if slides {
-                a = kernel::axpy::<N, A>(term_rate(body.d_rate, q_ddot), z, a);
+                a = crate::eval::kernel::frame::axpy::<N, A>(term_rate(body.d_rate, q_ddot), z, a);
             }
             if let Some(z_u) = z_u {
-                a = kernel::axpy::<N, A>(th_dd, z_u, a);
+                a = crate::eval::kernel::frame::axpy::<N, A>(th_dd, z_u, a);
                 a = cross_add::<N, A>(w_rel, scale(th_d, z_u), a);
             }
         }

@@ -34,102 +34,21 @@
 //! ```
 //! (tangential, normal, Coriolis and local terms of eq. 2.75).
 
-use crate::eval::arith::{Arith, Separate, fma_dispatch};
-use crate::eval::chain::Chain;
-use crate::eval::data::{Data, LimitPolicy};
+use crate::eval::checks::{LimitPolicy, admitted, check_q, check_values};
 use crate::eval::error::StateError;
-use crate::eval::kernel::{self, Lanes};
-use crate::eval::layout::{Body, DenseLimits, Placement};
-use crate::eval::padded::{self, Frame4, Rates4};
+use crate::eval::kernel::pose_columns::Frame4;
+use crate::eval::kernel::rates_columns::Rates4;
+use crate::eval::layout::chain::Chain;
+use crate::eval::layout::limits::DenseLimits;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::lanes::Lanes;
+use crate::eval::simd::traits::Arith;
+use crate::eval::single::data::Data;
+use crate::eval::single::results::{Accelerations, Poses, Velocities};
 use crate::model::chain::LinkId;
-use crate::model::joint::{Motion, Term};
+use crate::model::joint::Term;
 use crate::model::transform::Transform;
 use std::ops::Range;
-
-pub use crate::eval::results::{
-    AccelerationParts, Accelerations, LinkAcceleration, LinkVelocity, PointMotion, PointVelocity,
-    Poses, Velocities,
-};
-
-/// Checks length and finiteness of a joint-space vector.
-pub(crate) fn check_values(
-    chain: &Chain,
-    values: &[f64],
-    what: &'static str,
-) -> Result<(), StateError> {
-    if values.len() != chain.dof() {
-        return Err(StateError::WrongLength {
-            what,
-            expected: chain.dof(),
-            got: values.len(),
-        });
-    }
-    // Branch-free, two operations per entry: `x · 0` is ±0 for a finite `x` and NaN for ±∞ or
-    // NaN, so the sum is 0 exactly when every entry is finite. The entry at fault is looked for
-    // only on failure.
-    if values.iter().fold(0.0, |sum, x| sum + x * 0.0) == 0.0 {
-        return Ok(());
-    }
-    if let Some(index) = values.iter().position(|x| !x.is_finite()) {
-        let (joint, component) = chain.variable(index);
-        return Err(StateError::NonFinite {
-            what,
-            index,
-            joint: chain.joints()[joint].name().to_string(),
-            component,
-            value: values[index],
-        });
-    }
-    Ok(())
-}
-
-/// See [`all_valid`]; `A` only selects the target features it is compiled with.
-#[inline(always)]
-fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool {
-    // Plain loops: an iterator adapter's closure is not always inlined into the target-feature
-    // function, and would then run as baseline code.
-    let mut finite = true;
-    for x in qs {
-        finite &= x.is_finite();
-    }
-    finite
-        && (policy == LimitPolicy::Ignore
-            || qs
-                .chunks_exact(chain.dof())
-                .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
-}
-
-/// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
-///
-/// # Errors
-/// [`StateError`] naming the first entry at fault.
-pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), StateError> {
-    // One branch-free pass when the checks fit one per entry; the entry at fault is looked for
-    // only on failure.
-    if let (Some(limits), LimitPolicy::Enforce, true) =
-        (&chain.dense_limits, policy, q.len() == chain.dof())
-        && admitted::<Separate>(q, Some(limits))
-    {
-        return Ok(());
-    }
-    check_values(chain, q, "q")?;
-    if policy == LimitPolicy::Enforce {
-        for c in &chain.limit_checks {
-            let value = c.value(q[c.index]);
-            if !c.limits.contains(value) {
-                return Err(StateError::OutOfLimits {
-                    joint: chain.joints()[c.joint].name().to_string(),
-                    component: c.component,
-                    angular: c.angular,
-                    value,
-                    lower: c.limits.lower,
-                    upper: c.limits.upper,
-                });
-            }
-        }
-    }
-    Ok(())
-}
 
 /// Computes the pose of every link at `q`.
 ///
@@ -297,7 +216,10 @@ pub fn forward_kinematics_to(
         poses_path(chain, data, q, body);
     }
     data.poses_valid = false;
-    Ok(padded::link_pose(&data.world_from_body[body], &l.offset))
+    Ok(crate::eval::kernel::pose_columns::link_pose(
+        &data.world_from_body[body],
+        &l.offset,
+    ))
 }
 
 /// Computes poses, angular velocities and origin velocities of every link.
@@ -395,64 +317,6 @@ fn kernel_check<'a>(
     }
 }
 
-/// Whether `q` (of the chain's length) passes the check [`kernel_check`] chose: finiteness, or
-/// [`crate::eval::layout::within`] the limits of each entry. Four entries per vector compare on the
-/// AVX paths (a loop over single entries stays scalar, about 40 instructions more on a
-/// seven-joint arm), each against one contiguous block of limit columns.
-#[inline(always)]
-pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> bool {
-    match limits {
-        // Another length is not decided here (`check_q` decides).
-        Some(limits) if limits.blocks().len() != q.len().div_ceil(4) => false,
-        Some(limits) => admitted_rows::<A>(q, limits.blocks().iter()),
-        None => admitted_rows::<A>(q, std::iter::repeat(&DenseLimits::FREE)),
-    }
-}
-
-/// [`admitted`] with the limit columns of each block of four entries of `q` from `columns`,
-/// which has one block for each (the last one for the completed rest).
-#[inline(always)]
-fn admitted_rows<'c, A: Arith>(
-    q: &[f64],
-    mut columns: impl Iterator<Item = &'c [[f64; 4]; 4]>,
-) -> bool {
-    let (blocks, rest) = q.as_chunks::<4>();
-    let mut ok = true;
-    for (x, c) in blocks.iter().zip(&mut columns) {
-        ok &= admitted_block::<A>(x, c);
-    }
-    if !rest.is_empty() {
-        ok &= match columns.next() {
-            Some(c) => admitted_block::<A>(&completed(rest), c),
-            None => false,
-        };
-    }
-    ok
-}
-
-/// The last (one to three) entries of `q` completed with zeros, which the padding of the limit
-/// columns admits (entry by entry: a copy of variable length would be a library call).
-#[inline(always)]
-fn completed(rest: &[f64]) -> [f64; 4] {
-    let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
-    [entry(0), entry(1), entry(2), 0.0]
-}
-
-/// [`admitted`] for four entries `x` of `q` against their columns `[scale, offset, lower,
-/// upper]`.
-#[inline(always)]
-fn admitted_block<A: Arith>(x: &[f64; 4], [s, o, l, u]: &[[f64; 4]; 4]) -> bool {
-    use crate::eval::arith::Col;
-    type C<A> = <A as Arith>::Col;
-    let columns = [
-        C::<A>::load(s),
-        C::<A>::load(o),
-        C::<A>::load(l),
-        C::<A>::load(u),
-    ];
-    C::<A>::admitted(C::<A>::load(x), columns)
-}
-
 /// [`poses_all_generic`] if `q` passes the check [`kernel_check`] chose, checked in the same
 /// dispatched call (a separate baseline call costs about a tenth of a 7-joint evaluation).
 /// False, with nothing computed, otherwise.
@@ -490,7 +354,7 @@ fn poses_path_admitted_generic<A: Arith>(
 /// (the identity for `n = 0`).
 #[inline(always)]
 fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
-    let chunks = chain.turning_before[n].div_ceil(kernel::LANES);
+    let chunks = chain.turning_before[n].div_ceil(crate::eval::simd::lanes::LANES);
     sin_cos_chunks::<A>(chain, data, q, 0..chunks);
     compose_prefix::<A>(chain, data, q, n)
 }
@@ -500,7 +364,7 @@ fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -
 #[inline(always)]
 fn sin_cos_chunks<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], chunks: Range<usize>) {
     let from = chunks.start;
-    kernel::all_sin_cos::<A>(
+    crate::eval::kernel::joint::all_sin_cos::<A>(
         &chain.theta_gather[chunks],
         q,
         Lanes::flat_mut(&mut data.sin[from..]),
@@ -530,9 +394,16 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
         // (One call per case, so that the frame is never reached through an optional pointer.)
         let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
-            _ if body.follows_previous => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
-            Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
-            None => padded::pose_step::<A>(None, body, q, sin_cos),
+            _ if body.follows_previous => {
+                crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
+            }
+            Some(p) => crate::eval::kernel::pose_columns::pose_step::<A>(
+                Some(&Frame4::load(&frames[p])),
+                body,
+                q,
+                sin_cos,
+            ),
+            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -541,14 +412,14 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
 
 /// The frames of the bodies on the path from the base to `body`, and of no other, into
 /// `data.world_from_body`. The caller reads the link's pose from the last one with
-/// [`padded::link_pose`], as every other way of reading a pose does: ending the kernel with that
+/// [`crate::eval::kernel::pose_columns::link_pose`], as every other way of reading a pose does: ending the kernel with that
 /// composition and store instead, in its AVX-512 build, made a one-link call 5–10 ns slower than a
 /// full evaluation and a read of the same link on Zen 4 (a Panda finger).
 #[inline(always)]
 fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body: usize) {
     // A body's ancestors all have smaller indices: the trigonometry of bodies 0..=body covers the
     // path (vectorised, so computing a few bodies off the path costs nothing).
-    let chunks = chain.turning_before[body + 1].div_ceil(kernel::LANES);
+    let chunks = chain.turning_before[body + 1].div_ceil(crate::eval::simd::lanes::LANES);
     sin_cos_chunks::<A>(chain, data, q, 0..chunks);
     // The path is a run of the leading serial bodies (no index list), then the rest of the path
     // (for a branch), listed from the body back towards the base.
@@ -570,8 +441,10 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         let slot = chain.trig_slot[k];
         let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
-            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
-            None => padded::pose_step::<A>(None, body, q, sin_cos),
+            Some(_) => {
+                crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
+            }
+            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -599,15 +472,18 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
         data.dirty[k] = dirty;
         if dirty {
             // The frame just computed stays in registers when it is the parent's.
-            let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
+            let sin_cos = crate::eval::kernel::joint::body_sin_cos::<f64, A>(body, q);
             f = match body.parent {
                 _ if body.follows_previous && previous_done => {
-                    padded::pose_step::<A>(Some(&f), body, q, sin_cos)
+                    crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
                 }
-                Some(p) => {
-                    padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos)
-                }
-                None => padded::pose_step::<A>(None, body, q, sin_cos),
+                Some(p) => crate::eval::kernel::pose_columns::pose_step::<A>(
+                    Some(&Frame4::load(&frames[p])),
+                    body,
+                    q,
+                    sin_cos,
+                ),
+                None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
             };
             f.store(&mut frames[k]);
         }
@@ -619,7 +495,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
 /// bodies before `first` being up to date; the trigonometry vectorised like a full evaluation's.
 #[inline(always)]
 fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize) {
-    let chunk = chain.turning_before[first] / kernel::LANES;
+    let chunk = chain.turning_before[first] / crate::eval::simd::lanes::LANES;
     sin_cos_chunks::<A>(chain, data, q, chunk..chain.theta_gather.len());
     let frames = &mut data.world_from_body;
     let mut f = match first.checked_sub(1) {
@@ -631,8 +507,10 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
     for (k, (body, &slot)) in (first..).zip(bodies) {
         let sin_cos = (sin[slot], cos[slot]);
         f = match body.parent {
-            Some(_) => padded::pose_step::<A>(Some(&f), body, q, sin_cos),
-            None => padded::pose_step::<A>(None, body, q, sin_cos),
+            Some(_) => {
+                crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
+            }
+            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -658,14 +536,19 @@ fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first
     // (Not `enumerate().skip(first)`, here or in `poses_from` and `poses_incremental_generic`:
     // it divides by the size of a body to count them.)
     for (k, body) in (first..).zip(&chain.bodies[first..]) {
-        let sin_cos = kernel::body_sin_cos::<f64, A>(body, q);
+        let sin_cos = crate::eval::kernel::joint::body_sin_cos::<f64, A>(body, q);
         // The parent's frame stays in registers when it was just computed.
         f = match body.parent {
             _ if body.follows_previous && k > first => {
-                padded::pose_step::<A>(Some(&f), body, q, sin_cos)
+                crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
             }
-            Some(p) => padded::pose_step::<A>(Some(&Frame4::load(&frames[p])), body, q, sin_cos),
-            None => padded::pose_step::<A>(None, body, q, sin_cos),
+            Some(p) => crate::eval::kernel::pose_columns::pose_step::<A>(
+                Some(&Frame4::load(&frames[p])),
+                body,
+                q,
+                sin_cos,
+            ),
+            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -690,16 +573,29 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
         // The previous body's state stays in registers; only branches read a parent from memory.
         // (One call per case, as in `poses_prefix`.)
         let sin_cos = (sin[slot], cos[slot]);
-        previous = match body.parent {
-            _ if body.follows_previous => {
-                padded::rates_step::<A, ACC>(Some(&previous), body, q, q_dot, q_ddot, sin_cos)
-            }
-            Some(p) => {
-                let loaded = (Frame4::load(&frames[p]), Rates4::from_rates(&rates[p]));
-                padded::rates_step::<A, ACC>(Some(&loaded), body, q, q_dot, q_ddot, sin_cos)
-            }
-            None => padded::rates_step::<A, ACC>(None, body, q, q_dot, q_ddot, sin_cos),
-        };
+        previous =
+            match body.parent {
+                _ if body.follows_previous => crate::eval::kernel::rates_columns::rates_step::<
+                    A,
+                    ACC,
+                >(
+                    Some(&previous), body, q, q_dot, q_ddot, sin_cos
+                ),
+                Some(p) => {
+                    let loaded = (Frame4::load(&frames[p]), Rates4::from_rates(&rates[p]));
+                    crate::eval::kernel::rates_columns::rates_step::<A, ACC>(
+                        Some(&loaded),
+                        body,
+                        q,
+                        q_dot,
+                        q_ddot,
+                        sin_cos,
+                    )
+                }
+                None => crate::eval::kernel::rates_columns::rates_step::<A, ACC>(
+                    None, body, q, q_dot, q_ddot, sin_cos,
+                ),
+            };
         previous.0.store(&mut frames[k]);
         previous.1.store::<ACC>(&mut rates[k]);
     }
@@ -759,29 +655,22 @@ fn accelerations_generic<A: Arith>(
 }
 
 fma_dispatch!(fn poses_all(chain: &Chain, data: &mut Data, q: &[f64]) => poses_all_generic);
-fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize) => poses_path_generic);
-fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: Option<&DenseLimits>) -> bool => poses_all_admitted_generic);
-fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, limits: Option<&DenseLimits>) -> bool => poses_path_admitted_generic);
-fma_dispatch!(
-    /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
-    /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for
-    /// a batch whose limits the kernels cannot check on their lanes (no
-    /// [`Chain::dense_limits`](crate::Chain)), in a finiteness pass that vectorises.
-    pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
-);
-fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
-fma_dispatch!(fn poses_tail(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_tail_generic);
-fma_dispatch!(fn rates_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: Option<&[f64]>, limits: Option<&DenseLimits>) -> bool => rates_admitted_either_generic);
-fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
-fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
 
-/// The constant transform `M(θ, d)` of a motion whose terms are constants (a fixed joint),
-/// computed once at load time.
-pub(crate) fn constant_motion(m: &Motion) -> Placement {
-    let body = Body::new(None, Placement::Identity, *m, Placement::Identity, 0);
-    let f = kernel::pose_step::<f64, Separate>(None, &body, &[], (0.0, 1.0));
-    Placement::from_transform(&f.into())
-}
+fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usize) => poses_path_generic);
+
+fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: Option<&DenseLimits>) -> bool => poses_all_admitted_generic);
+
+fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, limits: Option<&DenseLimits>) -> bool => poses_path_admitted_generic);
+
+fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
+
+fma_dispatch!(fn poses_tail(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_tail_generic);
+
+fma_dispatch!(fn rates_admitted(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: Option<&[f64]>, limits: Option<&DenseLimits>) -> bool => rates_admitted_either_generic);
+
+fma_dispatch!(fn velocities_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64]) => velocities_generic);
+
+fma_dispatch!(fn accelerations_all(chain: &Chain, data: &mut Data, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) => accelerations_generic);
 
 #[cfg(test)]
 mod tests;

@@ -72,7 +72,7 @@ fn an_incremental_update_leaves_the_unchanged_head_alone() {
         let mut data = unchecked(&chain);
         forward_kinematics(&chain, &mut data, &q0).expect("finite");
         let parent = chain.bodies[first].parent.expect("a moving parent");
-        let unset = padded::Stored([[f64::NAN; 4]; 4]);
+        let unset = crate::eval::layout::stored::Stored([[f64::NAN; 4]; 4]);
         for (k, frame) in data.world_from_body.iter_mut().enumerate().take(first) {
             if k != parent {
                 *frame = unset;

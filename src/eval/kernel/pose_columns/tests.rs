@@ -1,6 +1,11 @@
 use super::*;
-use crate::eval::arith::{Fused, Separate};
-use crate::eval::kernel::Frame;
+use crate::eval::kernel::frame::Frame;
+use crate::eval::kernel::joint::body_sin_cos;
+use crate::eval::kernel::pose_lanes;
+use crate::eval::layout::body::{Body, CheapPlacement, Placement};
+use crate::eval::layout::stored::{stored, transform};
+use crate::eval::simd::fused::Fused;
+use crate::eval::simd::portable::Separate;
 use crate::model::joint::Motion;
 
 fn bodies() -> Vec<Body> {
@@ -92,9 +97,9 @@ fn check<A: Arith>() {
     let generic_parent = Frame::splat(&parent);
     let padded_parent = Frame4::<A::Col>::load(&stored(&parent));
     for body in bodies() {
-        let sin_cos = crate::eval::kernel::body_sin_cos::<f64, A>(&body, &q);
+        let sin_cos = body_sin_cos::<f64, A>(&body, &q);
         for has_parent in [true, false] {
-            let generic = crate::eval::kernel::pose_step::<f64, A>(
+            let generic = pose_lanes::pose_step::<f64, A>(
                 has_parent.then_some(&generic_parent),
                 &body,
                 &q,
@@ -149,7 +154,7 @@ fn check_quarter_turns<A: Arith>() {
 fn quarter_turns_are_the_plane_rotation_bit_for_bit() {
     assert_eq!(std::f64::consts::FRAC_PI_2.sin(), 1.0);
     check_quarter_turns::<Separate>();
-    if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
+    if crate::eval::simd::isa::isa() != crate::eval::simd::isa::Isa::Baseline {
         check_quarter_turns::<Fused>();
     }
 }
@@ -169,7 +174,7 @@ fn frames_leave_the_registers_entry_for_entry() {
         out(Frame4::<<Separate as Arith>::Col>::load(&stored(&t)).to_transform()),
         out(t)
     );
-    if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
+    if crate::eval::simd::isa::isa() != crate::eval::simd::isa::Isa::Baseline {
         assert_eq!(
             out(Frame4::<<Fused as Arith>::Col>::load(&stored(&t)).to_transform()),
             out(t)
@@ -181,7 +186,7 @@ fn frames_leave_the_registers_entry_for_entry() {
 #[test]
 fn padded_frames_are_the_generic_frames_bit_for_bit() {
     check::<Separate>();
-    if crate::eval::arith::isa() != crate::eval::arith::Isa::Baseline {
+    if crate::eval::simd::isa::isa() != crate::eval::simd::isa::Isa::Baseline {
         check::<Fused>();
     }
 }

@@ -3,72 +3,20 @@
 //! ([`Accelerations`]), points fixed on links, and geometric Jacobians and their rates.
 //!
 //! Every quantity is in the world (base) frame; `v` is the velocity of the link-frame origin and
-//! `a` its classical acceleration (see [`crate::eval::kinematics`]).
+//! `a` its classical acceleration (see [`crate::eval::single::kinematics`]).
 
-use crate::eval::chain::Chain;
-use crate::eval::data::Data;
 use crate::eval::error::StateError;
-use crate::eval::jacobian::{self, JacobianFrame};
-use crate::eval::layout::{Body, Placement};
-use crate::eval::padded;
+use crate::eval::jacobian::JacobianFrame;
+use crate::eval::layout::body::Body;
+use crate::eval::layout::chain::Chain;
+use crate::eval::link_rates::{
+    AccelerationParts, LinkAcceleration, LinkVelocity, PointMotion, PointVelocity,
+    link_acceleration, link_velocity, offset_in_world,
+};
+use crate::eval::single::data::Data;
 use crate::model::chain::LinkId;
 use crate::model::transform::{Transform, add3, cross3, scale3};
 use nalgebra::Vector3;
-
-/// Angular velocity and linear velocity of a link-frame origin.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkVelocity {
-    /// Angular velocity ω (rad/s).
-    pub omega: Vector3<f64>,
-    /// Velocity of the link-frame origin (m/s).
-    pub v: Vector3<f64>,
-}
-
-/// Angular acceleration and classical linear acceleration of a link-frame origin.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkAcceleration {
-    /// Angular acceleration α = dω/dt (rad/s²).
-    pub alpha: Vector3<f64>,
-    /// Classical acceleration of the link-frame origin, d²p/dt² (m/s²).
-    pub a: Vector3<f64>,
-}
-
-/// Position and velocity of a point of a link (world frame).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointVelocity {
-    /// Position `r = R + A ū` (eq. 2.52).
-    pub position: Vector3<f64>,
-    /// Velocity `ṙ = Ṙ + ω × u (+ A dū/dt for a moving point)` (eq. 2.55), `u = A ū`.
-    pub velocity: Vector3<f64>,
-}
-
-/// The parts of a point's acceleration (eq. 2.75), world frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AccelerationParts {
-    /// Classical acceleration of the link-frame origin, `R̈`.
-    pub origin: Vector3<f64>,
-    /// Tangential part `α × u`.
-    pub tangential: Vector3<f64>,
-    /// Normal (centripetal) part `ω × (ω × u)`.
-    pub normal: Vector3<f64>,
-    /// Coriolis part `2 ω × (A dū/dt)` (zero for a point fixed on the link).
-    pub coriolis: Vector3<f64>,
-    /// Local part `A d²ū/dt²`, the point's acceleration relative to the link (zero for a fixed point).
-    pub local: Vector3<f64>,
-}
-
-/// Position, velocity and acceleration of a point of a link (world frame).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointMotion {
-    /// Position `r = R + A ū` (eq. 2.52).
-    pub position: Vector3<f64>,
-    /// Velocity (eq. 2.55, plus `A dū/dt` for a moving point).
-    pub velocity: Vector3<f64>,
-    /// Classical acceleration, the sum of [`PointMotion::parts`] (eq. 2.75).
-    pub acceleration: Vector3<f64>,
-    /// The acceleration's parts.
-    pub parts: AccelerationParts,
-}
 
 /// Poses of every link after [`forward_kinematics`](crate::forward_kinematics) or [`forward_kinematics_incremental`](crate::forward_kinematics_incremental).
 #[derive(Clone, Copy, Debug)]
@@ -107,7 +55,10 @@ impl<'a> Poses<'a> {
         match l.body {
             None => l.offset.to_transform(),
             // (Also for an identity offset: `link_pose` writes the result in whole vectors.)
-            Some(b) => padded::link_pose(&self.data.world_from_body[b], &l.offset),
+            Some(b) => crate::eval::kernel::pose_columns::link_pose(
+                &self.data.world_from_body[b],
+                &l.offset,
+            ),
         }
     }
 
@@ -129,7 +80,12 @@ impl<'a> Poses<'a> {
                 got: out.len(),
             });
         }
-        padded::write_link_matrices(self.chain, &self.data.world_from_body, links, out);
+        crate::eval::kernel::pose_columns::write_link_matrices(
+            self.chain,
+            &self.data.world_from_body,
+            links,
+            out,
+        );
         Ok(())
     }
 
@@ -162,7 +118,7 @@ impl<'a> Poses<'a> {
     /// [`Poses::axis_of`] on plain arrays, read from the parent's stored frame in place.
     #[inline(always)]
     fn axis_entries(&self, body: &Body) -> ([f64; 3], [f64; 3]) {
-        let (parent_origin, offset, z) = jacobian::axis_parts(self, body);
+        let (parent_origin, offset, z) = crate::eval::jacobian::axis_parts(self, body);
         (add3(parent_origin, offset), z)
     }
 
@@ -251,7 +207,7 @@ impl<'a> Poses<'a> {
         if j.ncols() != self.chain.dof() {
             *j = nalgebra::Matrix6xX::zeros(self.chain.dof());
         }
-        jacobian::stored_jacobian(
+        crate::eval::jacobian::stored_jacobian(
             self.chain,
             &self.data.world_from_body,
             link,
@@ -268,7 +224,10 @@ impl<'a> Poses<'a> {
         let b = l.body?;
         Some((
             b,
-            offset_in_world(&padded::transform(&self.data.world_from_body[b]), &l.offset),
+            offset_in_world(
+                &crate::eval::layout::stored::transform(&self.data.world_from_body[b]),
+                &l.offset,
+            ),
         ))
     }
 
@@ -278,7 +237,11 @@ impl<'a> Poses<'a> {
             None => link_velocity([0.0; 3], [0.0; 3], [0.0; 3]),
             Some((b, r)) => {
                 let body = &self.data.rates[b];
-                link_velocity(padded::cut(&body.omega), padded::cut(&body.v), r)
+                link_velocity(
+                    crate::eval::layout::stored::cut(&body.omega),
+                    crate::eval::layout::stored::cut(&body.v),
+                    r,
+                )
             }
         }
     }
@@ -344,44 +307,13 @@ impl<'a> Poses<'a> {
             Some((b, r)) => {
                 let body = &self.data.rates[b];
                 let (w, al, a) = (
-                    padded::cut(&body.omega),
-                    padded::cut(&body.alpha),
-                    padded::cut(&body.a),
+                    crate::eval::layout::stored::cut(&body.omega),
+                    crate::eval::layout::stored::cut(&body.alpha),
+                    crate::eval::layout::stored::cut(&body.a),
                 );
                 link_acceleration([w, al, a], r)
             }
         }
-    }
-}
-
-/// A link's offset from the frame of the body that carries it, in world axes: the body's
-/// rotation applied to the offset's translation (not the difference of the two origins, which
-/// would cancel and need the link's whole pose).
-#[inline]
-pub(crate) fn offset_in_world(body: &Transform, offset: &Placement) -> [f64; 3] {
-    match offset {
-        Placement::Identity => [0.0; 3],
-        offset => body.apply(offset.to_transform().p),
-    }
-}
-
-/// A link's ω and origin velocity from its body's ω and origin velocity `v`, the link's origin
-/// `r` from the body's (eq. 2.55): `v + ω × r`.
-#[inline]
-pub(crate) fn link_velocity(omega: [f64; 3], v: [f64; 3], r: [f64; 3]) -> LinkVelocity {
-    LinkVelocity {
-        omega: omega.into(),
-        v: add3(v, cross3(omega, r)).into(),
-    }
-}
-
-/// A link's α and classical origin acceleration from its body's `[ω, α, a]`, the link's origin
-/// `r` from the body's (eq. 2.75 for a point fixed on the body): `a + α × r + ω × (ω × r)`.
-#[inline]
-pub(crate) fn link_acceleration([w, al, a]: [[f64; 3]; 3], r: [f64; 3]) -> LinkAcceleration {
-    LinkAcceleration {
-        alpha: al.into(),
-        a: add3(a, add3(cross3(al, r), cross3(w, cross3(w, r)))).into(),
     }
 }
 
@@ -504,7 +436,7 @@ impl<'a> Velocities<'a> {
         if j.ncols() != self.chain().dof() {
             *j = nalgebra::Matrix6xX::zeros(self.chain().dof());
         }
-        jacobian::jacobian_dot(&self.poses, link, frame, j.as_mut_slice());
+        crate::eval::jacobian::jacobian_dot(&self.poses, link, frame, j.as_mut_slice());
     }
 }
 
@@ -591,18 +523,21 @@ impl<'a> Accelerations<'a> {
 }
 
 /// A single evaluation as the state a Jacobian is computed from.
-impl jacobian::State for Poses<'_> {
+impl crate::eval::jacobian::State for Poses<'_> {
     fn chain(&self) -> &Chain {
         self.chain
     }
     #[inline(always)]
     fn body_frame(&self, b: usize) -> Transform {
-        padded::transform(&self.data.world_from_body[b])
+        crate::eval::layout::stored::transform(&self.data.world_from_body[b])
     }
     #[inline(always)]
     fn body_rates(&self, b: usize) -> [[f64; 3]; 2] {
         let rates = &self.data.rates[b];
-        [padded::cut(&rates.omega), padded::cut(&rates.v)]
+        [
+            crate::eval::layout::stored::cut(&rates.omega),
+            crate::eval::layout::stored::cut(&rates.v),
+        ]
     }
     #[inline(always)]
     fn link_pose(&self, link: LinkId) -> Transform {

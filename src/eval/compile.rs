@@ -1,226 +1,277 @@
-//! The chain as the kernels evaluate it: a validated [`Model`] and its kernel-ready form
-//! (`eval::layout`). [`ChainBuilder::build`] makes one.
+//! Compiling a [`ChainBuilder`] into a [`Chain`]: validation, one body per moving joint with the
+//! fixed joints folded into its placements, the limit checks, and the lookup tables of the
+//! evaluation paths.
 
-use crate::eval::error::StateError;
-use crate::eval::layout::{
-    Assembled, Body, Carrier, DenseLimits, EvalTables, LimitCheck, ThetaGather, assemble,
-};
-use crate::model::builder::ChainBuilder;
-use crate::model::chain::{JointId, JointScrew, LinkId, Model, validate};
+use crate::eval::layout::body::{Body, Carrier, Placement, ThetaGather};
+use crate::eval::layout::chain::Chain;
+use crate::eval::layout::limits::{DenseLimits, LimitCheck};
+use crate::eval::simd::portable::Separate;
+use crate::model::builder::{ChainBuilder, JointSpec};
+use crate::model::chain::{Resolved, Tree, validate};
 use crate::model::error::ModelError;
-use crate::model::joint::JointKind;
-use nalgebra::{Unit, Vector3};
+use crate::model::joint::{Axis, JointKind, Motion, Term};
+use crate::model::transform::Transform;
 
-/// An immutable, validated kinematic chain (or tree), laid out for evaluation.
-///
-/// Build one from a file with [`Chain::from_file`], from text with
-/// [`Chain::from_dh_yaml_str`] / [`Chain::from_urdf_str`], or programmatically with
-/// [`ChainBuilder`]. Evaluate it with the free functions of [`crate::eval::kinematics`] into a
-/// [`Data`](crate::eval::data::Data) buffer. Its joints, links and names are those of its
-/// [`Model`], to which it dereferences.
-#[derive(Clone, Debug)]
-pub struct Chain {
-    model: Model,
+fn compose(a: Placement, b: Placement) -> Placement {
+    match (a, b) {
+        (Placement::Identity, b) => b,
+        (a, Placement::Identity) => a,
+        (a, b) => Placement::from_transform(&(a.to_transform() * b.to_transform())),
+    }
+}
+
+fn norm(p: [f64; 3]) -> f64 {
+    (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+}
+
+/// The moving bodies of a chain, with what hangs from them.
+pub(crate) struct Assembled {
     pub(crate) bodies: Vec<Body>,
-    /// θ of the bodies, [`LANES`](crate::eval::kernel::LANES) at a time.
-    pub(crate) theta_gather: Vec<ThetaGather>,
-    /// Each body's entry in the sines and cosines `theta_gather` yields (0 for a constant θ).
-    pub(crate) trig_slot: Vec<usize>,
-    /// `turning_before[k]`: the number of bodies before body `k` whose θ varies (`k` up to the
-    /// number of bodies).
-    pub(crate) turning_before: Vec<usize>,
-    /// For each entry `i` of `q`, the first body whose θ or d reads entry `i` or a later one
-    /// (`usize::MAX` if none): when entry `i` is the first to change, no body before this one
-    /// moves.
-    pub(crate) first_body_from: Vec<usize>,
+    /// Each link's (body it is fixed to, `None` for the base; placement in that body's frame),
+    /// in the builder's link indices.
+    pub(crate) link_carrier: Vec<(Option<usize>, Placement)>,
+    /// An upper bound on the distance of any link origin from the world origin ([`Chain::reach`](crate::eval::layout::chain::Chain::reach)).
+    pub(crate) reach: f64,
     pub(crate) limit_checks: Vec<LimitCheck>,
-    /// `limit_checks` by entry of `q`, when no entry has two different ones.
-    pub(crate) dense_limits: Option<DenseLimits>,
-    /// The number of leading bodies that form a serial chain (body `k` hangs from `k − 1`):
-    /// the part of any body's path that needs no index list.
-    pub(crate) serial_run: usize,
-    /// The first body from which the bodies to the end are few enough for the scalar update of
-    /// the last bodies (`kinematics::poses_tail`): at most four, of which at most two turn. A
-    /// body index `k` qualifies exactly when `k ≥ tail_start` (both counts shrink as `k` grows).
-    pub(crate) tail_start: usize,
-    /// Each link's body (`None` for a link fixed to the world) and its constant placement in
-    /// that body's frame, by link index.
-    carriers: Vec<Carrier>,
-    reach: f64,
-    /// For each entry of `q`, the number of rate terms (θ or d of a body) that read it: the
-    /// number of terms its Jacobian column can take (more than one for a mimicked joint).
-    pub(crate) column_terms: Vec<usize>,
 }
 
-impl std::ops::Deref for Chain {
-    type Target = Model;
+/// One body per moving joint in depth-first order, fixed joints folded into the placement of
+/// what follows them; each joint's limits as checks on entries of `q`.
+pub(crate) fn assemble(
+    spec: &ChainBuilder,
+    tree: &Tree,
+    axes: &[[f64; 3]],
+    q_index: &[Option<usize>],
+    mimic: &[Option<Resolved>],
+    new_joint: &[usize],
+) -> Assembled {
+    let root = tree.root;
+    let mut link_carrier: Vec<(Option<usize>, Placement)> =
+        vec![(None, Placement::Identity); spec.links.len()];
+    link_carrier[root] = (
+        None,
+        Placement::from_transform(&spec.world_from_root.unwrap_or(Transform::IDENTITY)),
+    );
+    let mut reach_of = vec![0.0; spec.links.len()];
+    reach_of[root] = norm(spec.world_from_root.unwrap_or(Transform::IDENTITY).p);
+    let mut bodies = Vec::new();
+    let mut limit_checks = Vec::new();
+    for &j in &tree.joint_order {
+        let js = &spec.joints[j];
+        let (parent, child) = tree.ends[j];
+        let (carrier, offset) = link_carrier[parent];
+        let origin = Placement::from_transform(&js.origin);
+        let post = Placement::from_transform(&js.post);
+        let axis = axes[j];
 
-    fn deref(&self) -> &Model {
-        &self.model
-    }
-}
+        let travel = match (
+            js.kind.translates(),
+            js.limits[js.kind.dof().saturating_sub(1)],
+        ) {
+            (true, Some(l)) if l.lower.is_finite() && l.upper.is_finite() => {
+                (js.d + l.lower).abs().max((js.d + l.upper).abs())
+            }
+            _ => js.d.abs(),
+        };
+        reach_of[child] = reach_of[parent] + norm(js.origin.p) + travel + norm(js.post.p);
 
-impl Chain {
-    /// The validated model: joints, links, names, the layout of `q` (also reached through the
-    /// chain itself, which dereferences to it).
-    #[must_use]
-    pub fn model(&self) -> &Model {
-        &self.model
-    }
+        let first = q_index[j].unwrap_or(0);
+        let (theta, d) = joint_terms(js, first, mimic[j], q_index);
 
-    /// The body link `link` is fixed to (`None`: the world) and its placement in that body.
-    #[inline]
-    pub(crate) fn carrier(&self, link: LinkId) -> &Carrier {
-        &self.carriers[link.0]
-    }
-
-    /// `path` ← the bodies from the base to `body` (base first; empty for `None`, a link fixed to
-    /// the world). Reuses `path`'s allocation.
-    pub(crate) fn body_path(&self, body: Option<usize>, path: &mut Vec<usize>) {
-        path.clear();
-        let mut k = body;
-        while let Some(b) = k {
-            path.push(b);
-            k = self.bodies[b].parent;
+        if js.kind == JointKind::Fixed {
+            let motion = crate::eval::compile::constant_motion(&Motion::new(
+                Axis::from_unit(axis),
+                theta,
+                d,
+            ));
+            let placement = compose(compose(compose(offset, origin), motion), post);
+            link_carrier[child] = (carrier, placement);
+            continue;
         }
-        path.reverse();
-    }
 
-    /// True when every moving joint hangs from the previous one (no branches).
-    #[must_use]
-    pub fn is_serial(&self) -> bool {
-        self.serial_run == self.bodies.len()
-    }
+        let body = bodies.len();
+        bodies.push(Body {
+            follows_previous: carrier.is_some() && carrier == body.checked_sub(1),
+            ..Body::new(
+                carrier,
+                compose(offset, origin),
+                Motion::new(Axis::from_unit(axis), theta, d),
+                post,
+                new_joint[j],
+            )
+        });
+        link_carrier[child] = (Some(body), Placement::Identity);
 
-    /// An upper bound on the distance of any link origin from the world origin (m): the sum of
-    /// the constant offsets along the longest path plus prismatic travel. Errors are reported
-    /// relative to it.
-    #[must_use]
-    pub fn reach(&self) -> f64 {
-        self.reach
+        limit_checks.extend(joint_limit_checks(
+            js,
+            new_joint[j],
+            first,
+            mimic[j],
+            q_index,
+        ));
     }
-
-    /// The smallest value of each entry of `q` that the limit checks admit (`-∞` where none
-    /// bounds it from below): the intersection of the joint's own limits and, mapped back
-    /// through `θ = scale · q + offset`, those of every mimic joint that follows it. `dof`
-    /// entries, in `q` order.
-    #[must_use]
-    pub fn lower(&self) -> Vec<f64> {
-        self.admitted_ranges().into_iter().map(|r| r.0).collect()
+    for k in 0..bodies.len() {
+        if let (false, Some(p)) = (bodies[k].follows_previous, bodies[k].parent) {
+            bodies[p].branches = true;
+        }
     }
-
-    /// The largest value of each entry of `q` that the limit checks admit (`+∞` where none
-    /// bounds it from above); see [`Chain::lower`].
-    #[must_use]
-    pub fn upper(&self) -> Vec<f64> {
-        self.admitted_ranges().into_iter().map(|r| r.1).collect()
+    Assembled {
+        bodies,
+        link_carrier,
+        reach: reach_of.iter().copied().fold(0.0, f64::max),
+        limit_checks,
     }
+}
 
-    /// A configuration inside the limits: each entry is 0 where 0 is admitted, otherwise the
-    /// middle of its admitted range (the finite bound where the other is infinite). An entry
-    /// whose range is empty (a mimic joint's limits that its primary's cannot reach) is the
-    /// middle of the empty range, which [`crate::check_q`] then refuses, naming the joint.
-    #[must_use]
-    pub fn neutral(&self) -> Vec<f64> {
-        self.admitted_ranges()
-            .into_iter()
-            .map(|(lo, hi)| {
-                if lo <= 0.0 && 0.0 <= hi {
-                    0.0
-                } else if lo.is_finite() && hi.is_finite() {
-                    lo + 0.5 * (hi - lo)
-                } else if lo.is_finite() {
-                    lo
-                } else {
-                    hi
-                }
+/// θ and d of `js` as terms of `q`: its own entries from `first`, or its primary's through the
+/// mimic relation `(primary, multiplier, offset)`; constants for what the joint does not move.
+fn joint_terms(
+    js: &JointSpec,
+    first: usize,
+    mimic: Option<Resolved>,
+    q_index: &[Option<usize>],
+) -> (Term, Term) {
+    // Entry `index` of the joint's own coordinates, plus the joint's value at q = 0.
+    let var = |index: usize, base: f64| -> Term {
+        let (index, scale, offset) = match mimic {
+            Some((primary, scale, offset)) => (q_index[primary].unwrap_or(index), scale, offset),
+            None => (index, 1.0, 0.0),
+        };
+        Term::Var {
+            index,
+            scale,
+            offset: offset + base,
+        }
+    };
+    match js.kind {
+        JointKind::Fixed => (Term::Const(js.theta), Term::Const(js.d)),
+        JointKind::Revolute | JointKind::Continuous => (var(first, js.theta), Term::Const(js.d)),
+        JointKind::Prismatic => (Term::Const(js.theta), var(first, js.d)),
+        JointKind::Cylindrical => (var(first, js.theta), var(first + 1, js.d)),
+    }
+}
+
+/// The checks of `js`'s limits (`joint` its index in the chain), on the joint's own
+/// coordinate: `q` for an independent joint (entries from `first`), the implied value for a
+/// mimic joint. None for a continuous joint.
+fn joint_limit_checks(
+    js: &JointSpec,
+    joint: usize,
+    first: usize,
+    mimic: Option<Resolved>,
+    q_index: &[Option<usize>],
+) -> Vec<LimitCheck> {
+    if js.kind == JointKind::Continuous {
+        return Vec::new();
+    }
+    // Each coordinate's name (a cylindrical joint's two) and whether it is an angle.
+    let components: &[(Option<&'static str>, bool)] = if js.kind == JointKind::Cylindrical {
+        &[(Some("theta"), true), (Some("d"), false)]
+    } else {
+        &[(None, js.kind.rotates())]
+    };
+    components
+        .iter()
+        .enumerate()
+        .filter_map(|(c, &(component, angular))| {
+            let limits = js.limits[c]?;
+            let (index, scale, offset) = match mimic {
+                Some((primary, m, o)) => (q_index[primary].unwrap_or(0), m, o),
+                None => (first + c, 1.0, 0.0),
+            };
+            Some(LimitCheck {
+                joint,
+                index,
+                component,
+                angular,
+                scale,
+                offset,
+                limits,
             })
-            .collect()
-    }
-
-    /// `[lower, upper]` of each entry of `q`, bounds that pass the checks' own arithmetic.
-    fn admitted_ranges(&self) -> Vec<(f64, f64)> {
-        let mut ranges = vec![(f64::NEG_INFINITY, f64::INFINITY); self.dof()];
-        for c in &self.limit_checks {
-            let range = &mut ranges[c.index];
-            if c.scale == 0.0 {
-                if !c.limits.contains(c.offset) {
-                    *range = (f64::INFINITY, f64::NEG_INFINITY);
-                }
-                continue;
-            }
-            let (a, b) = (
-                (c.limits.lower - c.offset) / c.scale,
-                (c.limits.upper - c.offset) / c.scale,
-            );
-            let (mut lo, mut hi) = if c.scale > 0.0 { (a, b) } else { (b, a) };
-            // The division rounds: step inwards until the check itself admits the bound.
-            for _ in 0..4 {
-                if lo.is_finite() && !c.limits.contains(c.value(lo)) {
-                    lo = lo.next_up();
-                }
-                if hi.is_finite() && !c.limits.contains(c.value(hi)) {
-                    hi = hi.next_down();
-                }
-            }
-            range.0 = range.0.max(lo);
-            range.1 = range.1.min(hi);
-        }
-        ranges
-    }
-
-    /// Number of moving joints after folding fixed joints away.
-    #[must_use]
-    pub fn moving_joint_count(&self) -> usize {
-        self.bodies.len()
-    }
-
-    /// θ, d and their rates for one joint at `(q, q_dot, q_ddot)`, from which its relative 4×4
-    /// transform and derivatives follow (eqs. 2.119, 2.122, 2.127). A fixed joint has constant θ
-    /// and d; a mimic joint follows its primary.
-    ///
-    /// # Errors
-    /// [`StateError::WrongLength`] if a vector does not have [`Chain::dof`](crate::Model::dof) entries.
-    ///
-    /// # Panics
-    /// If `joint` comes from another chain with more joints.
-    pub fn joint_screw(
-        &self,
-        joint: JointId,
-        q: &[f64],
-        q_dot: &[f64],
-        q_ddot: &[f64],
-    ) -> Result<JointScrew, StateError> {
-        for (what, v) in [("q", q), ("q_dot", q_dot), ("q_ddot", q_ddot)] {
-            if v.len() != self.dof() {
-                return Err(StateError::WrongLength {
-                    what,
-                    expected: self.dof(),
-                    got: v.len(),
-                });
-            }
-        }
-        let j = &self.joints[joint.0];
-        let source = self.coordinate_source(joint);
-        let coordinate = |k: usize| match source {
-            Some((i, m, o)) => (m * q[i + k] + o, m * q_dot[i + k], m * q_ddot[i + k]),
-            None => (0.0, 0.0, 0.0),
-        };
-        let (rot, slide) = match j.kind {
-            JointKind::Revolute | JointKind::Continuous => (coordinate(0), (0.0, 0.0, 0.0)),
-            JointKind::Prismatic => ((0.0, 0.0, 0.0), coordinate(0)),
-            JointKind::Cylindrical => (coordinate(0), coordinate(1)),
-            JointKind::Fixed => ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
-        };
-        Ok(JointScrew {
-            axis: Unit::new_unchecked(Vector3::from(j.axis)),
-            theta: rot.0 + j.theta0,
-            d: slide.0 + j.d0,
-            theta_dot: rot.1,
-            d_dot: slide.1,
-            theta_ddot: rot.2,
-            d_ddot: slide.2,
         })
+        .collect()
+}
+
+/// What the evaluation paths look up about the bodies (the [`Chain`] fields of the same names).
+pub(crate) struct EvalTables {
+    pub(crate) theta_gather: Vec<ThetaGather>,
+    pub(crate) trig_slot: Vec<usize>,
+    pub(crate) turning_before: Vec<usize>,
+    pub(crate) first_body_from: Vec<usize>,
+    pub(crate) serial_run: usize,
+    pub(crate) tail_start: usize,
+}
+
+impl EvalTables {
+    /// The tables for `bodies`, whose motions read `dof` entries of `q`.
+    pub(crate) fn new(bodies: &[Body], dof: usize) -> EvalTables {
+        let serial_run = bodies
+            .iter()
+            .enumerate()
+            .take_while(|(k, b)| b.parent == k.checked_sub(1))
+            .count();
+        let mut first_body_from = vec![usize::MAX; dof];
+        for (k, b) in bodies.iter().enumerate() {
+            for index in b.motion.variables() {
+                first_body_from[index] = first_body_from[index].min(k);
+            }
+        }
+        for i in (1..first_body_from.len()).rev() {
+            first_body_from[i - 1] = first_body_from[i - 1].min(first_body_from[i]);
+        }
+        // θ is gathered only for the bodies whose θ varies, in body order: a body's slot in
+        // `sin`/`cos`.
+        let turning: Vec<&Body> = bodies
+            .iter()
+            .filter(|b| matches!(b.motion.theta, Term::Var { .. }))
+            .collect();
+        let mut trig_slot = Vec::with_capacity(bodies.len());
+        let mut turning_before = Vec::with_capacity(bodies.len() + 1);
+        let mut count = 0;
+        for b in bodies {
+            turning_before.push(count);
+            if matches!(b.motion.theta, Term::Var { .. }) {
+                trig_slot.push(count);
+                count += 1;
+            } else {
+                // Read but not used: a constant θ has its sine and cosine in the body.
+                trig_slot.push(0);
+            }
+        }
+        turning_before.push(count);
+        let n = bodies.len();
+        let tail_start = (0..=n)
+            .find(|&k| n - k <= 4 && count - turning_before[k] <= 2)
+            .unwrap_or(n);
+        let theta_gather = turning
+            .chunks(crate::eval::simd::lanes::LANES)
+            .map(|chunk| {
+                let mut g = ThetaGather {
+                    index: [0; crate::eval::simd::lanes::LANES],
+                    scale: [0.0; crate::eval::simd::lanes::LANES],
+                    offset: [0.0; crate::eval::simd::lanes::LANES],
+                };
+                for (i, b) in chunk.iter().enumerate() {
+                    if let Term::Var {
+                        index,
+                        scale,
+                        offset,
+                    } = b.motion.theta
+                    {
+                        (g.index[i], g.scale[i], g.offset[i]) = (index, scale, offset);
+                    }
+                }
+                g
+            })
+            .collect();
+        EvalTables {
+            theta_gather,
+            trig_slot,
+            turning_before,
+            first_body_from,
+            serial_run,
+            tail_start,
+        }
     }
 }
 
@@ -305,10 +356,19 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
     })
 }
 
+/// The constant transform `M(θ, d)` of a motion whose terms are constants (a fixed joint),
+/// computed once at load time.
+pub(crate) fn constant_motion(m: &Motion) -> Placement {
+    let body = Body::new(None, Placement::Identity, *m, Placement::Identity, 0);
+    let f =
+        crate::eval::kernel::pose_lanes::pose_step::<f64, Separate>(None, &body, &[], (0.0, 1.0));
+    Placement::from_transform(&f.into())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::layout::Placement;
+    use crate::eval::layout::body::Placement;
     use crate::model::builder::JointSpec;
     use crate::model::joint::Term;
     use crate::model::transform::Transform;
@@ -475,7 +535,7 @@ mod tests {
 
     #[test]
     fn z_tail_codes_give_the_kinds_of_theta_and_d() {
-        use crate::eval::layout::ZTail as Z;
+        use crate::eval::layout::body::ZTail as Z;
         // (kind, θ offset, d offset) and the (θ, d) kinds the code must give.
         let cases = [
             (JointKind::Revolute, 0.0, 0.0, (Z::VARIABLE, Z::ZERO)),
@@ -560,7 +620,7 @@ mod tests {
             };
             let base = crate::measure::configurations(chain, 1, 3).remove(0);
             assert_eq!(
-                crate::eval::kinematics::admitted::<crate::eval::arith::Separate>(
+                crate::eval::checks::admitted::<crate::eval::simd::portable::Separate>(
                     &base,
                     Some(limits)
                 ),
@@ -572,7 +632,7 @@ mod tests {
                     q[i] = x;
                     let want = slow(chain, &q);
                     assert_eq!(
-                        crate::eval::kinematics::admitted::<crate::eval::arith::Separate>(
+                        crate::eval::checks::admitted::<crate::eval::simd::portable::Separate>(
                             &q,
                             Some(limits)
                         ),

@@ -1,20 +1,10 @@
-//! Preallocated evaluation buffers, sized once from a [`Chain`].
+//! The single-configuration workspace [`Data`]: one chain's frames, rates and sines, sized once.
 
-use crate::eval::chain::Chain;
-use crate::eval::kernel::{LANES, Lanes};
-use crate::eval::padded::Rates;
+use crate::eval::checks::{LimitPolicy, assert_buffers_match};
+use crate::eval::layout::chain::Chain;
+use crate::eval::layout::stored::Rates;
+use crate::eval::simd::lanes::{LANES, Lanes};
 use crate::model::transform::Transform;
-
-/// Whether evaluation refuses joint values outside the joints' limits.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LimitPolicy {
-    /// Values outside the limits are an error naming the joint, the value and the limits
-    /// (default: a common sign of degrees passed as radians).
-    #[default]
-    Enforce,
-    /// Evaluate any finite value.
-    Ignore,
-}
 
 /// The workspace for evaluating one [`Chain`]: per moving joint, the pose of its frame and, when
 /// asked for, its velocity and acceleration. Created once with [`Data::new`]; evaluations then
@@ -25,7 +15,7 @@ pub enum LimitPolicy {
 #[derive(Clone, Debug)]
 pub struct Data {
     /// Padded columns (see [`crate::eval::padded`]).
-    pub(crate) world_from_body: Vec<crate::eval::padded::Stored>,
+    pub(crate) world_from_body: Vec<crate::eval::layout::stored::Stored>,
     /// ω, origin velocity, α and classical origin acceleration of each body (world frame).
     pub(crate) rates: Vec<Rates>,
     /// `sin θ` and `cos θ` of each body's joint, computed before the pass along the chain, in
@@ -53,7 +43,7 @@ impl Data {
         // Whole chunks of lanes, at least one (constant-θ bodies read slot 0).
         let trig = chain.theta_gather.len().max(1);
         Data {
-            world_from_body: vec![crate::eval::padded::stored(&Transform::IDENTITY); n],
+            world_from_body: vec![crate::eval::layout::stored::stored(&Transform::IDENTITY); n],
             rates: vec![Rates::ZERO; n],
             sin: vec![Lanes([0.0; LANES]); trig],
             cos: vec![Lanes([1.0; LANES]); trig],
@@ -93,17 +83,4 @@ impl Data {
     pub(crate) fn assert_matches(&self, chain: &Chain) {
         assert_buffers_match("Data", self.world_from_body.len(), self.dof, chain);
     }
-}
-
-/// Panics, naming both sides, unless buffers of type `what` made for a chain of `bodies` moving
-/// joints and `dof` entries were made for one of `chain`'s shape.
-#[inline]
-pub(crate) fn assert_buffers_match(what: &str, bodies: usize, dof: usize, chain: &Chain) {
-    assert!(
-        bodies == chain.bodies.len() && dof == chain.dof(),
-        "kinechain: {what} was created for another chain ({bodies} moving joints, dof {dof}), not '{}' ({} moving joints, dof {})",
-        chain.name(),
-        chain.bodies.len(),
-        chain.dof()
-    );
 }

@@ -10,36 +10,55 @@
 //! negates them. Arguments with `|x| ≥ 2¹⁹ π/2` (about 8.2·10⁵ rad) are left to the standard
 //! library, whose reduction covers the whole `f64` range.
 
-use crate::eval::arith::Arith;
-
+use crate::eval::simd::traits::Arith;
 use std::f64::consts::FRAC_2_PI;
+
 /// π/2 in three parts of 33 significant bits, and the remainder.
 const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+
 const PIO2_2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
+
 const PIO2_3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
+
 const PIO2_3_TAIL: f64 = f64::from_bits(0x397B_839A_2520_49C1);
+
 /// π/2 as the sum of three doubles (with a fused multiply–add the products need no spare bits).
 const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5444_2D18);
+
 const PIO2_MID: f64 = f64::from_bits(0x3C91_A626_3314_5C07);
+
 const PIO2_LO: f64 = f64::from_bits(0xB91F_1976_B7ED_8FBC);
+
 /// Largest |x| reduced here; beyond it `k` could exceed 2²⁰ and the products would round.
 pub(crate) const REDUCTION_LIMIT: f64 = 524_288.0 * std::f64::consts::FRAC_PI_2;
+
 /// 1.5 · 2⁵²: adding it rounds a double of magnitude < 2⁵¹ to an integer in the low mantissa bits.
 const ROUNDER: f64 = 6_755_399_441_055_744.0;
 
 // Minimax coefficients of sin r = r + r³ (S1 + r² (S2 + ...)) and
 // cos r = 1 − r²/2 + r⁴ (C1 + r² (C2 + ...)) on |r| ≤ π/4.
 const S1: f64 = -1.666_666_666_666_663_2e-1;
+
 const S2: f64 = 8.333_333_333_322_49e-3;
+
 const S3: f64 = -1.984_126_982_985_795e-4;
+
 const S4: f64 = 2.755_731_370_707_006_8e-6;
+
 const S5: f64 = -2.505_076_025_340_686_3e-8;
+
 const S6: f64 = 1.589_690_995_211_55e-10;
+
 const C1: f64 = 4.166_666_666_666_66e-2;
+
 const C2: f64 = -1.388_888_888_887_411e-3;
+
 const C3: f64 = 2.480_158_728_947_673e-5;
+
 const C4: f64 = -2.755_731_435_139_066_3e-7;
+
 const C5: f64 = 2.087_572_321_298_175e-9;
+
 const C6: f64 = -1.135_964_755_778_819_5e-11;
 
 /// `(sin x, cos x)`, reduced here for `|x| < REDUCTION_LIMIT` and by the standard library beyond.
@@ -141,7 +160,7 @@ fn reduce_split(x: f64, k: f64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::arith::Separate;
+    use crate::eval::simd::portable::Separate;
     use crate::measure::worse;
 
     /// Distance in ulps of the result (relative to max(|expected|, 2⁻¹⁰²²)), and absolute.
@@ -246,7 +265,7 @@ mod tests {
     fn agrees_with_the_standard_library_within_one_ulp() {
         check_against_the_standard_library::<Separate>();
         // Outside a function compiled for FMA, `Fused` calls the library's fma (slow, exact).
-        check_against_the_standard_library::<crate::eval::arith::Fused>();
+        check_against_the_standard_library::<crate::eval::simd::fused::Fused>();
     }
 
     #[test]
@@ -256,7 +275,7 @@ mod tests {
         assert_eq!(sin_cos::<Separate>(-0.0), (0.0, 1.0));
         for x in [1e-300, -5e-324, 1e-20] {
             assert_eq!(sin_cos::<Separate>(x), (x, 1.0));
-            assert_eq!(sin_cos::<crate::eval::arith::Fused>(x), (x, 1.0));
+            assert_eq!(sin_cos::<crate::eval::simd::fused::Fused>(x), (x, 1.0));
         }
         for x in [REDUCTION_LIMIT, -1e7, 1e300, f64::MAX] {
             assert_eq!(sin_cos::<Separate>(x), x.sin_cos());

@@ -1,0 +1,180 @@
+//! Checks of joint-space vectors before any kernel runs: length, finiteness and (under
+//! [`LimitPolicy::Enforce`]) joint limits, one configuration at a time or a whole batch.
+
+use crate::eval::error::StateError;
+use crate::eval::layout::chain::Chain;
+use crate::eval::layout::limits::DenseLimits;
+use crate::eval::simd::isa::fma_dispatch;
+use crate::eval::simd::portable::Separate;
+use crate::eval::simd::traits::Arith;
+
+/// Whether evaluation refuses joint values outside the joints' limits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LimitPolicy {
+    /// Values outside the limits are an error naming the joint, the value and the limits
+    /// (default: a common sign of degrees passed as radians).
+    #[default]
+    Enforce,
+    /// Evaluate any finite value.
+    Ignore,
+}
+
+/// Panics, naming both sides, unless buffers of type `what` made for a chain of `bodies` moving
+/// joints and `dof` entries were made for one of `chain`'s shape.
+#[inline]
+pub(crate) fn assert_buffers_match(what: &str, bodies: usize, dof: usize, chain: &Chain) {
+    assert!(
+        bodies == chain.bodies.len() && dof == chain.dof(),
+        "kinechain: {what} was created for another chain ({bodies} moving joints, dof {dof}), not '{}' ({} moving joints, dof {})",
+        chain.name(),
+        chain.bodies.len(),
+        chain.dof()
+    );
+}
+
+/// Checks length and finiteness of a joint-space vector.
+pub(crate) fn check_values(
+    chain: &Chain,
+    values: &[f64],
+    what: &'static str,
+) -> Result<(), StateError> {
+    if values.len() != chain.dof() {
+        return Err(StateError::WrongLength {
+            what,
+            expected: chain.dof(),
+            got: values.len(),
+        });
+    }
+    // Branch-free, two operations per entry: `x · 0` is ±0 for a finite `x` and NaN for ±∞ or
+    // NaN, so the sum is 0 exactly when every entry is finite. The entry at fault is looked for
+    // only on failure.
+    if values.iter().fold(0.0, |sum, x| sum + x * 0.0) == 0.0 {
+        return Ok(());
+    }
+    if let Some(index) = values.iter().position(|x| !x.is_finite()) {
+        let (joint, component) = chain.variable(index);
+        return Err(StateError::NonFinite {
+            what,
+            index,
+            joint: chain.joints()[joint].name().to_string(),
+            component,
+            value: values[index],
+        });
+    }
+    Ok(())
+}
+
+/// See [`all_valid`]; `A` only selects the target features it is compiled with.
+#[inline(always)]
+fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool {
+    // Plain loops: an iterator adapter's closure is not always inlined into the target-feature
+    // function, and would then run as baseline code.
+    let mut finite = true;
+    for x in qs {
+        finite &= x.is_finite();
+    }
+    finite
+        && (policy == LimitPolicy::Ignore
+            || qs
+                .chunks_exact(chain.dof())
+                .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
+}
+
+/// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
+///
+/// # Errors
+/// [`StateError`] naming the first entry at fault.
+pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), StateError> {
+    // One branch-free pass when the checks fit one per entry; the entry at fault is looked for
+    // only on failure.
+    if let (Some(limits), LimitPolicy::Enforce, true) =
+        (&chain.dense_limits, policy, q.len() == chain.dof())
+        && admitted::<Separate>(q, Some(limits))
+    {
+        return Ok(());
+    }
+    check_values(chain, q, "q")?;
+    if policy == LimitPolicy::Enforce {
+        for c in &chain.limit_checks {
+            let value = c.value(q[c.index]);
+            if !c.limits.contains(value) {
+                return Err(StateError::OutOfLimits {
+                    joint: chain.joints()[c.joint].name().to_string(),
+                    component: c.component,
+                    angular: c.angular,
+                    value,
+                    lower: c.limits.lower,
+                    upper: c.limits.upper,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether `q` (of the chain's length) passes the check `single::kinematics::kernel_check`
+/// chose: finiteness, or [`within`](crate::eval::simd::traits::within) the limits of each entry.
+/// Four entries per vector compare on the AVX paths (a loop over single entries stays scalar,
+/// about 40 instructions more on a seven-joint arm), each against one contiguous block of limit
+/// columns.
+#[inline(always)]
+pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> bool {
+    match limits {
+        // Another length is not decided here (`check_q` decides).
+        Some(limits) if limits.blocks().len() != q.len().div_ceil(4) => false,
+        Some(limits) => admitted_rows::<A>(q, limits.blocks().iter()),
+        None => admitted_rows::<A>(q, std::iter::repeat(&DenseLimits::FREE)),
+    }
+}
+
+/// [`admitted`] with the limit columns of each block of four entries of `q` from `columns`,
+/// which has one block for each (the last one for the completed rest).
+#[inline(always)]
+fn admitted_rows<'c, A: Arith>(
+    q: &[f64],
+    mut columns: impl Iterator<Item = &'c [[f64; 4]; 4]>,
+) -> bool {
+    let (blocks, rest) = q.as_chunks::<4>();
+    let mut ok = true;
+    for (x, c) in blocks.iter().zip(&mut columns) {
+        ok &= admitted_block::<A>(x, c);
+    }
+    if !rest.is_empty() {
+        ok &= match columns.next() {
+            Some(c) => admitted_block::<A>(&completed(rest), c),
+            None => false,
+        };
+    }
+    ok
+}
+
+/// The last (one to three) entries of `q` completed with zeros, which the padding of the limit
+/// columns admits (entry by entry: a copy of variable length would be a library call).
+#[inline(always)]
+fn completed(rest: &[f64]) -> [f64; 4] {
+    let entry = |i: usize| rest.get(i).copied().unwrap_or(0.0);
+    [entry(0), entry(1), entry(2), 0.0]
+}
+
+/// [`admitted`] for four entries `x` of `q` against their columns `[scale, offset, lower,
+/// upper]`.
+#[inline(always)]
+fn admitted_block<A: Arith>(x: &[f64; 4], [s, o, l, u]: &[[f64; 4]; 4]) -> bool {
+    use crate::eval::simd::traits::Col;
+    type C<A> = <A as Arith>::Col;
+    let columns = [
+        C::<A>::load(s),
+        C::<A>::load(o),
+        C::<A>::load(l),
+        C::<A>::load(u),
+    ];
+    C::<A>::admitted(C::<A>::load(x), columns)
+}
+
+fma_dispatch!(
+    /// True when every entry of `qs` (whole configurations of `chain`) is finite and, under
+    /// [`LimitPolicy::Enforce`], within its joint's limits: what [`check_q`] accepts, decided for
+    /// a batch whose limits the kernels cannot check on their lanes (no
+    /// [`Chain::dense_limits`](crate::Chain)), in a finiteness pass that vectorises.
+    pub(crate) fn all_valid(chain: &Chain, qs: &[f64], policy: LimitPolicy) -> bool => all_valid_generic
+);
