@@ -96,6 +96,7 @@ const EVAL_ORDER: &[&str] = &[
     "eval::batch::macros",
     "eval::batch::rates",
     "eval::batch::jacobians",
+    "eval::batch::lanes32",
     "eval::batch::single_precision",
     "eval::batch",
     "eval",

@@ -12,6 +12,7 @@ mod claims;
 mod data;
 mod fold;
 mod jacobians;
+mod lanes32;
 mod matrices;
 mod poses;
 mod rates;

@@ -37,6 +37,7 @@
 use crate::eval::batch::blocks::transpose_chunk;
 use crate::eval::batch::data::{BatchError, LaneCheck, batch_rows, first_error};
 use crate::eval::batch::fold::{block_len, fold_blocks};
+use crate::eval::batch::lanes32::{F16, Lanes32, WIDTH, Wide32, sin_cos};
 use crate::eval::batch::poses::lane_pose;
 use crate::eval::batch::threads::{par_chunks_checked, worth_parallel};
 use crate::eval::checks::LimitPolicy;
@@ -49,145 +50,6 @@ use crate::eval::simd::traits::{Arith, LaneNum, Num};
 use crate::model::chain::LinkId;
 use crate::model::joint::Term;
 use crate::model::transform::Transform;
-use std::ops::{Add, Mul, Neg, Sub};
-
-/// Number of configurations evaluated together.
-const WIDTH: usize = 16;
-
-/// [`WIDTH`] `f32` values, one per configuration; arithmetic is lane-wise (loops the compiler
-/// turns into one AVX-512 or two AVX2 instructions inside the dispatched kernels).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(64))]
-pub(crate) struct F16([f32; WIDTH]);
-
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for F16 {
-            type Output = F16;
-            #[inline(always)]
-            fn $method(self, rhs: F16) -> F16 {
-                let mut out = [0.0; WIDTH];
-                for i in 0..WIDTH {
-                    out[i] = self.0[i] $op rhs.0[i];
-                }
-                F16(out)
-            }
-        }
-    };
-}
-
-lanewise!(Add, add, +);
-
-lanewise!(Sub, sub, -);
-
-lanewise!(Mul, mul, *);
-
-impl Neg for F16 {
-    type Output = F16;
-    #[inline(always)]
-    fn neg(self) -> F16 {
-        F16(self.0.map(|x| -x))
-    }
-}
-
-/// Reduced angles below this in magnitude (2⁻⁴⁰ ≈ 9·10⁻¹³ rad) are taken as zero. They are
-/// rounding residues: a joint at θ = π, stored as a double, leaves r = 1.2·10⁻¹⁶. Their powers in
-/// the polynomials (r³ ≈ 10⁻⁴⁸) would underflow to subnormal `f32` values, which the hardware
-/// handles slowly: on the Zen 5 host, the UR5 table's configurations at 0 and π took the whole
-/// batch from 8.0 to 12.5 ns per configuration. Dropping the residue changes `sin` by at most
-/// 9·10⁻¹³, about 10⁻⁵ `f32` ulps of 1.
-const TINY: f32 = 9.094_947e-13;
-
-impl Num for F16 {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        F16([x as f32; WIDTH])
-    }
-    #[inline(always)]
-    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        let mut out = [0.0; WIDTH];
-        for i in 0..WIDTH {
-            // Fused only inside functions compiled with FMA (see `Arith::FUSED`).
-            out[i] = if A::FUSED {
-                a.0[i].mul_add(b.0[i], c.0[i])
-            } else {
-                a.0[i] * b.0[i] + c.0[i]
-            };
-        }
-        F16(out)
-    }
-    #[inline(always)]
-    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        sin_cos::<A>(x.0.map(f64::from))
-    }
-}
-
-// sin r ≈ r + r³ (S1 + r² (S2 + r² S3)) and cos r ≈ 1 − r²/2 + r⁴ (C1 + r² (C2 + r² C3)) on
-// |r| ≤ π/4: minimax fits for single precision (those of the Cephes library's `sinf`/`cosf`).
-const S1: f32 = -1.666_665_5e-1;
-
-const S2: f32 = 8.332_161e-3;
-
-const S3: f32 = -1.951_529_6e-4;
-
-const C1: f32 = 4.166_664_6e-2;
-
-const C2: f32 = -1.388_731_6e-3;
-
-const C3: f32 = 2.443_315_7e-5;
-
-/// `(sin θ, cos θ)` in `f32` of sixteen angles given in `f64`: reduced in `f64`
-/// ([`crate::eval::simd::trig::reduce`]), the remainder rounded to `f32` and the polynomials evaluated there.
-/// Angles beyond the reduction's range take the standard library's `f64` functions.
-#[inline(always)]
-fn sin_cos<A: Arith>(theta: [f64; WIDTH]) -> (F16, F16) {
-    let (mut s, mut c) = ([0.0_f32; WIDTH], [0.0_f32; WIDTH]);
-    let mut big = false;
-    for i in 0..WIDTH {
-        let (r64, _, quadrant) = crate::eval::simd::trig::reduce::<A>(theta[i]);
-        // r = r₃₂ + r_lo: the rounding of the remainder to f32 is kept, to first order.
-        let r = r64 as f32;
-        let r_lo = (r64 - f64::from(r)) as f32;
-        // A select, not a branch: exact angles (0, ±π/2, π) are common in some batches and
-        // not others, and a branch mispredicted once per body cost more than the select.
-        let (r, r_lo) = if r.abs() < TINY {
-            (0.0, 0.0)
-        } else {
-            (r, r_lo)
-        };
-        let z = r * r;
-        let mul_add = |a: f32, b: f32, c: f32| if A::FUSED { a.mul_add(b, c) } else { a * b + c };
-        let sin_r = mul_add(r * z, mul_add(z, mul_add(z, S3, S2), S1), r);
-        let cos_r = mul_add(
-            z * z,
-            mul_add(z, mul_add(z, C3, C2), C1),
-            mul_add(-0.5, z, 1.0),
-        );
-        // sin(r + r_lo) ≈ sin r + r_lo cos r. The like term of cos, −r_lo sin r, is at most
-        // 2⁻²⁵ · 0.71 in size, about a third of an ulp of cos r ∈ [0.71, 1]: added, it never
-        // changes the rounded result, so it is left out.
-        let sin_r = mul_add(r_lo, cos_r, sin_r);
-        // Quadrant k mod 4: 1 → (cos, −sin), 2 → (−sin, −cos), 3 → (−cos, sin).
-        let (sr, cr) = if quadrant & 1 != 0 {
-            (cos_r, sin_r)
-        } else {
-            (sin_r, cos_r)
-        };
-        let quadrant = quadrant as u32;
-        s[i] = f32::from_bits(sr.to_bits() ^ ((quadrant & 2) << 30));
-        c[i] = f32::from_bits(cr.to_bits() ^ ((quadrant.wrapping_add(1) & 2) << 30));
-        big |= theta[i].abs() >= crate::eval::simd::trig::REDUCTION_LIMIT;
-    }
-    if big {
-        for i in 0..WIDTH {
-            if theta[i].abs() >= crate::eval::simd::trig::REDUCTION_LIMIT {
-                let (sw, cw) = theta[i].sin_cos();
-                (s[i], c[i]) = (sw as f32, cw as f32);
-            }
-        }
-    }
-    (F16(s), F16(c))
-}
 
 /// `(sin θ, cos θ)` of `body` in the sixteen configurations whose joint values (`f64`) are the
 /// lanes of `q_lo` (configurations 0–7) and `q_hi` (8–15).
@@ -642,7 +504,7 @@ fn load_chunk<A: Arith>(
 /// batch took 9.3–9.5 ns per configuration instead of 10.1–10.5 (alternated `kinechain bench`).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn chunk_poses_generic<A: Arith>(
+fn chunk_poses_generic<A: Wide32>(
     chain: &Chain,
     check: Option<LaneCheck<'_>>,
     raw: &mut [Lanes],
@@ -652,25 +514,27 @@ fn chunk_poses_generic<A: Arith>(
     c: usize,
     frames: &mut [Frame<F16>],
 ) -> bool {
+    type N<A> = <A as Wide32>::Lanes32;
     let ok = load_chunk::<A>(check, raw, q64, q32, qs, c);
     let (lo, hi) = q64.split_at(q32.len());
-    let q = &*q32;
-    let mut f = Frame::splat(&Transform::IDENTITY);
+    let q = N::<A>::view(q32);
+    let mut f = N::<A>::identity();
     for (k, body) in chain.bodies.iter().enumerate() {
-        let sin_cos = body_sin_cos::<A>(body, lo, hi);
+        let (s, c) = body_sin_cos::<A>(body, lo, hi);
+        let sin_cos = (N::<A>::from_f16(s), N::<A>::from_f16(c));
         f = match body.parent {
             _ if body.follows_previous => {
-                crate::eval::kernel::pose_lanes::pose_step::<F16, A>(Some(&f), body, q, sin_cos)
+                crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(Some(&f), body, q, sin_cos)
             }
-            Some(p) => crate::eval::kernel::pose_lanes::pose_step::<F16, A>(
-                Some(&frames[p]),
+            Some(p) => crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(
+                Some(N::<A>::frame(&frames[p])),
                 body,
                 q,
                 sin_cos,
             ),
-            None => crate::eval::kernel::pose_lanes::pose_step::<F16, A>(None, body, q, sin_cos),
+            None => crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(None, body, q, sin_cos),
         };
-        frames[k] = f;
+        N::<A>::store(&f, &mut frames[k]);
     }
     ok
 }
@@ -688,7 +552,7 @@ fma_dispatch!(#[allow(clippy::too_many_arguments)] fn chunk_poses(chain: &Chain,
 /// 45).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn chunk_path_generic<A: Arith>(
+fn chunk_path_generic<A: Wide32>(
     chain: &Chain,
     check: Option<LaneCheck<'_>>,
     path: &[usize],
@@ -699,19 +563,22 @@ fn chunk_path_generic<A: Arith>(
     c: usize,
     out: &mut Frame<F16>,
 ) -> bool {
+    type N<A> = <A as Wide32>::Lanes32;
     let ok = load_chunk::<A>(check, raw, q64, q32, qs, c);
     let (lo, hi) = q64.split_at(q32.len());
-    let q = &*q32;
+    let q = N::<A>::view(q32);
     for (i, &k) in path.iter().enumerate() {
         let body = &chain.bodies[k];
-        let sin_cos = body_sin_cos::<A>(body, lo, hi);
+        let (s, c) = body_sin_cos::<A>(body, lo, hi);
+        let sin_cos = (N::<A>::from_f16(s), N::<A>::from_f16(c));
         // The first body hangs from the world, each next one from the one before it.
-        *out = crate::eval::kernel::pose_lanes::pose_step::<F16, A>(
-            (i > 0).then_some(&*out),
+        let f = crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(
+            (i > 0).then_some(N::<A>::frame(out)),
             body,
             q,
             sin_cos,
         );
+        N::<A>::store(&f, out);
     }
     ok
 }

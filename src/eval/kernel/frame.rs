@@ -99,10 +99,18 @@ impl<N: Num> Frame<N> {
     #[inline(always)]
     pub(crate) fn splat(f: &crate::model::transform::Transform) -> Self {
         Frame {
-            r: f.r.map(|c| c.map(N::splat)),
-            p: f.p.map(N::splat),
+            r: [splat3(f.r[0]), splat3(f.r[1]), splat3(f.r[2])],
+            p: splat3(f.p),
         }
     }
+}
+
+/// `[N::splat(v[0]), N::splat(v[1]), N::splat(v[2])]`, written out: as `v.map(N::splat)`, the
+/// closure is a function of its own, compiled without the kernel's target features, and the
+/// `f32` register types' `splat` did not inline into it (one call per body, through memory).
+#[inline(always)]
+pub(crate) fn splat3<N: Num>(v: [f64; 3]) -> V3<N> {
+    [N::splat(v[0]), N::splat(v[1]), N::splat(v[2])]
 }
 
 impl From<Frame<f64>> for crate::model::transform::Transform {
@@ -127,7 +135,7 @@ pub(crate) fn axpy<N: Num, A: Arith>(s: N, x: V3<N>, y: V3<N>) -> V3<N> {
 /// `R u + p` with a constant `u`.
 #[inline(always)]
 pub(crate) fn apply_const_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: [f64; 3], p: V3<N>) -> V3<N> {
-    mat_vec_add::<N, A>(r, &u.map(N::splat), p)
+    mat_vec_add::<N, A>(r, &splat3(u), p)
 }
 
 /// A rotation about +e_k mixes the two other columns (i, j) in cyclic order:
@@ -146,7 +154,7 @@ pub(crate) fn plane<N: Num, A: Arith>(r: &mut [[N; 3]; 3], i: usize, j: usize, s
 #[inline(always)]
 pub(crate) fn rodrigues<N: Num, A: Arith>(v: [f64; 3], s: N, c: N) -> [[N; 3]; 3] {
     let w = N::splat(1.0) - c;
-    let [x, y, z] = v.map(N::splat);
+    let [x, y, z] = splat3::<N>(v);
     let (wx, wy, wz) = (w * x, w * y, w * z);
     let (sx, sy, sz) = (s * x, s * y, s * z);
     [
@@ -233,6 +241,6 @@ pub(crate) fn place<N: Num, A: Arith>(f: &mut Frame<N>, placement: &Placement) {
 /// `R u` with constant `u`, as [`Transform::apply`] computes it (no fused multiply–adds).
 #[inline(always)]
 pub(crate) fn rotate<N: Num>(r: &[[N; 3]; 3], u: [f64; 3]) -> [N; 3] {
-    let u = u.map(N::splat);
+    let u = splat3::<N>(u);
     std::array::from_fn(|k| r[0][k] * u[0] + r[1][k] * u[1] + r[2][k] * u[2])
 }

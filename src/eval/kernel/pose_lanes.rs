@@ -104,9 +104,10 @@ pub(crate) fn axis_of<N: Num, A: Arith>(r: &[[N; 3]; 3], axis: &Axis) -> V3<N> {
         Axis::X => r[0],
         Axis::Y => r[1],
         Axis::Z => r[2],
-        Axis::NegX => r[0].map(|x| -x),
-        Axis::NegY => r[1].map(|x| -x),
-        Axis::NegZ => r[2].map(|x| -x),
+        // Written out, not mapped (see `splat3`).
+        Axis::NegX => [-r[0][0], -r[0][1], -r[0][2]],
+        Axis::NegY => [-r[1][0], -r[1][1], -r[1][2]],
+        Axis::NegZ => [-r[2][0], -r[2][1], -r[2][2]],
         Axis::General(v) => apply_const_add::<N, A>(r, v, [N::splat(0.0); 3]),
     }
 }
