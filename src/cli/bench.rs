@@ -203,7 +203,7 @@ impl<'a> Workload<'a> {
         methods.extend(self.incremental_method());
         methods.extend(self.batch_methods());
         // Where the choice of `narrow_trig` applies (all the angles in one chunk, the test
-        // `kernel::all_sin_cos` makes), what it saves.
+        // `kernel::joint::all_sin_cos` makes), what it saves.
         if crate::eval::isa() == crate::eval::Isa::Avx512
             && crate::eval::narrow_trig()
             && chain.theta_gather.len() == 1

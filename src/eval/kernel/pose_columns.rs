@@ -115,7 +115,7 @@ pub(crate) fn link_pose_from_entries<A: Arith>(
 }
 
 /// `c₀ u₀ + c₁ u₁ + c₂ u₂ + base` for constant coefficients `u`, innermost term first (the order
-/// of `kernel::apply_const_add`).
+/// of `kernel::frame::apply_const_add`).
 #[inline(always)]
 pub(crate) fn combine_const<C: Col>(c: &[C; 4], u: [f64; 3], base: C) -> C {
     let u = [C::splat(u[0]), C::splat(u[1]), C::splat(u[2])];
@@ -126,7 +126,7 @@ pub(crate) fn combine_const<C: Col>(c: &[C; 4], u: [f64; 3], base: C) -> C {
     )
 }
 
-/// Columns `i`, `j` turned by the angle with sine `s` and cosine `c` (see `kernel::plane`).
+/// Columns `i`, `j` turned by the angle with sine `s` and cosine `c` (see `kernel::frame::plane`).
 #[inline(always)]
 fn plane<C: Col>(f: &mut [C; 4], i: usize, j: usize, s: f64, c: f64) {
     let (ci, cj) = (f[i], f[j]);
@@ -135,7 +135,7 @@ fn plane<C: Col>(f: &mut [C; 4], i: usize, j: usize, s: f64, c: f64) {
     f[j] = C::mul_add(c, cj, C::mul(s, ci).neg());
 }
 
-/// Replaces the rotation columns by `r · A(axis, θ)` (eq. 2.112; see `kernel::rotate_columns`).
+/// Replaces the rotation columns by `r · A(axis, θ)` (eq. 2.112; see `kernel::frame::rotate_columns`).
 #[inline(always)]
 fn rotate_columns<A: Arith>(f: &mut [A::Col; 4], axis: &Axis, s: f64, c: f64) {
     match *axis {
@@ -176,7 +176,7 @@ pub(crate) fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
         }
         Placement::OffsetRot { t, axis, c, s } => {
             f[3] = combine_const(f, *t, f[3]);
-            // Constant indices in each arm (see `kernel::place`).
+            // Constant indices in each arm (see `kernel::frame::place`).
             match axis {
                 0 => plane(f, 1, 2, *s, *c),
                 1 => plane(f, 2, 0, *s, *c),
@@ -195,7 +195,7 @@ pub(crate) fn place<A: Arith>(f: &mut [A::Col; 4], placement: &Placement) {
     }
 }
 
-/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::apply_motion`); the axis is the one `f`'s columns
+/// `f ← f · M(θ, d)` (eq. 2.119; see `kernel::pose_lanes::apply_motion`); the axis is the one `f`'s columns
 /// carry.
 #[inline(always)]
 fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: (f64, f64)) {
@@ -218,7 +218,7 @@ fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: 
     }
 }
 
-/// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes (see `kernel::z_tail`).
+/// `f ← f · M(θ, d) · post` for the shape [`ZTail`] describes (see `kernel::pose_lanes::z_tail`).
 #[inline(always)]
 fn z_tail<A: Arith>(
     f: &mut [A::Col; 4],
@@ -231,7 +231,7 @@ fn z_tail<A: Arith>(
     cheap_place::<A>(f, &tail.post);
 }
 
-/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::z_motion`).
+/// `f ← f · M(θ, d)` about z for the kinds of d and θ in `MOTION` (see `kernel::pose_lanes::z_motion`).
 #[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn z_motion<A: Arith, const MOTION: u8>(
     f: &mut [A::Col; 4],
@@ -253,13 +253,13 @@ fn z_motion<A: Arith, const MOTION: u8>(
 }
 
 /// `f ← f · placement` for a [`CheapPlacement`]: one jump on its shape (see
-/// `kernel::cheap_place`).
+/// `kernel::pose_lanes::cheap_place`).
 #[inline(always)]
 fn cheap_place<A: Arith>(f: &mut [A::Col; 4], p: &CheapPlacement) {
     crate::eval::kernel::joint::by_shape!(p.shape, cheap_steps::<A>(f, p));
 }
 
-/// The steps of a [`CheapPlacement`] of shape `SHAPE` (see `kernel::cheap_steps`).
+/// The steps of a [`CheapPlacement`] of shape `SHAPE` (see `kernel::pose_lanes::cheap_steps`).
 #[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacement) {
     if SHAPE & CheapPlacement::ALONG_X != 0 {
@@ -272,7 +272,7 @@ fn cheap_steps<A: Arith, const SHAPE: u8>(f: &mut [A::Col; 4], p: &CheapPlacemen
         CheapPlacement::NO_TURN => {}
         CheapPlacement::ANY_TURN => plane(f, 1, 2, p.s, p.c),
         turn => {
-            // `plane` with s = ±1 (see `kernel::cheap_steps`).
+            // `plane` with s = ±1 (see `kernel::pose_lanes::cheap_steps`).
             let (c, c1, c2) = (A::Col::splat(p.c), f[1], f[2]);
             let (s_c2, s_c1) = if turn == CheapPlacement::NEGATIVE_QUARTER {
                 (c2.neg(), c1.neg())
@@ -296,7 +296,7 @@ fn columns_or_world<C: Col>(parent: Option<&Frame4<C>>) -> [C; 4] {
 }
 
 /// The frame of a body from its parent's frame (`None`: the body hangs from the world), with the
-/// steps of `kernel::pose_step`.
+/// steps of `kernel::pose_lanes::pose_step`.
 #[cfg_attr(not(debug_assertions), inline(always))] // (see `by_shape!`)
 pub(crate) fn pose_step<A: Arith>(
     parent: Option<&Frame4<A::Col>>,

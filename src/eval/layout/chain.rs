@@ -38,7 +38,7 @@ pub struct Chain {
     /// the part of any body's path that needs no index list.
     pub(crate) serial_run: usize,
     /// The first body from which the bodies to the end are few enough for the scalar update of
-    /// the last bodies (`kinematics::poses_tail`): at most four, of which at most two turn. A
+    /// the last bodies (`single::kinematics::poses_tail`): at most four, of which at most two turn. A
     /// body index `k` qualifies exactly when `k ≥ tail_start` (both counts shrink as `k` grows).
     pub(crate) tail_start: usize,
     /// Each link's body (`None` for a link fixed to the world) and its constant placement in

@@ -34,7 +34,7 @@ impl LimitCheck {
 /// `lower[i] ≤ scale[i] · x + offset[i] ≤ upper[i]` (the arithmetic of [`LimitCheck`]), with
 /// `(1, 0, −∞, ∞)` for an entry without limits (also the padding to whole blocks of four). A
 /// whole configuration is then checked in one branch-free pass, four entries per vector compare
-/// (`kinematics::admitted`).
+/// (`checks::admitted`).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DenseLimits {
     /// Block `b` holds the columns `[scale, offset, lower, upper]` of entries `4b..4b + 4`, so

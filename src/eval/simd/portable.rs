@@ -1,5 +1,6 @@
 //! The baseline implementations: the [`Separate`] multiply–add policy, its [`Portable`] column
-//! type, and [`Num`] / [`LaneNum`] for `f64` and [`Lanes`], in plain Rust that any target compiles.
+//! type, and [`Num`] / [`LaneNum`] for `f64` and [`Lanes`], in plain Rust that any target
+//! compiles; on x86-64, the batch lanes of the baseline build are [`S8`], four SSE2 registers.
 
 // Index loops over lanes and rows are the shape the vectoriser expects here.
 #![allow(clippy::needless_range_loop)]
@@ -14,6 +15,9 @@ pub(crate) struct Separate;
 
 impl Arith for Separate {
     type Col = Portable<Separate>;
+    #[cfg(target_arch = "x86_64")]
+    type Lanes = S8;
+    #[cfg(not(target_arch = "x86_64"))]
     type Lanes = Lanes;
     const FUSED: bool = false;
     #[inline(always)]
@@ -28,7 +32,7 @@ pub(crate) struct Portable<A>([f64; 4], std::marker::PhantomData<A>);
 
 impl<A: Arith> Portable<A> {
     /// `[f(0), f(1), f(2), f(3)]`, written out rather than looped (see
-    /// `eval::lanes::each_lane`: these inline into every body step of the baseline build).
+    /// `eval::simd::lanes::each_lane`: these inline into every body step of the baseline build).
     #[inline(always)]
     fn map(f: impl Fn(usize) -> f64) -> Self {
         Portable([f(0), f(1), f(2), f(3)], std::marker::PhantomData)
@@ -190,5 +194,145 @@ impl Num for f64 {
     #[inline(always)]
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
         crate::eval::simd::trig::sin_cos::<A>(x)
+    }
+}
+
+/// Eight `f64` in four SSE2 registers (part of baseline x86-64): the batch lanes of the baseline
+/// build. Each lane-wise operation is one intrinsic per register, the operation [`Lanes`]
+/// performs lane by lane, so the results are the same bits; written as eight scalar operations,
+/// the baseline batch kernels were among the crate's slowest functions to optimise (the SLP
+/// vectoriser rebuilt the pairs from thousands of scalars).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct S8([std::arch::x86_64::__m128d; 4]);
+
+#[cfg(target_arch = "x86_64")]
+const _: () =
+    assert!(size_of::<S8>() == size_of::<Lanes>() && align_of::<S8>() == align_of::<Lanes>());
+
+#[cfg(target_arch = "x86_64")]
+impl S8 {
+    /// The eight values.
+    #[inline(always)]
+    fn lanes(self) -> [f64; LANES] {
+        // SAFETY: the same size, and every bit pattern of either is valid.
+        unsafe { std::mem::transmute::<S8, [f64; LANES]>(self) }
+    }
+    #[inline(always)]
+    fn from_lanes(x: [f64; LANES]) -> S8 {
+        // SAFETY: as in `lanes`.
+        unsafe { std::mem::transmute::<[f64; LANES], S8>(x) }
+    }
+}
+
+/// `S8` arithmetic: one SSE2 intrinsic per register (SSE2 is part of every x86-64 target, so the
+/// intrinsics are sound to call anywhere; they take and return values).
+#[cfg(target_arch = "x86_64")]
+macro_rules! sse2_lanewise {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl std::ops::$trait for S8 {
+            type Output = S8;
+            #[inline(always)]
+            fn $method(self, rhs: S8) -> S8 {
+                use std::arch::x86_64::$intrinsic as op;
+                let (a, b) = (self.0, rhs.0);
+                // SAFETY: SSE2 is part of every x86-64 target; the intrinsic takes values.
+                unsafe {
+                    S8([
+                        op(a[0], b[0]),
+                        op(a[1], b[1]),
+                        op(a[2], b[2]),
+                        op(a[3], b[3]),
+                    ])
+                }
+            }
+        }
+    };
+}
+
+#[cfg(target_arch = "x86_64")]
+sse2_lanewise!(Add, add, _mm_add_pd);
+#[cfg(target_arch = "x86_64")]
+sse2_lanewise!(Sub, sub, _mm_sub_pd);
+#[cfg(target_arch = "x86_64")]
+sse2_lanewise!(Mul, mul, _mm_mul_pd);
+
+#[cfg(target_arch = "x86_64")]
+impl std::ops::Neg for S8 {
+    type Output = S8;
+    #[inline(always)]
+    fn neg(self) -> S8 {
+        use std::arch::x86_64::{_mm_set1_pd, _mm_xor_pd};
+        // SAFETY: SSE2 is part of every x86-64 target; the intrinsics take values.
+        unsafe {
+            let (a, sign) = (self.0, _mm_set1_pd(-0.0));
+            S8([
+                _mm_xor_pd(a[0], sign),
+                _mm_xor_pd(a[1], sign),
+                _mm_xor_pd(a[2], sign),
+                _mm_xor_pd(a[3], sign),
+            ])
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Num for S8 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        // SAFETY: as for the arithmetic.
+        let v = unsafe { std::arch::x86_64::_mm_set1_pd(x) };
+        S8([v; 4])
+    }
+    #[inline(always)]
+    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
+        if A::FUSED {
+            let (a, b, c) = (a.lanes(), b.lanes(), c.lanes());
+            S8::from_lanes(each_lane!(8, |i| A::mul_add(a[i], b[i], c[i])))
+        } else {
+            a * b + c
+        }
+    }
+    #[inline(always)]
+    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
+        let (s, c) = lanes_sin_cos::<A, LANES>(x.lanes());
+        (S8::from_lanes(s), S8::from_lanes(c))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl LaneNum for S8 {
+    const PARTS: usize = 1;
+    #[inline(always)]
+    fn cast(q: &[Lanes]) -> &[Self] {
+        // SAFETY: the same size and alignment (asserted above), every bit pattern valid.
+        unsafe { std::slice::from_raw_parts(q.as_ptr().cast(), q.len()) }
+    }
+    #[inline(always)]
+    fn get(x: &Lanes, _: usize) -> Self {
+        S8::from_lanes(x.0)
+    }
+    #[inline(always)]
+    fn put(self, x: &mut Lanes, _: usize) {
+        x.0 = self.lanes();
+    }
+    /// Four non-temporal stores, which fill one line.
+    #[inline(always)]
+    fn stream(self, x: &mut Lanes) {
+        use std::arch::x86_64::_mm_stream_pd;
+        for (pair, out) in self.0.into_iter().zip(x.0.chunks_exact_mut(2)) {
+            // SAFETY: `out` is two `f64` of a `Lanes` (aligned to 64 bytes), so 16-byte aligned
+            // as the store requires.
+            unsafe { _mm_stream_pd(out.as_mut_ptr(), pair) }
+        }
+    }
+    #[inline(always)]
+    fn admitted(x: Self, scale: f64, offset: f64, lower: f64, upper: f64) -> bool {
+        Lanes::admitted(Lanes(x.lanes()), scale, offset, lower, upper)
+    }
+    #[inline(always)]
+    fn transpose(q: &mut [Lanes], qs: &[f64], rows: [usize; LANES]) {
+        Lanes::transpose(q, qs, rows);
     }
 }
