@@ -201,8 +201,7 @@ pub(crate) unsafe trait Lanes32: Num {
         out.r[2] = [r2[0], r2[1], r2[2]];
         out.p = [p[0], p[1], p[2]];
     }
-    /// The identity frame (built in registers: [`Frame::splat`] maps over arrays, and its
-    /// closures, compiled apart from the kernel's instruction set, did not inline).
+    /// The identity frame, from two splats (the kernel's starting frame, built in registers).
     #[inline(always)]
     fn identity() -> Frame<Self> {
         let (one, zero) = (Self::splat(1.0), Self::splat(0.0));
@@ -265,7 +264,7 @@ pub(crate) struct A16([std::arch::x86_64::__m256; 2]);
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub(crate) struct Z16(std::arch::x86_64::__m512);
+pub(crate) struct Z16([std::arch::x86_64::__m512; 1]);
 
 /// The arithmetic of a register type of [`Lanes32`], one intrinsic per register: `$add`, `$sub`,
 /// `$mul` and `$xor` (with `−0.0`, the negation `-x` performs), `$set1`, and `$fmadd` where the
@@ -358,67 +357,14 @@ registers32!(
     _mm256_fmadd_ps
 );
 
-// [`Z16`] is one register, not an array of them: its arithmetic written out as `registers32`
-// writes it for an array.
-//
-// SAFETY (every block below): only instantiated inside functions compiled with `avx512f`
-// and `avx512dq` (see `Z16`), on values.
 #[cfg(target_arch = "x86_64")]
-impl Add for Z16 {
-    type Output = Z16;
-    #[inline(always)]
-    fn add(self, rhs: Z16) -> Z16 {
-        Z16(unsafe { std::arch::x86_64::_mm512_add_ps(self.0, rhs.0) })
-    }
-}
-#[cfg(target_arch = "x86_64")]
-impl Sub for Z16 {
-    type Output = Z16;
-    #[inline(always)]
-    fn sub(self, rhs: Z16) -> Z16 {
-        Z16(unsafe { std::arch::x86_64::_mm512_sub_ps(self.0, rhs.0) })
-    }
-}
-#[cfg(target_arch = "x86_64")]
-impl Mul for Z16 {
-    type Output = Z16;
-    #[inline(always)]
-    fn mul(self, rhs: Z16) -> Z16 {
-        Z16(unsafe { std::arch::x86_64::_mm512_mul_ps(self.0, rhs.0) })
-    }
-}
-#[cfg(target_arch = "x86_64")]
-impl Neg for Z16 {
-    type Output = Z16;
-    #[inline(always)]
-    fn neg(self) -> Z16 {
-        Z16(unsafe {
-            std::arch::x86_64::_mm512_xor_ps(self.0, std::arch::x86_64::_mm512_set1_ps(-0.0))
-        })
-    }
-}
-#[cfg(target_arch = "x86_64")]
-impl Num for Z16 {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        Z16(unsafe { std::arch::x86_64::_mm512_set1_ps(x as f32) })
-    }
-    #[inline(always)]
-    fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self {
-        if A::FUSED {
-            Z16(unsafe { std::arch::x86_64::_mm512_fmadd_ps(a.0, b.0, c.0) })
-        } else {
-            a * b + c
-        }
-    }
-    #[inline(always)]
-    fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
-        // SAFETY: the layout of `F16` (the type's `Lanes32` contract).
-        let x: F16 = unsafe { std::mem::transmute_copy(&x) };
-        let (s, c) = F16::sin_cos::<A>(x);
-        (Self::from_f16(s), Self::from_f16(c))
-    }
-}
-// SAFETY: `repr(C, align(64))` around one 64-byte register of sixteen `f32` in order.
-#[cfg(target_arch = "x86_64")]
-unsafe impl Lanes32 for Z16 {}
+registers32!(
+    Z16,
+    [0],
+    _mm512_add_ps,
+    _mm512_sub_ps,
+    _mm512_mul_ps,
+    _mm512_xor_ps,
+    _mm512_set1_ps,
+    _mm512_fmadd_ps
+);
