@@ -135,6 +135,18 @@ def test_batches_equal_single_evaluations_bit_for_bit(name):
     assert np.array_equal(sub[pick[1]], full[pick[1]])
     assert np.array_equal(chain.fk(q, links=pick[0]).poses[:, 0], full[pick[0]])
     assert np.array_equal(chain.fk(q[5], links=[pick[0]]).poses[0], full[pick[0]][5])
+    # Requests alternating between link lists (the last one's lookup is reused): each result
+    # has the links it asked for, and a changed list or a bad name in it is seen.
+    for asked in ([pick[0]], [pick[0]], pick, [pick[1]], [pick[1], pick[0]], [pick[0]]):
+        r = chain.fk(q[5], links=asked)
+        assert r.links == asked
+        for k, name in enumerate(asked):
+            assert np.array_equal(r.poses[k], full[name][5])
+    with pytest.raises(kc.Error, match="no_such_link"):
+        chain.fk(q[5], links=[pick[0], "no_such_link"])
+    with pytest.raises(TypeError):
+        chain.fk(q[5], links=[pick[0], 3])
+    assert chain.fk(q[5], links=[pick[0]]).links == [pick[0]]
     # An empty batch.
     assert chain.fk(q[:0]).poses.shape == (0, len(chain.link_names), 4, 4)
 
