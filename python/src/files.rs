@@ -22,7 +22,9 @@ pub(crate) fn read_interruptibly<T: Send + 'static>(
         .spawn(move || {
             let _ = sent.send(read());
         })
-        .map_err(|e| crate::Error::new_err(format!("cannot start a thread to read: {e}")))?;
+        .map_err(|e| {
+            crate::errors::Error::new_err(format!("cannot start a thread to read: {e}"))
+        })?;
     py.detach(move || {
         loop {
             match received.recv_timeout(SIGNAL_POLL) {
@@ -31,7 +33,9 @@ pub(crate) fn read_interruptibly<T: Send + 'static>(
                     Python::attach(|py| py.check_signals())?;
                 }
                 Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                    return Err(crate::Error::new_err("the read stopped without a result"));
+                    return Err(crate::errors::Error::new_err(
+                        "the read stopped without a result",
+                    ));
                 }
             }
         }

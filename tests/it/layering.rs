@@ -98,6 +98,7 @@ const EVAL_ORDER: &[&str] = &[
     "eval::batch::jacobians",
     "eval::batch::lanes32",
     "eval::batch::single_precision",
+    "eval::batch::arrays",
     "eval::batch",
     "eval",
 ];

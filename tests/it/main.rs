@@ -6,6 +6,7 @@
 mod common;
 
 mod batch;
+mod batch_arrays;
 mod batch_jacobians;
 mod batch_rates;
 mod book_examples;

@@ -7,6 +7,7 @@
 
 #[macro_use]
 mod macros;
+pub mod arrays;
 mod blocks;
 mod claims;
 mod data;
@@ -19,6 +20,10 @@ mod rates;
 pub mod single_precision;
 mod threads;
 
+pub use arrays::{
+    ArrayError, Interrupt, LinkArrays, LinkSelection, Motion, Overflow, Uninterrupted, Workers,
+    write_jacobian_batch, write_link_batch,
+};
 pub use data::{BatchData, BatchError};
 pub use fold::{fold_block_len, forward_kinematics_batch_fold, forward_kinematics_batch_fold_par};
 pub use jacobians::{

@@ -317,6 +317,25 @@ impl<'a> Poses<'a> {
     }
 }
 
+/// `pairs(link)`'s two vectors of each of `links` into `outs`, link `k`'s three entries from
+/// `3 k` of each: C-ordered `(links.len(), 3)` arrays.
+fn write_rates(
+    links: &[LinkId],
+    [x, y]: [&mut [f64]; 2],
+    pair: impl Fn(LinkId) -> [Vector3<f64>; 2],
+) -> Result<(), StateError> {
+    let expected = 3 * links.len();
+    if let Some(got) = [x.len(), y.len()].into_iter().find(|&n| n != expected) {
+        return Err(StateError::OutputLength { expected, got });
+    }
+    for (k, &link) in links.iter().enumerate() {
+        let [a, b] = pair(link);
+        x[3 * k..3 * k + 3].copy_from_slice(a.as_slice());
+        y[3 * k..3 * k + 3].copy_from_slice(b.as_slice());
+    }
+    Ok(())
+}
+
 impl<'a> Velocities<'a> {
     /// The chain evaluated.
     #[must_use]
@@ -342,6 +361,28 @@ impl<'a> Velocities<'a> {
     #[inline]
     pub fn velocity(&self, link: LinkId) -> LinkVelocity {
         self.poses.velocity(link)
+    }
+
+    /// Writes ω and the origin's v of each of `links` (world frame), link `k`'s three entries
+    /// from `3 k` of `omega` and `v`: C-ordered `(links.len(), 3)` arrays, the entries of
+    /// [`velocity`](Velocities::velocity) bit for bit.
+    ///
+    /// # Errors
+    /// [`StateError::OutputLength`] when `omega` or `v` does not have `3 · links.len()` entries
+    /// (nothing is written then).
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    pub fn write_velocities(
+        &self,
+        links: &[LinkId],
+        omega: &mut [f64],
+        v: &mut [f64],
+    ) -> Result<(), StateError> {
+        write_rates(links, [omega, v], |l| {
+            let r = self.velocity(l);
+            [r.omega, r.v]
+        })
     }
 
     /// The same as [`Velocities::velocity`] with components in the link's own frame:
@@ -478,6 +519,27 @@ impl<'a> Accelerations<'a> {
     #[inline]
     pub fn acceleration(&self, link: LinkId) -> LinkAcceleration {
         self.poses.acceleration(link)
+    }
+
+    /// Writes α and the origin's classical acceleration a of each of `links` (world frame), in
+    /// the layout of [`Velocities::write_velocities`]; the entries of
+    /// [`acceleration`](Accelerations::acceleration) bit for bit.
+    ///
+    /// # Errors
+    /// [`StateError::OutputLength`] when `alpha` or `a` does not have `3 · links.len()` entries.
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    pub fn write_accelerations(
+        &self,
+        links: &[LinkId],
+        alpha: &mut [f64],
+        a: &mut [f64],
+    ) -> Result<(), StateError> {
+        write_rates(links, [alpha, a], |l| {
+            let r = self.acceleration(l);
+            [r.alpha, r.a]
+        })
     }
 
     /// The same as [`Accelerations::velocity`] with components in the link's own frame.

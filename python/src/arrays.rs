@@ -1,0 +1,175 @@
+//! numpy arrays in and out: joint values read as C-contiguous float64 (in place when they are
+//! already), their shapes checked against the chain, and new output arrays whose entries the
+//! core writes.
+
+use crate::errors::{Error, StateError};
+use kinechain::Chain as Inner;
+use kinechain::regression::variable_names;
+use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+/// The rows of a `(dof,)` or `(N, dof)` array: `(N, batched)`.
+pub(crate) fn rows(
+    chain: &Inner,
+    a: &PyReadonlyArrayDyn<'_, f64>,
+    what: &str,
+) -> PyResult<(usize, bool)> {
+    let shape = a.shape();
+    let dof = chain.dof();
+    let (n, batched, len) = match shape {
+        [len] => (1, false, *len),
+        [n, len] => (*n, true, *len),
+        _ => {
+            return Err(StateError::new_err(format!(
+                "{what} has shape {shape:?}: expected ({dof},) or (N, {dof})"
+            )));
+        }
+    };
+    if len != dof {
+        return Err(StateError::new_err(format!(
+            "{what} has {len} entries per configuration; the chain '{}' has {dof} degrees of freedom (joints in q order: {})",
+            chain.name(),
+            variable_names(chain).join(", ")
+        )));
+    }
+    Ok((n, batched))
+}
+
+/// `x` as a C-contiguous float64 array: read as it is when it already is one, converted by numpy
+/// otherwise (a conversion that fails is a `StateError`).
+pub(crate) fn float_array<'py>(
+    x: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
+    let py = x.py();
+    // SAFETY: reads the type of a live object, and numpy's array type from its C API.
+    let plain = unsafe {
+        pyo3::ffi::Py_TYPE(x.as_ptr())
+            == numpy::npyffi::PY_ARRAY_API
+                .get_type_object(py, numpy::npyffi::NpyTypes::PyArray_Type)
+    };
+    // A plain ndarray (not a subclass such as a masked array) read in place.
+    if plain
+        && let Ok(a) = x.cast::<PyArrayDyn<f64>>()
+        && a.is_c_contiguous()
+        && a.ndim() > 0
+    {
+        return a
+            .try_readonly()
+            .map_err(|e| StateError::new_err(format!("{name}: {e}")));
+    }
+    let numpy = py.import("numpy")?;
+    // numpy would drop an imaginary part and a mask without a word.
+    if numpy.getattr("iscomplexobj")?.call1((x,))?.is_truthy()? {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name} holds complex numbers: joint values are real (pass the real part if that is what is meant)"
+        )));
+    }
+    if numpy
+        .getattr("ma")?
+        .getattr("is_masked")?
+        .call1((x,))?
+        .is_truthy()?
+    {
+        return Err(StateError::new_err(format!(
+            "{name} is a masked array with masked entries: a joint value is missing (fill them, or drop the rows)"
+        )));
+    }
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("dtype", numpy.getattr("float64")?)?;
+    let a = numpy
+        .getattr("asarray")?
+        .call((x,), Some(&kwargs))
+        .map_err(|e| {
+            StateError::new_err(format!("{name} cannot be read as float64 numbers: {e}"))
+        })?;
+    // (Before `ascontiguousarray`, which makes a scalar a 1-element vector.)
+    if a.getattr("ndim")?.extract::<usize>()? == 0 {
+        return Err(StateError::new_err(format!(
+            "{name} has shape (): expected (dof,) or (N, dof)"
+        )));
+    }
+    let a = numpy.getattr("ascontiguousarray")?.call1((a,))?;
+    let a = a
+        .cast_into::<PyArrayDyn<f64>>()
+        .map_err(|e| StateError::new_err(format!("{name}: {e}")))?;
+    a.try_readonly()
+        .map_err(|e| StateError::new_err(format!("{name}: {e}")))
+}
+
+/// `threads=`: `None`, or a positive integer.
+pub(crate) fn thread_count(threads: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
+    let Some(t) = threads else { return Ok(None) };
+    if t.is_none() {
+        return Ok(None);
+    }
+    match t.extract::<i64>() {
+        Ok(n) if n >= 1 && !t.is_instance_of::<pyo3::types::PyBool>() => {
+            Ok(Some(usize::try_from(n).unwrap_or(usize::MAX)))
+        }
+        _ => Err(Error::new_err(format!(
+            "threads must be a positive integer, not {}",
+            t.repr()?
+        ))),
+    }
+}
+
+/// A new, uninitialised C-ordered float64 array of shape `dims`; a `MemoryError` (or numpy's
+/// `ValueError` for a shape too large to index) when numpy cannot make it.
+pub(crate) fn new_array<'py, D: numpy::ndarray::Dimension>(
+    py: Python<'py>,
+    dims: D,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    use numpy::npyffi::{NPY_TYPES, NpyTypes, PY_ARRAY_API, npy_intp};
+    let mut shape: Vec<npy_intp> = dims
+        .slice()
+        .iter()
+        .map(|&d| npy_intp::try_from(d))
+        .collect::<Result<_, _>>()
+        .map_err(|_| pyo3::exceptions::PyMemoryError::new_err("array too large"))?;
+    let nd = std::os::raw::c_int::try_from(shape.len())
+        .map_err(|_| Error::new_err("too many dimensions"))?;
+    // SAFETY: numpy's C API, called as rust-numpy calls it: a float64 descriptor (whose
+    // reference the call takes), a shape of `nd` entries, no strides or data (numpy allocates
+    // them). A null result has set the Python error that `from_owned_ptr_or_err` takes.
+    unsafe {
+        let descr = PY_ARRAY_API.PyArray_DescrFromType(py, NPY_TYPES::NPY_DOUBLE as _);
+        let ptr = PY_ARRAY_API.PyArray_NewFromDescr(
+            py,
+            PY_ARRAY_API.get_type_object(py, NpyTypes::PyArray_Type),
+            descr,
+            nd,
+            shape.as_mut_ptr(),
+            std::ptr::null_mut(),
+            std::ptr::null_mut(),
+            0,
+            std::ptr::null_mut(),
+        );
+        Ok(Bound::from_owned_ptr_or_err(py, ptr)?.cast_into_unchecked())
+    }
+}
+
+/// The entries of `a`, a C-contiguous array, to write.
+///
+/// # Safety
+/// `a` is an array this package has just made ([`new_array`]) and not yet handed to Python:
+/// no other reference to its data exists while the slice lives. (rust-numpy's
+/// `as_slice_mut` is unsafe for this reason: numpy arrays can alias without its knowledge.)
+#[allow(clippy::mut_from_ref)]
+pub(crate) unsafe fn entries<'a>(a: &'a Bound<'_, PyArrayDyn<f64>>) -> PyResult<&'a mut [f64]> {
+    // SAFETY: the caller's promise above.
+    unsafe { a.as_slice_mut() }.map_err(|e| Error::new_err(e.to_string()))
+}
+
+/// Whether the C-contiguous arrays `a` and `b` share memory.
+pub(crate) fn overlaps(a: &PyReadonlyArrayDyn<'_, f64>, b: &Bound<'_, PyArrayDyn<f64>>) -> bool {
+    let range = |ptr: *const f64, len: usize| {
+        let start = ptr as usize;
+        start..start + len * std::mem::size_of::<f64>()
+    };
+    let (x, y) = (
+        range(a.as_array().as_ptr(), a.len()),
+        range(b.data(), b.len()),
+    );
+    !x.is_empty() && !y.is_empty() && x.start < y.end && y.start < x.end
+}
