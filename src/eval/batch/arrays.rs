@@ -6,7 +6,7 @@
 //!
 //! This is what a binding calls: it converts its arrays to slices and back, and this module
 //! does the rest. The values are those of the batch functions
-//! ([`forward_kinematics_batch`](crate::eval::batch::forward_kinematics_batch) and the others),
+//! ([`forward_kinematics_batch`] and the others),
 //! bit for bit, whichever [`Workers`] run them.
 
 use crate::eval::batch::data::{BatchData, BatchError};
