@@ -73,6 +73,27 @@ def main():
     rows.append(("kinechain Jacobian of the hand, one configuration", per_call(lambda: chain.jacobian(q1, "panda_hand")), "6 × 8 numpy"))
     rows.append(("kinechain Jacobian of the hand, batch of 100 000, 1 thread", per_call(lambda: chain.jacobian(qs, "panda_hand", threads=1), n, rounds=5), "per configuration"))
     rows.append(("kinechain Jacobian of the hand, batch of 100 000, all threads", per_call(lambda: chain.jacobian(qs, "panda_hand"), n, rounds=5), "per configuration"))
+    # The binding's cost: each batch from Python against the core doing the same work timed
+    # from Rust in this process (into outputs allocated beforehand), one thread, alternated.
+    from kinechain import _kinechain
+
+    qds = rng.uniform(-1.0, 1.0, qs.shape)
+    qdds = rng.uniform(-1.0, 1.0, qs.shape)
+    cases = [
+        ("end-link poses", lambda: chain.fk(qs, links=["panda_hand"], threads=1), {"links": ["panda_hand"]}),
+        ("all-links poses into `out=`", lambda: chain.fk(qs, threads=1, out=out), {}),
+        ("the hand's Jacobian", lambda: chain.jacobian(qs, "panda_hand", threads=1), {"jacobian": "panda_hand"}),
+        ("velocities, all links", lambda: chain.fk(qs, qds, threads=1), {"qd": qds}),
+        ("accelerations, all links", lambda: chain.fk(qs, qds, qdds, threads=1), {"qd": qds, "qdd": qdds}),
+    ]
+    ratios = []
+    for name, call, kwargs in cases:
+        py_times, rust_times = [], []
+        for _ in range(5):
+            py_times.append(per_call(call, n, rounds=1))
+            rust_times.append(_kinechain._rust_batch(chain, qs, repeats=2, **kwargs) / n)
+        py, rust = min(py_times), min(rust_times)
+        ratios.append((name, py, rust))
     try:
         import pytorch_kinematics as pk
         import torch
@@ -124,6 +145,13 @@ def main():
     for name, t, what in rows:
         unit = f"{t * 1e9:.1f} ns" if t < 1e-6 else f"{t * 1e6:.2f} µs"
         print(f"| {name} | {unit} | {what} |")
+    print()
+    print(f"Batches of {n:,} configurations, one thread: from Python (new result arrays, except `out=`) against the core called from Rust in this process writing into buffers allocated beforehand (fastest of five alternated runs, ns per configuration)")
+    print()
+    print("| work | Python | Rust | ratio |")
+    print("|---|---:|---:|---:|")
+    for name, py, rust in ratios:
+        print(f"| {name} | {py * 1e9:.1f} | {rust * 1e9:.1f} | {py / rust:.2f}× |")
 
 
 if __name__ == "__main__":

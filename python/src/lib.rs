@@ -11,9 +11,10 @@
 //! Its modules, each using only those before it: `errors`, `arrays` (numpy in and out), `files`
 //! (interruptible reads), `run` (threads and signals), `links` (the links a call asks for),
 //! `results` (the result class), `robot` (what evaluations use of a chain), `fk`, `jacobian`, `chain` (the class),
-//! `regression`, `orientation`.
+//! `regression`, `orientation`, `bench` (the core timed from Rust, for the benchmarks).
 
 mod arrays;
+mod bench;
 mod chain;
 mod errors;
 mod files;
@@ -44,6 +45,7 @@ fn _kinechain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_record_golden, m)?)?;
     m.add_function(wrap_pyfunction!(_verify_golden, m)?)?;
     m.add_function(wrap_pyfunction!(_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::_rust_batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

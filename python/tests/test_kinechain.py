@@ -399,3 +399,19 @@ def test_poses_can_be_written_into_an_array_of_the_caller():
     qv[:] = q
     with pytest.raises(kc.StateError, match="out"):
         chain.fk(qv, out=buffer[: want.size].reshape(want.shape))
+
+
+def test_the_benchmarks_rust_timing_runs_the_same_batches():
+    from kinechain import _kinechain
+
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    qs = np.tile(chain.neutral(), (100, 1))
+    for kwargs in ({}, {"links": ["panda_hand"]}, {"qd": qs}, {"qd": qs, "qdd": qs}, {"jacobian": "panda_hand"}):
+        t = _kinechain._rust_batch(chain, qs, repeats=2, **kwargs)
+        assert 0.0 < t < 1.0, kwargs
+    bad = qs.copy()
+    bad[7, 0] = 100.0
+    with pytest.raises(kc.StateError, match="configuration 7"):
+        _kinechain._rust_batch(chain, bad)
+    with pytest.raises(kc.StateError):
+        _kinechain._rust_batch(chain, chain.neutral())

@@ -276,7 +276,7 @@ pub struct LinkArrays<'a> {
 
 const RATE_NAMES: [&str; 4] = ["omega", "v", "alpha", "a"];
 
-fn expect(what: &'static str, got: usize, expected: usize) -> Result<(), ArrayError> {
+fn need(what: &'static str, got: usize, expected: usize) -> Result<(), ArrayError> {
     if got == expected {
         Ok(())
     } else {
@@ -347,7 +347,7 @@ pub fn write_link_batch(
         (None, Some(_)) => {
             return Err(ArrayError::Length {
                 what: "qd",
-                expected: n * dof,
+                expected: n.saturating_mul(dof),
                 got: 0,
             });
         }
@@ -357,18 +357,22 @@ pub fn write_link_batch(
         expected: usize::MAX,
         got: motion.q.len(),
     })?;
-    expect("q", motion.q.len(), rows)?;
+    need("q", motion.q.len(), rows)?;
     for (what, x) in [("qd", motion.qd), ("qdd", motion.qdd)] {
         if let Some(x) = x {
-            expect(what, x.len(), rows)?;
+            need(what, x.len(), rows)?;
         }
     }
-    expect("poses", out.poses.len(), n * l * 16)?;
+    need("poses", out.poses.len(), n.saturating_mul(l * 16))?;
     for (k, r) in out.rates.iter().enumerate() {
-        expect(
+        need(
             RATE_NAMES[k],
             r.len(),
-            if k < 2 * level { n * l * 3 } else { 0 },
+            if k < 2 * level {
+                n.saturating_mul(l * 3)
+            } else {
+                0
+            },
         )?;
     }
     let block = match (level, l) {
@@ -469,8 +473,8 @@ pub fn write_jacobian_batch(
             StateError::NoDegreesOfFreedom,
         ));
     }
-    expect("q", qs.len(), n.saturating_mul(dof))?;
-    expect("jacobians", out.len(), n.saturating_mul(6 * dof))?;
+    need("q", qs.len(), n.saturating_mul(dof))?;
+    need("jacobians", out.len(), n.saturating_mul(6 * dof))?;
     let mut rest = out;
     let parts: Vec<(usize, &mut [f64])> = (0..n.div_ceil(JACOBIAN_BLOCK))
         .map(|b| {
