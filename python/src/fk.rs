@@ -212,14 +212,12 @@ fn single_rows(
         one(chain, data, motion, ids, pose, [omega, v, alpha, a])
             .map_err(|source| ArrayError::State { index: i, source })?;
     }
-    let names = ["omega", "v", "alpha", "a"];
-    let rates: Vec<(&'static str, &[f64])> = names
-        .into_iter()
-        .zip(rates.iter())
-        .filter(|(_, r)| !r.is_empty())
-        .map(|(n, r)| (n, &**r))
-        .collect();
-    links.selection.check_finite(chain, 0, poses, &rates)
+    // The rates asked for are the first ones (ω, v, then α, a); no allocation per call.
+    let [omega, v, alpha, a] = rates.each_ref().map(|r| &**r);
+    let named = [("omega", omega), ("v", v), ("alpha", alpha), ("a", a)];
+    let asked = named.iter().take_while(|(_, r)| !r.is_empty()).count();
+    let rates = &named[..asked];
+    links.selection.check_finite(chain, 0, poses, rates)
 }
 
 /// One configuration's poses and rates of `ids`.
