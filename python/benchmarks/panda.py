@@ -57,6 +57,10 @@ def main():
 
     rows.append(("kinechain `chain.fk(q)`, all links, one configuration", per_call(lambda: chain.fk(q1)), "13 × 4×4 numpy"))
     rows.append(("kinechain `chain.fk(q, links=[hand])`, one configuration", per_call(lambda: chain.fk(q1, links=["panda_hand"])), "1 × 4×4 numpy"))
+    hand = ["panda_hand"]
+    rows.append(("kinechain `chain.fk(q, links=hand)`, the list made once, one configuration", per_call(lambda: chain.fk(q1, links=hand)), "1 × 4×4 numpy"))
+    rows.append(("kinechain `chain.poses(q)`, all links, one configuration", per_call(lambda: chain.poses(q1)), "(13, 4, 4) numpy"))
+    rows.append(("kinechain `chain.pose(q, \"panda_hand\")`, one configuration", per_call(lambda: chain.pose(q1, "panda_hand")), "(4, 4) numpy"))
     rows.append(("kinechain batch of 100 000, end link, 1 thread", per_call(lambda: chain.fk(qs, links=["panda_hand"], threads=1), n, rounds=5), "per configuration"))
     rows.append(("kinechain batch of 100 000, end link, all threads", per_call(lambda: chain.fk(qs, links=["panda_hand"]), n, rounds=5), "per configuration"))
     rows.append(("kinechain batch of 100 000, all links, 1 thread", per_call(lambda: chain.fk(qs, threads=1), n, rounds=5), "per configuration"))
@@ -74,26 +78,31 @@ def main():
     rows.append(("kinechain Jacobian of the hand, batch of 100 000, 1 thread", per_call(lambda: chain.jacobian(qs, "panda_hand", threads=1), n, rounds=5), "per configuration"))
     rows.append(("kinechain Jacobian of the hand, batch of 100 000, all threads", per_call(lambda: chain.jacobian(qs, "panda_hand"), n, rounds=5), "per configuration"))
     # The binding's cost: each batch from Python against the core doing the same work timed
-    # from Rust in this process (into outputs allocated beforehand), one thread, alternated.
+    # from Rust in this process, one thread, alternated: new arrays against numpy arrays made
+    # by Rust inside its timed run; `out=` against buffers written before its clock starts.
     from kinechain import _kinechain
 
     qds = rng.uniform(-1.0, 1.0, qs.shape)
     qdds = rng.uniform(-1.0, 1.0, qs.shape)
+    rv = chain.fk(qs, qds, threads=1)
+    ra = chain.fk(qs, qds, qdds, threads=1)
+    jac = chain.jacobian(qs, "panda_hand", threads=1)
     cases = [
-        ("end-link poses", lambda: chain.fk(qs, links=["panda_hand"], threads=1), {"links": ["panda_hand"]}),
-        ("all-links poses into `out=`", lambda: chain.fk(qs, threads=1, out=out), {}),
-        ("the hand's Jacobian", lambda: chain.jacobian(qs, "panda_hand", threads=1), {"jacobian": "panda_hand"}),
-        ("velocities, all links", lambda: chain.fk(qs, qds, threads=1), {"qd": qds}),
-        ("accelerations, all links", lambda: chain.fk(qs, qds, qdds, threads=1), {"qd": qds, "qdd": qdds}),
+        ("end-link poses", lambda: chain.fk(qs, links=["panda_hand"], threads=1), lambda: chain.fk(qs, links=["panda_hand"], threads=1, out=out1), {"links": ["panda_hand"]}),
+        ("all-links poses", lambda: chain.fk(qs, threads=1), lambda: chain.fk(qs, threads=1, out=out), {}),
+        ("the hand's Jacobian", lambda: chain.jacobian(qs, "panda_hand", threads=1), lambda: chain.jacobian(qs, "panda_hand", threads=1, out=jac), {"jacobian": "panda_hand"}),
+        ("velocities, all links", lambda: chain.fk(qs, qds, threads=1), lambda: chain.fk(qs, qds, threads=1, out=rv), {"qd": qds}),
+        ("accelerations, all links", lambda: chain.fk(qs, qds, qdds, threads=1), lambda: chain.fk(qs, qds, qdds, threads=1, out=ra), {"qd": qds, "qdd": qdds}),
     ]
     ratios = []
-    for name, call, kwargs in cases:
-        py_times, rust_times = [], []
+    for name, new, into, kwargs in cases:
+        times = {k: [] for k in ("py", "rust", "py_out", "rust_out")}
         for _ in range(5):
-            py_times.append(per_call(call, n, rounds=1))
-            rust_times.append(_kinechain._rust_batch(chain, qs, repeats=2, **kwargs) / n)
-        py, rust = min(py_times), min(rust_times)
-        ratios.append((name, py, rust))
+            times["py"].append(per_call(new, n, rounds=1))
+            times["rust"].append(_kinechain._rust_batch(chain, qs, repeats=1, fresh=True, **kwargs) / n)
+            times["py_out"].append(per_call(into, n, rounds=1))
+            times["rust_out"].append(_kinechain._rust_batch(chain, qs, repeats=1, **kwargs) / n)
+        ratios.append((name, *(min(times[k]) for k in ("py", "rust", "py_out", "rust_out"))))
     try:
         import pytorch_kinematics as pk
         import torch
@@ -146,12 +155,12 @@ def main():
         unit = f"{t * 1e9:.1f} ns" if t < 1e-6 else f"{t * 1e6:.2f} µs"
         print(f"| {name} | {unit} | {what} |")
     print()
-    print(f"Batches of {n:,} configurations, one thread: from Python (new result arrays, except `out=`) against the core called from Rust in this process writing into buffers allocated beforehand (fastest of five alternated runs, ns per configuration)")
+    print(f"Batches of {n:,} configurations, one thread, ns per configuration (fastest of five alternated runs): from Python against the core called from Rust in this process, into new numpy arrays (made by Rust inside its timed run) and into arrays written before (`out=`; Rust: buffers written before its clock starts)")
     print()
-    print("| work | Python | Rust | ratio |")
-    print("|---|---:|---:|---:|")
-    for name, py, rust in ratios:
-        print(f"| {name} | {py * 1e9:.1f} | {rust * 1e9:.1f} | {py / rust:.2f}× |")
+    print("| work | Python, new arrays | Rust, new arrays | ratio | Python, `out=` | Rust, written before | ratio |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for name, py, rust, py_out, rust_out in ratios:
+        print(f"| {name} | {py * 1e9:.1f} | {rust * 1e9:.1f} | {py / rust:.2f}× | {py_out * 1e9:.1f} | {rust_out * 1e9:.1f} | {py_out / rust_out:.2f}× |")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """Type stubs of the compiled half of kinechain (the Chain class and the exceptions)."""
 
-from typing import Any, Iterable, Optional, Tuple
+from typing import Any, Iterable, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -77,10 +77,30 @@ class Chain:
         links: Optional[Iterable[str]] = None,
         check_limits: bool = True,
         threads: Optional[int] = None,
-        out: Optional[npt.NDArray[np.float64]] = None,
+        out: Optional[Union[npt.NDArray[np.float64], "FkResult"]] = None,
     ) -> FkResult:
         """Poses (and velocities, accelerations) of the links at q of shape (dof,) or (N, dof);
-        out: a C-contiguous float64 array of the poses' shape to write them into."""
+        out: a C-contiguous float64 array of the poses' shape to write them into, or the result
+        of an earlier call on the same links with the same quantities, written again."""
+    def poses(
+        self,
+        q: npt.ArrayLike,
+        *,
+        links: Optional[Iterable[str]] = None,
+        check_limits: bool = True,
+        threads: Optional[int] = None,
+        out: Optional[npt.NDArray[np.float64]] = None,
+    ) -> npt.NDArray[np.float64]:
+        """fk(q, links=...).poses in one call: (L, 4, 4) or (N, L, 4, 4)."""
+    def pose(
+        self,
+        q: npt.ArrayLike,
+        link: str,
+        *,
+        check_limits: bool = True,
+        threads: Optional[int] = None,
+    ) -> npt.NDArray[np.float64]:
+        """The pose world_from_link of one link: (4, 4) or (N, 4, 4)."""
     def jacobian(
         self,
         q: npt.ArrayLike,
@@ -90,8 +110,10 @@ class Chain:
         point: Optional[npt.ArrayLike] = None,
         check_limits: bool = True,
         threads: Optional[int] = None,
+        out: Optional[npt.NDArray[np.float64]] = None,
     ) -> npt.NDArray[np.float64]:
-        """Geometric Jacobian of link: (6, dof) or (N, 6, dof), rows v then omega.
+        """Geometric Jacobian of link: (6, dof) or (N, 6, dof), rows v then omega (into out, a
+        C-contiguous float64 array of that shape, when given).
 
         frame="world": v of the link origin (or of point, in link coordinates) and omega in
         world axes; frame="link": both in the link's own axes."""

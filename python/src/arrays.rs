@@ -5,7 +5,7 @@
 use crate::errors::{Error, StateError};
 use kinechain::Chain as Inner;
 use kinechain::regression::variable_names;
-use numpy::{PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 /// The rows of a `(dof,)` or `(N, dof)` array: `(N, batched)`.
@@ -97,6 +97,35 @@ pub(crate) fn float_array<'py>(
         .map_err(|e| StateError::new_err(format!("{name}: {e}")))
 }
 
+/// `x` when it is one configuration as a plain numpy vector (not a subclass), float64,
+/// C-contiguous, of `len` entries: what single calls are given, read without conversion.
+pub(crate) fn plain_vector<'a, 'py>(
+    x: &'a Bound<'py, PyAny>,
+    len: usize,
+) -> Option<&'a Bound<'py, PyArray1<f64>>> {
+    // SAFETY: reads the type of a live object, and numpy's array type from its C API.
+    let plain = unsafe {
+        pyo3::ffi::Py_TYPE(x.as_ptr())
+            == numpy::npyffi::PY_ARRAY_API
+                .get_type_object(x.py(), numpy::npyffi::NpyTypes::PyArray_Type)
+    };
+    let a = x.cast::<PyArray1<f64>>().ok()?;
+    (plain && a.is_c_contiguous() && a.len() == len).then_some(a)
+}
+
+/// Copies the entries of `a` (a C-contiguous vector of `dst.len()` entries, from
+/// [`plain_vector`]) into `dst`, holding the GIL.
+pub(crate) fn copy_vector(a: &Bound<'_, PyArray1<f64>>, dst: &mut [f64]) -> PyResult<()> {
+    // SAFETY: a copy made while the GIL is held, as rust-numpy's safe `to_vec` makes it, into a
+    // buffer of ours (no allocation, unlike `to_vec`); the slice lives only for the copy.
+    let src = unsafe { a.as_slice() }.map_err(|e| Error::new_err(e.to_string()))?;
+    if src.len() != dst.len() {
+        return Err(Error::new_err("joint values changed length while read"));
+    }
+    dst.copy_from_slice(src);
+    Ok(())
+}
+
 /// `threads=`: `None`, or a positive integer.
 pub(crate) fn thread_count(threads: Option<&Bound<'_, PyAny>>) -> PyResult<Option<usize>> {
     let Some(t) = threads else { return Ok(None) };
@@ -121,14 +150,18 @@ pub(crate) fn new_array<'py, D: numpy::ndarray::Dimension>(
     dims: D,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     use numpy::npyffi::{NPY_TYPES, NpyTypes, PY_ARRAY_API, npy_intp};
-    let mut shape: Vec<npy_intp> = dims
-        .slice()
-        .iter()
-        .map(|&d| npy_intp::try_from(d))
-        .collect::<Result<_, _>>()
-        .map_err(|_| pyo3::exceptions::PyMemoryError::new_err("array too large"))?;
-    let nd = std::os::raw::c_int::try_from(shape.len())
-        .map_err(|_| Error::new_err("too many dimensions"))?;
+    // The shapes made here have at most four axes: on the stack.
+    let mut shape: [npy_intp; 4] = [0; 4];
+    let nd = dims.ndim();
+    if nd > shape.len() {
+        return Err(Error::new_err("too many dimensions"));
+    }
+    for (s, &d) in shape.iter_mut().zip(dims.slice()) {
+        *s = npy_intp::try_from(d)
+            .map_err(|_| pyo3::exceptions::PyMemoryError::new_err("array too large"))?;
+    }
+    let nd =
+        std::os::raw::c_int::try_from(nd).map_err(|_| Error::new_err("too many dimensions"))?;
     // SAFETY: numpy's C API, called as rust-numpy calls it: a float64 descriptor (whose
     // reference the call takes), a shape of `nd` entries, no strides or data (numpy allocates
     // them). A null result has set the Python error that `from_owned_ptr_or_err` takes.
@@ -162,14 +195,11 @@ pub(crate) unsafe fn entries<'a>(a: &'a Bound<'_, PyArrayDyn<f64>>) -> PyResult<
 }
 
 /// Whether the C-contiguous arrays `a` and `b` share memory.
-pub(crate) fn overlaps(a: &PyReadonlyArrayDyn<'_, f64>, b: &Bound<'_, PyArrayDyn<f64>>) -> bool {
-    let range = |ptr: *const f64, len: usize| {
-        let start = ptr as usize;
-        start..start + len * std::mem::size_of::<f64>()
+pub(crate) fn overlaps(a: &Bound<'_, PyArrayDyn<f64>>, b: &Bound<'_, PyArrayDyn<f64>>) -> bool {
+    let range = |a: &Bound<'_, PyArrayDyn<f64>>| {
+        let start = a.data() as usize;
+        start..start + a.len() * std::mem::size_of::<f64>()
     };
-    let (x, y) = (
-        range(a.as_array().as_ptr(), a.len()),
-        range(b.data(), b.len()),
-    );
+    let (x, y) = (range(a), range(b));
     !x.is_empty() && !y.is_empty() && x.start < y.end && y.start < x.end
 }

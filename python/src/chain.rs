@@ -11,7 +11,7 @@ use kinechain::error::error_chain;
 use kinechain::regression::variable_names;
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyString, PyTuple};
 use std::path::PathBuf;
 
 /// A robot: links, joints, limits; immutable, shared between threads. Made by `kinechain.load`
@@ -206,6 +206,44 @@ impl Chain {
         )
     }
 
+    /// The poses `world_from_link` of the links asked for, `(L, 4, 4)` for one configuration or
+    /// `(N, L, 4, 4)` for rows of them: `fk(q, ...).poses` without the result object.
+    #[pyo3(signature = (q, *, links=None, check_limits=true, threads=None, out=None))]
+    fn poses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        links: Option<&Bound<'py, PyAny>>,
+        check_limits: bool,
+        threads: Option<&Bound<'py, PyAny>>,
+        out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        let r = crate::fk::fk(
+            &self.robot,
+            py,
+            (q, None, None),
+            links,
+            policy(check_limits),
+            threads,
+            out,
+        )?;
+        Ok(r.poses)
+    }
+
+    /// The pose `world_from_link` of one link, `(4, 4)` for one configuration or `(N, 4, 4)`
+    /// for rows of them: `fk(q, links=[link]).poses[..., 0, :, :]` in one call.
+    #[pyo3(signature = (q, link, *, check_limits=true, threads=None))]
+    fn pose<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        link: &Bound<'py, PyString>,
+        check_limits: bool,
+        threads: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        crate::fk::pose(&self.robot, py, q, link, policy(check_limits), threads)
+    }
+
     /// For each row of `q` (`(N, dof)`), whether `fk` would accept it: finite, and within the
     /// limits when `check_limits`.
     #[pyo3(signature = (q, check_limits=true))]
@@ -230,8 +268,9 @@ impl Chain {
     /// The geometric Jacobian of `link`: `(6, dof)` or `(N, 6, dof)`, rows v then ω, so that
     /// `[v; ω] = J q̇`. `frame="world"` (default): v of the link origin (or of `point`, link
     /// coordinates) and ω in world axes; `frame="link"`: both in the link's own axes. A batch
-    /// runs the batch kernels without the GIL and writes straight into the returned array.
-    #[pyo3(signature = (q, link, *, frame="world", point=None, check_limits=true, threads=None))]
+    /// runs the batch kernels without the GIL and writes straight into the returned array (or
+    /// into `out`, a C-contiguous float64 array of that shape).
+    #[pyo3(signature = (q, link, *, frame="world", point=None, check_limits=true, threads=None, out=None))]
     #[allow(clippy::too_many_arguments)]
     fn jacobian<'py>(
         &self,
@@ -242,7 +281,8 @@ impl Chain {
         point: Option<[f64; 3]>,
         check_limits: bool,
         threads: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, numpy::PyArrayDyn<f64>>> {
+        out: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
         crate::jacobian::jacobian(
             &self.robot,
             py,
@@ -251,6 +291,7 @@ impl Chain {
             (frame, point),
             policy(check_limits),
             threads,
+            out,
         )
     }
 }

@@ -2,9 +2,10 @@
 //! written by the core (one configuration with the single kernels; a batch through
 //! [`write_link_batch`], without the GIL).
 
-use crate::arrays::{entries, float_array, new_array, overlaps, rows, thread_count};
+use crate::arrays::{copy_vector, entries, float_array, plain_vector, rows, thread_count};
 use crate::errors::{StateError, array_error};
 use crate::links::Links;
+use crate::outputs::Outputs;
 use crate::results::FkResult;
 use crate::robot::Robot;
 use crate::run::{Signals, with_workers};
@@ -13,9 +14,13 @@ use kinechain::{
     Chain as Inner, Data, LimitPolicy, LinkId, StateError as KStateError, forward_accelerations,
     forward_kinematics, forward_kinematics_to, forward_velocities,
 };
-use numpy::ndarray::Dimension;
-use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::{PySlice, PyString};
+use std::sync::Arc;
+
+/// How errors name the arrays of an `FkResult` given as `out=`.
+const OUT_NAMES: [&str; 5] = ["out.poses", "out.omega", "out.v", "out.alpha", "out.a"];
 
 /// Joint values, rates and accelerations as given (`q` always).
 type Given<'a, 'py> = (
@@ -36,6 +41,21 @@ pub(crate) fn fk<'py>(
 ) -> PyResult<FkResult> {
     let inner = &robot.inner;
     let threads = thread_count(threads)?;
+    if qd.is_none()
+        && qdd.is_none()
+        && out.is_none()
+        && let Some(q) = plain_vector(q, inner.dof())
+    {
+        let (links, poses) = single_poses(robot, py, q, links, policy, false)?;
+        return Ok(FkResult {
+            links,
+            poses,
+            omega: None,
+            v: None,
+            alpha: None,
+            a: None,
+        });
+    }
     let q = float_array(q, "q")?;
     let qd = qd.map(|a| float_array(a, "qd")).transpose()?;
     let qdd = qdd.map(|a| float_array(a, "qdd")).transpose()?;
@@ -57,7 +77,7 @@ pub(crate) fn fk<'py>(
         ));
     }
     let level = usize::from(qd.is_some()) + usize::from(qdd.is_some());
-    let links = robot.links.get(py, inner, links)?;
+    let links = robot.links(py, links)?;
     let l = links.selection.ids().len();
     // The shape `(N, L, *tail)` or `(L, *tail)`, built on the stack (`IxDyn` keeps up to four
     // axes inline).
@@ -69,46 +89,32 @@ pub(crate) fn fk<'py>(
         d[lead + 1..lead + 1 + tail.len()].copy_from_slice(tail);
         numpy::ndarray::IxDyn(&d[..lead + 1 + tail.len()])
     };
-    let poses = match out {
-        Some(o) => caller_array(o, dims(&[4, 4]))?,
-        None => new_array(py, dims(&[4, 4]))?,
-    };
-    // The caller's array is borrowed for writing until the poses are written: writeable, and
-    // sharing no memory with the inputs (numpy's borrow checking refuses an overlap with q's
-    // read borrow when both are views of one array; `overlaps` finds views of one buffer made
-    // otherwise, as by `np.frombuffer`).
-    let mut borrowed = match out {
-        Some(_) => {
-            let borrow = poses
-                .try_readwrite()
-                .map_err(|e| StateError::new_err(format!("out: {e}")))?;
-            for (a, what) in [(Some(&q), "q"), (qd.as_ref(), "qd"), (qdd.as_ref(), "qdd")] {
-                if let Some(a) = a
-                    && overlaps(a, &poses)
-                {
-                    return Err(StateError::new_err(format!(
-                        "out shares memory with {what}: the poses would overwrite the joint values they are computed from"
-                    )));
-                }
+    let shapes = [
+        dims(&[4, 4]),
+        dims(&[3]),
+        dims(&[3]),
+        dims(&[3]),
+        dims(&[3]),
+    ];
+    let shapes = &shapes[..1 + 2 * level];
+    let inputs: Vec<(&PyReadonlyArrayDyn<'py, f64>, &str)> =
+        [(Some(&q), "q"), (qd.as_ref(), "qd"), (qdd.as_ref(), "qdd")]
+            .into_iter()
+            .filter_map(|(a, n)| a.map(|a| (a, n)))
+            .collect();
+    let mut outputs = match out {
+        None => Outputs::new(py, shapes)?,
+        Some(o) => match o.cast::<FkResult>() {
+            Ok(r) => {
+                let given = r.get().outputs(py, &links, level)?;
+                Outputs::caller(&given, &OUT_NAMES, shapes, &inputs)?
             }
-            Some(borrow)
-        }
-        None => None,
+            Err(_) => Outputs::caller(std::slice::from_ref(o), &["out"], &shapes[..1], &inputs)?
+                .then_new(py, &shapes[1..])?,
+        },
     };
-    let pose_out: &mut [f64] = match borrowed.as_mut() {
-        Some(b) => b.as_slice_mut()?,
-        // SAFETY: a new array, not yet handed out; every entry is written below before it is
-        // (an error drops it unread).
-        None => unsafe { entries(&poses)? },
-    };
-    let rates: Vec<Bound<'py, PyArrayDyn<f64>>> = (0..2 * level)
-        .map(|_| new_array(py, dims(&[3])))
-        .collect::<PyResult<_>>()?;
-    let mut rate_out: [&mut [f64]; 4] = Default::default();
-    for (o, a) in rate_out.iter_mut().zip(&rates) {
-        // SAFETY: as for the poses: new arrays, each taken once.
-        *o = unsafe { entries(a)? };
-    }
+    let [pose_out, omega, v, alpha, a] = outputs.slices()?;
+    let mut rate_out = [omega, v, alpha, a];
     let (q, qd, qdd) = (
         q.as_slice()?,
         qd.as_ref().map(|a| a.as_slice()).transpose()?,
@@ -147,12 +153,14 @@ pub(crate) fn fk<'py>(
         })?
     };
     result.map_err(|e| array_error(e, batched, signals.raised))?;
-    drop(borrowed);
-    let mut rates = rates.into_iter().map(|a| Some(a.into_any().unbind()));
-    let mut next = || rates.next().flatten();
+    let mut arrays = outputs.into_arrays();
+    let poses = arrays
+        .next()
+        .ok_or_else(|| crate::errors::Error::new_err("no poses"))?;
+    let mut next = || arrays.next();
     Ok(FkResult {
         links,
-        poses: poses.into_any().unbind(),
+        poses,
         omega: next(),
         v: next(),
         alpha: next(),
@@ -160,22 +168,70 @@ pub(crate) fn fk<'py>(
     })
 }
 
-/// `out=`: a writeable C-contiguous float64 array of exactly the shape the poses need.
-fn caller_array<'py>(
-    o: &Bound<'py, PyAny>,
-    want: numpy::ndarray::IxDyn,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let a = o
-        .cast::<PyArrayDyn<f64>>()
-        .map_err(|_| StateError::new_err("out must be a numpy array of float64"))?;
-    if a.shape() != want.slice() || !a.is_c_contiguous() {
-        return Err(StateError::new_err(format!(
-            "out has shape {:?}: expected a writeable C-contiguous float64 array of shape {:?}",
-            a.shape(),
-            want.slice()
-        )));
+/// `Chain.pose`: one link's pose, `(4, 4)` or `(N, 4, 4)`.
+pub(crate) fn pose<'py>(
+    robot: &Robot,
+    py: Python<'py>,
+    q: &Bound<'py, PyAny>,
+    link: &Bound<'py, PyString>,
+    policy: LimitPolicy,
+    threads: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    // (`threads=` is checked on every path, though one configuration runs on this thread.)
+    thread_count(threads)?;
+    if let Some(v) = plain_vector(q, robot.inner.dof()) {
+        return Ok(single_poses(robot, py, v, Some(link.as_any()), policy, true)?.1);
     }
-    Ok(a.clone())
+    let r = fk(
+        robot,
+        py,
+        (q, None, None),
+        Some(link.as_any()),
+        policy,
+        threads,
+        None,
+    )?;
+    let full = PySlice::full(py);
+    let key = (py.Ellipsis(), 0, full.clone(), full);
+    Ok(r.poses.bind(py).get_item(key)?.unbind())
+}
+
+/// The poses of one configuration given as a plain float64 vector: the common call, made
+/// without borrowing `q` (it is copied into the chain's buffer) or building rate arrays, into
+/// a spare array when one is free. `(L, 4, 4)`, or `(4, 4)` when `one` (one link asked for).
+fn single_poses<'py>(
+    robot: &Robot,
+    py: Python<'py>,
+    q: &Bound<'py, PyArray1<f64>>,
+    links: Option<&Bound<'py, PyAny>>,
+    policy: LimitPolicy,
+    one_link: bool,
+) -> PyResult<(Arc<Links>, Py<PyAny>)> {
+    let inner = &robot.inner;
+    robot.with_reused(|r| {
+        let (links, spare) = r.links.get(py, inner, links)?;
+        let links = Arc::clone(links);
+        let ids = links.selection.ids();
+        let poses = match one_link {
+            true => spare.take(py, numpy::ndarray::Ix2(4, 4))?,
+            false => spare.take(py, numpy::ndarray::Ix3(ids.len(), 4, 4))?,
+        };
+        // SAFETY: a new array, or a spare that nothing else refers to; every entry is written
+        // below before it is read (an error drops it unread).
+        let dst = unsafe { entries(&poses)? };
+        let s = r.scratch(inner, policy);
+        copy_vector(q, &mut s.q)?;
+        let motion = Motion {
+            q: &s.q,
+            qd: None,
+            qdd: None,
+        };
+        one(inner, &mut s.data, motion, ids, dst, Default::default())
+            .map_err(|source| ArrayError::State { index: 0, source })
+            .and_then(|()| links.selection.check_finite(inner, 0, dst, &[]))
+            .map_err(|e| array_error(e, false, None))?;
+        Ok((links, poses.into_any().unbind()))
+    })
 }
 
 /// The `n` configurations of `motion` one by one with the single kernels, into the rows of

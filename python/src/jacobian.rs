@@ -1,13 +1,13 @@
 //! `Chain.jacobian`: the geometric Jacobian of a link, one configuration with the single
 //! kernels, a batch through the core's [`write_jacobian_batch`] without the GIL.
 
-use crate::arrays::{entries, float_array, new_array, rows, thread_count};
+use crate::arrays::{copy_vector, entries, float_array, plain_vector, rows, thread_count};
 use crate::errors::{Error, array_error, error};
-use crate::robot::Robot;
+use crate::outputs::Outputs;
+use crate::robot::{Robot, Scratch};
 use crate::run::{Signals, with_workers};
 use kinechain::eval::batch::{ArrayError, Overflow, write_jacobian_batch};
-use kinechain::{JacobianFrame, LimitPolicy, forward_kinematics};
-use numpy::PyArrayDyn;
+use kinechain::{Chain as Inner, JacobianFrame, LimitPolicy, LinkId, forward_kinematics};
 use pyo3::prelude::*;
 
 /// `frame=` and `point=` as the core's frame.
@@ -27,6 +27,7 @@ fn frame_of((frame, point): (&str, Option<[f64; 3]>)) -> PyResult<JacobianFrame>
 }
 
 /// `Chain.jacobian` (see its documentation in [`crate::chain`]).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn jacobian<'py>(
     robot: &Robot,
     py: Python<'py>,
@@ -35,39 +36,41 @@ pub(crate) fn jacobian<'py>(
     frame: (&str, Option<[f64; 3]>),
     policy: LimitPolicy,
     threads: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    out: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Py<PyAny>> {
     let inner = &robot.inner;
     let threads = thread_count(threads)?;
     let frame = frame_of(frame)?;
-    let q = float_array(q, "q")?;
-    let (n, batched) = rows(inner, &q, "q")?;
     let id = inner.link_id(link).map_err(|e| error(&e))?;
     let dof = inner.dof();
+    if out.is_none()
+        && let Some(q) = plain_vector(q, dof)
+    {
+        // The common call: `q` copied into the chain's buffer, the result into a spare array.
+        return robot.with_reused(|r| {
+            let j = r.jacobian_spare.take(py, numpy::ndarray::Ix2(6, dof))?;
+            // SAFETY: a new array, or a spare that nothing else refers to; every entry is
+            // written below before it is read (an error drops it unread).
+            let dst = unsafe { entries(&j)? };
+            let s = r.scratch(inner, policy);
+            copy_vector(q, &mut s.q)?;
+            single(inner, s, None, id, frame, dst).map_err(|e| array_error(e, false, None))?;
+            Ok(j.into_any().unbind())
+        });
+    }
+    let q = float_array(q, "q")?;
+    let (n, batched) = rows(inner, &q, "q")?;
     let dims: &[usize] = if batched { &[n, 6, dof] } else { &[6, dof] };
-    let out = new_array(py, numpy::ndarray::IxDyn(dims))?;
-    // SAFETY: a new array, not yet handed out; every entry is written below before it is.
-    let dst = unsafe { entries(&out)? };
+    let shape = [numpy::ndarray::IxDyn(dims)];
+    let mut outputs = match out {
+        None => Outputs::new(py, &shape)?,
+        Some(o) => Outputs::caller(std::slice::from_ref(o), &["out"], &shape, &[(&q, "q")])?,
+    };
+    let [dst] = outputs.slices()?;
     let q = q.as_slice()?;
     let mut signals = Signals::default();
     let result = if !batched {
-        robot.with_data(policy, |data| {
-            let state = |source| ArrayError::State { index: 0, source };
-            let j = forward_kinematics(inner, data, q)
-                .map_err(state)?
-                .jacobian_in(id, frame);
-            for r in 0..6 {
-                for c in 0..dof {
-                    dst[r * dof + c] = j[(r, c)];
-                }
-            }
-            match dst.iter().all(|x| x.is_finite()) {
-                true => Ok(()),
-                false => Err(ArrayError::NotFinite {
-                    index: 0,
-                    source: Overflow::new("jacobian", inner.link(id).name()),
-                }),
-            }
-        })
+        robot.with_reused(|r| single(inner, r.scratch(inner, policy), Some(q), id, frame, dst))
     } else if n == 0 || dof == 0 {
         // A chain without moving joints has Jacobians of no columns: nothing to write.
         Ok(())
@@ -79,5 +82,37 @@ pub(crate) fn jacobian<'py>(
         })?
     };
     result.map_err(|e| array_error(e, batched, signals.raised))?;
-    Ok(out)
+    outputs
+        .into_arrays()
+        .next()
+        .ok_or_else(|| Error::new_err("no Jacobian"))
+}
+
+/// One configuration's Jacobian of `id` in `frame`, into `dst` (row-major `6 × dof`): of `q`, or
+/// of the joint values in `s.q` for `None`.
+fn single(
+    chain: &Inner,
+    s: &mut Scratch,
+    q: Option<&[f64]>,
+    id: LinkId,
+    frame: JacobianFrame,
+    dst: &mut [f64],
+) -> Result<(), ArrayError> {
+    let Scratch { data, q: copied, j } = s;
+    let poses = forward_kinematics(chain, data, q.unwrap_or(copied))
+        .map_err(|source| ArrayError::State { index: 0, source })?;
+    poses.jacobian_in_into(id, frame, j);
+    let dof = chain.dof();
+    for (r, row) in dst.chunks_exact_mut(dof).enumerate().take(6) {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = j[(r, c)];
+        }
+    }
+    match dst.iter().all(|x| x.is_finite()) {
+        true => Ok(()),
+        false => Err(ArrayError::NotFinite {
+            index: 0,
+            source: Overflow::new("jacobian", chain.link(id).name()),
+        }),
+    }
 }

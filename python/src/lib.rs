@@ -8,9 +8,10 @@
 //! non-finite values and values out of limits are checked and raised as `kinechain.StateError` /
 //! `kinechain.Error`, files as `kinechain.LoadError`.
 //!
-//! Its modules, each using only those before it: `errors`, `arrays` (numpy in and out), `files`
-//! (interruptible reads), `run` (threads and signals), `links` (the links a call asks for),
-//! `results` (the result class), `robot` (what evaluations use of a chain), `fk`, `jacobian`, `chain` (the class),
+//! Its modules, each using only those before it: `errors`, `arrays` (numpy in and out), `spare`
+//! (output arrays of single calls, reused once released), `files` (interruptible reads), `run`
+//! (threads and signals), `links` (the links a call asks for), `results` (the result class), `outputs` (the arrays a call writes),
+//! `robot` (what evaluations use of a chain), `fk`, `jacobian`, `chain` (the class),
 //! `regression`, `orientation`, `bench` (the core timed from Rust, for the benchmarks).
 
 mod arrays;
@@ -22,10 +23,12 @@ mod fk;
 mod jacobian;
 mod links;
 mod orientation;
+mod outputs;
 mod regression;
 mod results;
 mod robot;
 mod run;
+mod spare;
 
 use chain::Chain;
 use errors::{Error, LoadError, StateError};

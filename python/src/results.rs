@@ -1,5 +1,6 @@
 //! `FkResult`, what `Chain.fk` returns: the arrays, and the links they are of.
 
+use crate::errors::StateError;
 use crate::links::Links;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PySlice};
@@ -27,6 +28,43 @@ pub(crate) struct FkResult {
     pub(crate) alpha: Option<Py<PyAny>>,
     #[pyo3(get)]
     pub(crate) a: Option<Py<PyAny>>,
+}
+
+impl FkResult {
+    /// Its arrays, to be written again by a call of `level` (poses; with velocities; with
+    /// accelerations) on `links`: the same links in the same order, the same quantities.
+    pub(crate) fn outputs<'py>(
+        &self,
+        py: Python<'py>,
+        links: &Links,
+        level: usize,
+    ) -> PyResult<Vec<Bound<'py, PyAny>>> {
+        if !self.links.same_names(links) {
+            return Err(StateError::new_err(
+                "out is the result of a call on other links: it can take the results of a call on the same links, in the same order",
+            ));
+        }
+        let rates = [&self.omega, &self.v, &self.alpha, &self.a];
+        let has = rates.iter().take_while(|r| r.is_some()).count();
+        if has != 2 * level {
+            let what = |k: usize| {
+                [
+                    "poses",
+                    "poses and velocities",
+                    "poses, velocities and accelerations",
+                ][k / 2]
+            };
+            return Err(StateError::new_err(format!(
+                "out holds {}, this call computes {}: it can take the results of a call that computes the same",
+                what(has),
+                what(2 * level)
+            )));
+        }
+        Ok(std::iter::once(&self.poses)
+            .chain(rates.into_iter().flatten())
+            .map(|a| a.bind(py).clone())
+            .collect())
+    }
 }
 
 #[pymethods]

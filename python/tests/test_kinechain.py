@@ -401,17 +401,176 @@ def test_poses_can_be_written_into_an_array_of_the_caller():
         chain.fk(qv, out=buffer[: want.size].reshape(want.shape))
 
 
+@pytest.mark.parametrize("batched", [False, True])
+def test_rates_and_jacobians_can_be_written_into_arrays_of_the_caller(batched):
+    """`out=` takes a result of an earlier call with the same links and quantities (all its
+    arrays written again), and `jacobian(..., out=)` an array of the Jacobian's shape."""
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    qs = random_q(chain, 50, seed=5)
+    qds, qdds = random_q(chain, 50, seed=6), random_q(chain, 50, seed=7)
+    pick = (lambda a: a) if batched else (lambda a: a[0])
+    q, qd, qdd = pick(qs), pick(qds), pick(qdds)
+    for args, links in (((q, qd), None), ((q, qd, qdd), None), ((q, qd, qdd), ["panda_hand", "panda_link2"])):
+        want = chain.fk(*args, links=links)
+        r = chain.fk(*(a * 0.5 for a in args), links=links)
+        again = chain.fk(*args, links=links, out=r)
+        for name in ("poses", "omega", "v", "alpha", "a"):
+            got, expect = getattr(again, name), getattr(want, name)
+            assert (got is None) == (expect is None)
+            if got is not None:
+                assert got is getattr(r, name) and np.array_equal(got, expect), name
+    # The result of a call with other quantities or other links is refused, unchanged.
+    r = chain.fk(q, qd)
+    before = r.poses.copy()
+    with pytest.raises(kc.StateError, match="holds poses and velocities, this call computes poses, velocities and accelerations"):
+        chain.fk(q, qd, qdd, out=r)
+    with pytest.raises(kc.StateError, match="other links"):
+        chain.fk(q, qd, links=["panda_hand"], out=r)
+    with pytest.raises(kc.StateError, match="holds poses and velocities, this call computes poses"):
+        chain.fk(q, out=r)
+    assert np.array_equal(r.poses, before)
+    # An output array that shares memory with an input is refused.
+    r = chain.fk(q, qd)
+    with pytest.raises(kc.StateError, match="out.omega"):
+        chain.fk(q, r.omega.reshape(-1)[: qd.size].reshape(qd.shape), out=r)
+    # Jacobians.
+    want = chain.jacobian(q, "panda_hand")
+    J = np.full_like(want, np.nan)
+    assert chain.jacobian(q, "panda_hand", out=J) is J and np.array_equal(J, want)
+    with pytest.raises(kc.StateError, match="shape"):
+        chain.jacobian(q, "panda_hand", out=np.empty((7,) + want.shape))
+    with pytest.raises(kc.StateError, match="float64"):
+        chain.jacobian(q, "panda_hand", out=want.astype(np.float32))
+    buffer = np.zeros(want.size + q.size)
+    qv = buffer[: q.size].reshape(q.shape)
+    qv[:] = q
+    with pytest.raises(kc.StateError, match="out shares memory with q|out: "):
+        chain.jacobian(qv, "panda_hand", out=buffer[: want.size].reshape(want.shape))
+
+
 def test_the_benchmarks_rust_timing_runs_the_same_batches():
     from kinechain import _kinechain
 
     chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
     qs = np.tile(chain.neutral(), (100, 1))
     for kwargs in ({}, {"links": ["panda_hand"]}, {"qd": qs}, {"qd": qs, "qdd": qs}, {"jacobian": "panda_hand"}):
-        t = _kinechain._rust_batch(chain, qs, repeats=2, **kwargs)
-        assert 0.0 < t < 1.0, kwargs
+        for fresh in (False, True):
+            t = _kinechain._rust_batch(chain, qs, repeats=2, fresh=fresh, **kwargs)
+            assert 0.0 < t < 1.0, kwargs
     bad = qs.copy()
     bad[7, 0] = 100.0
     with pytest.raises(kc.StateError, match="configuration 7"):
         _kinechain._rust_batch(chain, bad)
+    with pytest.raises(kc.StateError, match="configuration 7"):
+        _kinechain._rust_batch(chain, bad, fresh=True)
     with pytest.raises(kc.StateError):
         _kinechain._rust_batch(chain, chain.neutral())
+
+
+def test_single_calls_never_change_an_array_still_referred_to():
+    """One configuration's poses may be written into an array an earlier call returned, but only
+    when nothing refers to it any more (results, views and weak references keep their numbers),
+    and only when it is still what a new one would be (shape, type and flags unchanged)."""
+    import gc
+    import weakref
+
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    qs = random_q(chain, 8, seed=3)
+    expect = [chain.fk(q.copy()).poses.copy() for q in qs]  # (copies: fresh values to compare with)
+
+    # Results kept alive, and views of them, keep their values through later calls.
+    kept = [chain.fk(q) for q in qs[:4]]
+    views = [chain.poses(q)[2] for q in qs[4:]]
+    for _ in range(3):
+        for q in qs:
+            chain.fk(q)
+            chain.poses(q)
+    for r, e in zip(kept, expect[:4]):
+        assert np.array_equal(r.poses, e)
+    for v, e in zip(views, expect[4:]):
+        assert np.array_equal(v, e[2])
+
+    # Jacobians likewise.
+    J = [chain.jacobian(q, "panda_hand") for q in qs[:3]]
+    want = [j.copy() for j in J]
+    for q in qs:
+        chain.jacobian(q, "panda_hand", frame="link")
+    for j, w in zip(J, want):
+        assert np.array_equal(j, w)
+    for q, w in zip(qs[:3], want):
+        assert np.array_equal(chain.jacobian(q, "panda_hand"), w)
+
+    # Dropped results are reused, each call's numbers its own.
+    for _ in range(2):
+        for q, e in zip(qs, expect):
+            p = chain.poses(q)
+            assert np.array_equal(p, e)
+            assert np.array_equal(chain.fk(q).poses, e)
+
+    # A weak reference, or an array changed in place, is not reused.
+    p = chain.poses(qs[0])
+    w = weakref.ref(p)
+    del p
+    gc.collect()
+    for q in qs:
+        chain.poses(q)
+    if w() is not None:
+        assert np.array_equal(w(), expect[0])
+    # An array changed in place and dropped is not handed out again as it is: every result is
+    # a writeable float64 (13, 4, 4) array.
+    for change in (lambda a: setattr(a, "shape", (13, 16)), lambda a: a.setflags(write=False), lambda a: setattr(a, "dtype", np.int64)):
+        p = chain.poses(qs[1])
+        change(p)
+        del p
+        for q, e in zip(qs, expect):
+            p = chain.poses(q)
+            assert p.dtype == np.float64 and p.shape == (13, 4, 4) and p.flags.writeable and p.flags.c_contiguous
+            assert np.array_equal(p, e)
+            del p
+
+
+def test_pose_and_poses_are_fk_in_one_call():
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    qs = random_q(chain, 5, seed=4)
+    for q in qs:
+        r = chain.fk(q)
+        assert np.array_equal(chain.poses(q), r.poses)
+        assert np.array_equal(chain.poses(q, links=["panda_hand", "panda_link3"]), r.poses[[r.links.index("panda_hand"), r.links.index("panda_link3")]])
+        assert chain.pose(q, "panda_hand").shape == (4, 4)
+        assert np.array_equal(chain.pose(q, "panda_hand"), r["panda_hand"])
+        # Lists and tuples as well as arrays; the same numbers.
+        assert np.array_equal(chain.pose(list(q), "panda_hand"), r["panda_hand"])
+        assert np.array_equal(chain.poses(tuple(q)), r.poses)
+    assert np.array_equal(chain.pose(qs, "panda_hand", threads=1), chain.fk(qs, links=["panda_hand"]).poses[:, 0])
+    assert np.array_equal(chain.poses(qs), chain.fk(qs).poses)
+    out = np.empty((5, 13, 4, 4))
+    assert chain.poses(qs, out=out) is not None and np.array_equal(out, chain.fk(qs).poses)
+    with pytest.raises(kc.Error, match="no link named"):
+        chain.pose(qs[0], "nope")
+    with pytest.raises(kc.StateError, match=f"{chain.dof - 1} entries per configuration"):
+        chain.pose(qs[0][:-1], "panda_hand")
+    with pytest.raises(kc.StateError, match="above its upper limit|out of|limit"):
+        chain.poses(chain.upper + 1.0)
+    assert chain.poses(chain.upper + 1.0, check_limits=False).shape == (13, 4, 4)
+    with pytest.raises(kc.Error, match="threads"):
+        chain.pose(qs[0], "panda_hand", threads=0)
+    with pytest.raises(TypeError):
+        chain.pose(qs[0], 3)
+
+
+def test_link_requests_are_recognised_whatever_their_container():
+    """The links of the last request are reused when the next names the same ones (a list, a
+    tuple or one name; equal strings or the same objects), and never when they differ."""
+    chain = kc.load(os.path.join(ROOT, "robots", "panda.urdf"))
+    q = chain.neutral()
+    full = chain.fk(q)
+    for asked in (["panda_hand"], ("panda_hand",), "panda_hand", ["panda_" + "hand"], ["panda_link2", "panda_hand"], ["panda_hand", "panda_link2"], ["panda_hand"]):
+        names = [asked] if isinstance(asked, str) else list(asked)
+        r = chain.fk(q, links=asked)
+        assert r.links == names
+        assert np.array_equal(r.poses, np.stack([full[n] for n in names]))
+    # A generator is read once, like any iterable.
+    r = chain.fk(q, links=(n for n in ["panda_link1", "panda_link4"]))
+    assert r.links == ["panda_link1", "panda_link4"]
+    with pytest.raises(TypeError):
+        chain.fk(q, links=[1])
