@@ -375,12 +375,15 @@ pub fn write_link_batch(
             },
         )?;
     }
-    let block = match (level, l) {
-        (0, 1) => LINK_BLOCK,
-        (0, _) => fold_block_len(chain),
-        _ => RATE_BLOCK,
-    }
-    .max(1);
+    let block = block_len(
+        match (level, l) {
+            (0, 1) => LINK_BLOCK,
+            (0, _) => fold_block_len(chain),
+            _ => RATE_BLOCK,
+        },
+        n,
+        &workers,
+    );
     // Each block's part of every output, split off in order (a batch of no links still
     // evaluates, and so checks, its configurations).
     let (mut poses, mut rates) = (out.poses, out.rates);
@@ -476,19 +479,12 @@ pub fn write_jacobian_batch(
     need("q", qs.len(), n.saturating_mul(dof))?;
     need("jacobians", out.len(), n.saturating_mul(6 * dof))?;
     let mut rest = out;
-    let parts: Vec<(usize, &mut [f64])> = (0..n.div_ceil(JACOBIAN_BLOCK))
-        .map(|b| {
-            (
-                b,
-                take(
-                    &mut rest,
-                    JACOBIAN_BLOCK.min(n - b * JACOBIAN_BLOCK) * 6 * dof,
-                ),
-            )
-        })
+    let block = block_len(JACOBIAN_BLOCK, n, &workers);
+    let parts: Vec<(usize, &mut [f64])> = (0..n.div_ceil(block))
+        .map(|b| (b, take(&mut rest, block.min(n - b * block) * 6 * dof)))
         .collect();
     let eval = |data: &mut BatchData, (b, dst): (usize, &mut [f64])| {
-        let first = b * JACOBIAN_BLOCK;
+        let first = b * block;
         let q = &qs[first * dof..(first * dof + dst.len() / 6)];
         jacobian_batch(chain, data, q, link, frame, dst).map_err(at(first))?;
         match dst.iter().position(|x| !x.is_finite()) {
@@ -505,6 +501,27 @@ pub fn write_jacobian_batch(
     run_blocks(chain, policy, parts, workers, interrupt, eval)
 }
 
+/// The configurations of a block: `preferred`, or fewer on a pool when a batch of `n` would
+/// give each thread fewer than [`PARTS_PER_THREAD`] blocks (so that the threads finish
+/// together), whole lanes of eight and at least [`MIN_SHARED_BLOCK`].
+fn block_len(preferred: usize, n: usize, workers: &Workers<'_>) -> usize {
+    let shared = match workers {
+        Workers::Here => return preferred.max(1),
+        Workers::Pool(pool) => n
+            .div_ceil(pool.current_num_threads().max(1) * PARTS_PER_THREAD)
+            .next_multiple_of(8),
+    };
+    shared
+        .clamp(MIN_SHARED_BLOCK.min(preferred), preferred)
+        .max(1)
+}
+
+/// Blocks per thread that a pool is given at least, where the batch allows.
+const PARTS_PER_THREAD: usize = 4;
+
+/// The smallest block a pool is given (smaller ones cost more in scheduling than they save).
+const MIN_SHARED_BLOCK: usize = 64;
+
 /// Runs `eval(data, part)` on every part, in order on the calling thread or in parallel on a
 /// pool (each thread with batch buffers of its own, checking under `policy`), and fails with
 /// the failure of the lowest configuration among the parts that fail, or with
@@ -519,7 +536,9 @@ fn run_blocks<P: Send>(
 ) -> Result<(), ArrayError> {
     let make = || BatchData::new(chain).with_limit_policy(policy);
     let pool = match workers {
-        Workers::Here => {
+        // One block is no work to share: waking the pool would cost more than it saves.
+        Workers::Pool(pool) if parts.len() > 1 => pool,
+        _ => {
             let (mut data, mut last) = (make(), Instant::now());
             for part in parts {
                 if last.elapsed() >= interrupt.interval() {
@@ -532,7 +551,6 @@ fn run_blocks<P: Send>(
             }
             return Ok(());
         }
-        Workers::Pool(pool) => pool,
     };
     let stop = AtomicBool::new(false);
     let (sent, received) = std::sync::mpsc::channel();
@@ -570,5 +588,28 @@ fn run_blocks<P: Send>(
         (true, _) => Err(ArrayError::Interrupted),
         (false, Some(e)) => Err(e),
         (false, None) => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Workers, block_len};
+
+    #[test]
+    fn a_pool_gets_at_least_four_blocks_a_thread_of_whole_lanes_where_the_batch_allows() {
+        let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(2).build() else {
+            panic!("no pool of two threads");
+        };
+        let pool = Workers::Pool(&pool);
+        // Large batches keep the preferred block; the calling thread always does.
+        assert_eq!(block_len(2048, 1_000_000, &pool), 2048);
+        assert_eq!(block_len(2048, 10_000, &Workers::Here), 2048);
+        // 10 000 on two threads: eight blocks of 1 256 (a multiple of eight).
+        assert_eq!(block_len(2048, 10_000, &pool), 1256);
+        assert_eq!(10_000usize.div_ceil(1256), 8);
+        // Never below 64, nor above the preferred block when that is smaller.
+        assert_eq!(block_len(2048, 100, &pool), 64);
+        assert_eq!(block_len(32, 100, &pool), 32);
+        assert_eq!(block_len(512, 0, &pool), 64);
     }
 }
