@@ -61,13 +61,13 @@ pub use nalgebra;
 
 pub use error::{Error, FieldProblem, LoadError, LoadErrorKind, ModelError, NameError, StateError};
 pub use eval::Chain;
-pub use eval::JacobianFrame;
 pub use eval::{
     Accelerations, LinkAcceleration, LinkVelocity, Poses, Velocities, check_q,
     forward_accelerations, forward_kinematics, forward_kinematics_incremental,
     forward_kinematics_to, forward_velocities,
 };
 pub use eval::{Data, LimitPolicy};
+pub use eval::{JacobianFrame, QUATERNION_TOLERANCE};
 pub use model::builder::{ChainBuilder, JointSpec, MimicSpec};
 pub use model::chain::{Joint, JointId, JointScrew, Link, LinkId, Mimic, Model};
 pub use model::joint::{JointKind, Limits};

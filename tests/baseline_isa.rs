@@ -46,6 +46,7 @@ fn baseline_batches_equal_baseline_single_evaluations_bit_for_bit() {
     assert_batches_equal_single_evaluations(
         &[
             "robots/panda.urdf",
+            "robots/panda.urdf+floating",
             "robots/snake50.yaml",
             "robots/cylindrical.yaml",
             "tests/data/reference/urdf/tiago_no_hand.urdf",

@@ -25,8 +25,8 @@ fn fingerprint(file: &str, seed: u64) -> Vec<u64> {
     let mut bits = Vec::new();
     for _ in 0..16 {
         let q = random_q(&chain, &mut rng);
-        let qd = random_vec(chain.dof(), 2.0, &mut rng);
-        let qdd = random_vec(chain.dof(), 5.0, &mut rng);
+        let qd = random_vec(chain.nv(), 2.0, &mut rng);
+        let qdd = random_vec(chain.nv(), 5.0, &mut rng);
         let acc = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
         for link in chain.links() {
             let id = chain.link_id(link.name()).unwrap();
@@ -47,8 +47,9 @@ fn fingerprint(file: &str, seed: u64) -> Vec<u64> {
     bits
 }
 
-const FILES: [&str; 6] = [
+const FILES: [&str; 7] = [
     "robots/panda.urdf",
+    "robots/panda.urdf+floating",
     "robots/ur5.yaml",
     "robots/stanford.yaml",
     "robots/snake50.yaml",

@@ -182,8 +182,17 @@ fn large_angles_are_as_accurate_as_small_ones() {
 fn bundled_robots_agree_with_the_f64_batch() {
     let _isa = ISA.lock().unwrap_or_else(|e| e.into_inner());
     let mut rng = rng(11);
-    for path in robot_files() {
-        let chain = Chain::from_file(&path).unwrap();
+    let floating = kinechain::io::LoadOptions::default().with_floating_base(true);
+    let files = robot_files();
+    let chains = files
+        .iter()
+        .map(|p| (p, Chain::from_file(p).unwrap()))
+        .chain(
+            files
+                .iter()
+                .map(|p| (p, Chain::from_file_with(p, &floating).unwrap())),
+        );
+    for (path, chain) in chains {
         let qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
         let mut data = sp::BatchData::new(&chain);
         let mut data64 = batch::BatchData::new(&chain);

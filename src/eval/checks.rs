@@ -24,35 +24,61 @@ pub enum LimitPolicy {
 #[inline]
 pub(crate) fn assert_buffers_match(what: &str, bodies: usize, dof: usize, chain: &Chain) {
     assert!(
-        bodies == chain.bodies.len() && dof == chain.dof(),
+        bodies == chain.bodies.len() && dof == chain.nq(),
         "kinechain: {what} was created for another chain ({bodies} moving joints, dof {dof}), not '{}' ({} moving joints, dof {})",
         chain.name(),
         chain.bodies.len(),
-        chain.dof()
+        chain.nq()
     );
 }
 
-/// Checks length and finiteness of a joint-space vector.
+/// The error for a vector `what` of `got` entries where the chain takes `expected`.
+pub(crate) fn wrong_length(
+    chain: &Chain,
+    what: &'static str,
+    expected: usize,
+    got: usize,
+) -> StateError {
+    match chain.floating_joint() {
+        Some(j) => StateError::WrongLengthFloating {
+            what,
+            expected,
+            got,
+            joint: chain.joint(j).name().to_string(),
+            own: if what == "q" { 7 } else { 6 },
+        },
+        None => StateError::WrongLength {
+            what,
+            expected,
+            got,
+        },
+    }
+}
+
+/// Checks length and finiteness of a joint-space vector: `q` (of [`Model::nq`](crate::Model::nq)
+/// entries, a floating joint's quaternion near unit length), or a rate `q_dot` or `q_ddot`
+/// ([`Model::nv`](crate::Model::nv)).
 pub(crate) fn check_values(
     chain: &Chain,
     values: &[f64],
     what: &'static str,
 ) -> Result<(), StateError> {
-    if values.len() != chain.dof() {
-        return Err(StateError::WrongLength {
-            what,
-            expected: chain.dof(),
-            got: values.len(),
-        });
+    let is_q = what == "q";
+    let expected = if is_q { chain.nq() } else { chain.nv() };
+    if values.len() != expected {
+        return Err(wrong_length(chain, what, expected, values.len()));
     }
     // Branch-free, two operations per entry: `x · 0` is ±0 for a finite `x` and NaN for ±∞ or
     // NaN, so the sum is 0 exactly when every entry is finite. The entry at fault is looked for
     // only on failure.
-    if values.iter().fold(0.0, |sum, x| sum + x * 0.0) == 0.0 {
-        return Ok(());
-    }
-    if let Some(index) = values.iter().position(|x| !x.is_finite()) {
-        let (joint, component) = chain.variable(index);
+    if values.iter().fold(0.0, |sum, x| sum + x * 0.0) != 0.0
+        && let Some(index) = values.iter().position(|x| !x.is_finite())
+    {
+        let (joint, component) = if is_q {
+            chain.variable(index)
+        } else {
+            chain.velocity_variable(index)
+        };
         return Err(StateError::NonFinite {
             what,
             index,
@@ -61,7 +87,25 @@ pub(crate) fn check_values(
             value: values[index],
         });
     }
+    if is_q {
+        check_quaternion(chain, values)?;
+    }
     Ok(())
+}
+
+/// A floating joint's quaternion (entries 3–6 of `q`, finite) near unit length.
+#[inline]
+pub(crate) fn check_quaternion(chain: &Chain, q: &[f64]) -> Result<(), StateError> {
+    match chain.floating_joint() {
+        Some(j) if !crate::eval::kernel::floating::admits(&q[3..7]) => {
+            Err(StateError::BadQuaternion {
+                joint: chain.joint(j).name().to_string(),
+                norm: q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt(),
+                tolerance: crate::eval::kernel::floating::QUATERNION_TOLERANCE,
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// See [`all_valid`]; `A` only selects the target features it is compiled with.
@@ -76,8 +120,12 @@ fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -
     finite
         && (policy == LimitPolicy::Ignore
             || qs
-                .chunks_exact(chain.dof())
+                .chunks_exact(chain.nq())
                 .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
+        && (chain.floating_joint().is_none()
+            || qs
+                .chunks_exact(chain.nq())
+                .all(|q| crate::eval::kernel::floating::admits(&q[3..7])))
 }
 
 /// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).
@@ -88,8 +136,9 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
     // One branch-free pass when the checks fit one per entry; the entry at fault is looked for
     // only on failure.
     if let (Some(limits), LimitPolicy::Enforce, true) =
-        (&chain.dense_limits, policy, q.len() == chain.dof())
+        (&chain.dense_limits, policy, q.len() == chain.nq())
         && admitted::<Separate>(q, Some(limits))
+        && check_quaternion(chain, q).is_ok()
     {
         return Ok(());
     }

@@ -7,10 +7,10 @@ use crate::eval::layout::chain::Chain;
 use crate::eval::layout::limits::{DenseLimits, LimitCheck};
 use crate::eval::simd::portable::Separate;
 use crate::model::builder::{ChainBuilder, JointSpec};
-use crate::model::chain::{Resolved, Tree, validate};
 use crate::model::error::ModelError;
 use crate::model::joint::{Axis, JointKind, Motion, Term};
 use crate::model::transform::Transform;
+use crate::model::validate::{Resolved, Tree, validate};
 
 fn compose(a: Placement, b: Placement) -> Placement {
     match (a, b) {
@@ -66,7 +66,7 @@ pub(crate) fn assemble(
 
         let travel = match (
             js.kind.translates(),
-            js.limits[js.kind.dof().saturating_sub(1)],
+            js.limits[js.kind.dof().clamp(1, 2) - 1],
         ) {
             (true, Some(l)) if l.lower.is_finite() && l.upper.is_finite() => {
                 (js.d + l.lower).abs().max((js.d + l.upper).abs())
@@ -77,6 +77,24 @@ pub(crate) fn assemble(
 
         let first = q_index[j].unwrap_or(0);
         let (theta, d) = joint_terms(js, first, mimic[j], q_index);
+
+        if js.kind == JointKind::Floating {
+            // The first body ([`Body::floating`]): its frame and rates come from the first
+            // seven entries of `q` and six of `q̇`, not from a motion about an axis.
+            let body = bodies.len();
+            bodies.push(Body {
+                floating: true,
+                ..Body::new(
+                    carrier,
+                    compose(offset, origin),
+                    Motion::new(Axis::Z, Term::Const(0.0), Term::Const(0.0)),
+                    post,
+                    new_joint[j],
+                )
+            });
+            link_carrier[child] = (Some(body), Placement::Identity);
+            continue;
+        }
 
         if js.kind == JointKind::Fixed {
             let motion = crate::eval::compile::constant_motion(&Motion::new(
@@ -115,6 +133,20 @@ pub(crate) fn assemble(
             bodies[p].branches = true;
         }
     }
+    // After a floating joint (the first: seven entries of `q`, six of `q̇`), a joint's entry
+    // of `q̇` is one before its entry of `q`.
+    if bodies.first().is_some_and(|b| b.floating) {
+        for b in &mut bodies {
+            for (rate, term) in [
+                (&mut b.theta_rate, b.motion.theta),
+                (&mut b.d_rate, b.motion.d),
+            ] {
+                if let Term::Var { index, .. } = term {
+                    rate.index = index - 1;
+                }
+            }
+        }
+    }
     Assembled {
         bodies,
         link_carrier,
@@ -144,7 +176,7 @@ fn joint_terms(
         }
     };
     match js.kind {
-        JointKind::Fixed => (Term::Const(js.theta), Term::Const(js.d)),
+        JointKind::Fixed | JointKind::Floating => (Term::Const(js.theta), Term::Const(js.d)),
         JointKind::Revolute | JointKind::Continuous => (var(first, js.theta), Term::Const(js.d)),
         JointKind::Prismatic => (Term::Const(js.theta), var(first, js.d)),
         JointKind::Cylindrical => (var(first, js.theta), var(first + 1, js.d)),
@@ -203,16 +235,16 @@ pub(crate) struct EvalTables {
 }
 
 impl EvalTables {
-    /// The tables for `bodies`, whose motions read `dof` entries of `q`.
-    pub(crate) fn new(bodies: &[Body], dof: usize) -> EvalTables {
+    /// The tables for `bodies`, whose motions read `nq` entries of `q`.
+    pub(crate) fn new(bodies: &[Body], nq: usize) -> EvalTables {
         let serial_run = bodies
             .iter()
             .enumerate()
             .take_while(|(k, b)| b.parent == k.checked_sub(1))
             .count();
-        let mut first_body_from = vec![usize::MAX; dof];
+        let mut first_body_from = vec![usize::MAX; nq];
         for (k, b) in bodies.iter().enumerate() {
-            for index in b.motion.variables() {
+            for index in b.variables() {
                 first_body_from[index] = first_body_from[index].min(k);
             }
         }
@@ -315,7 +347,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         reach,
         limit_checks,
     } = assemble(spec, &v.tree, &v.axes, &v.q_index, &v.mimic, &v.new_joint);
-    let dof = v.model.dof();
+    let (nq, nv) = (v.model.nq(), v.model.nv());
     let EvalTables {
         theta_gather,
         trig_slot,
@@ -323,7 +355,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         first_body_from,
         serial_run,
         tail_start,
-    } = EvalTables::new(&bodies, dof);
+    } = EvalTables::new(&bodies, nq);
     let carriers = v
         .tree
         .link_order
@@ -333,11 +365,15 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             offset: link_carrier[l].1,
         })
         .collect();
-    let mut column_terms = vec![0_usize; dof];
+    let mut column_terms = vec![0_usize; nv];
     for t in bodies.iter().flat_map(|b| [b.theta_rate, b.d_rate]) {
         if t.scale != 0.0 {
             column_terms[t.index] += 1;
         }
+    }
+    // A floating joint's body writes the first six columns, once each.
+    if bodies.first().is_some_and(|b| b.floating) {
+        column_terms[..6].fill(1);
     }
     Ok(Chain {
         column_terms,
@@ -347,7 +383,7 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         trig_slot,
         turning_before,
         first_body_from,
-        dense_limits: DenseLimits::new(&limit_checks, dof),
+        dense_limits: DenseLimits::new(&limit_checks, nq),
         limit_checks,
         serial_run,
         tail_start,

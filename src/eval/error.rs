@@ -14,6 +14,42 @@ pub enum StateError {
         /// Entries given.
         got: usize,
     },
+    /// A vector of a chain with a floating joint has the wrong number of entries.
+    #[error(
+        "{what} has {got} entries; the chain takes {expected}: {own} for the floating joint '{joint}', {} for the others",
+        expected - own
+    )]
+    WrongLengthFloating {
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Entries expected ([`Model::nq`](crate::Model::nq) or [`Model::nv`](crate::Model::nv)).
+        expected: usize,
+        /// Entries given.
+        got: usize,
+        /// The floating joint.
+        joint: String,
+        /// Its entries (7 of `q`, 6 of a rate).
+        own: usize,
+    },
+    /// A floating joint's quaternion is not one the kernels evaluate: zero, or off unit length
+    /// by more than [`QUATERNION_TOLERANCE`](crate::QUATERNION_TOLERANCE).
+    #[error(
+        "the quaternion of floating joint '{joint}' (q[3..7], w x y z) has norm {norm}: it must be within {tolerance} of 1 (it is then normalised)"
+    )]
+    BadQuaternion {
+        /// The floating joint.
+        joint: String,
+        /// The quaternion's norm.
+        norm: f64,
+        /// How far from 1 the norm may be.
+        tolerance: f64,
+    },
+    /// A joint asked for as a screw (θ and d about one axis) that is not one.
+    #[error("joint '{joint}' is floating: its motion is not a screw about one axis")]
+    NoScrew {
+        /// The joint.
+        joint: String,
+    },
     /// An entry is NaN or infinite.
     #[error(
         "{what}[{index}] (joint '{joint}'{}) is {value}, not a finite number",
@@ -26,20 +62,23 @@ pub enum StateError {
         index: usize,
         /// The joint this entry drives.
         joint: String,
-        /// For a cylindrical joint, `theta` or `d`.
+        /// For a joint of several entries, the component (`theta` or `d` of a cylindrical joint,
+        /// `x` … `qz` or `vx` … `wz` of a floating one).
         component: Option<&'static str>,
         /// The value given.
         value: f64,
     },
     /// A batch's `q_dot` or `q_ddot` does not hold one row of the chain's dof per configuration
     /// of its `q`.
-    #[error("{what} has {got} entries, the batch's q has {rows} configurations of {dof} entries")]
+    #[error(
+        "{what} has {got} entries, the batch's q has {rows} configurations, each of {dof} entries in {what}"
+    )]
     WrongRows {
         /// `q_dot` or `q_ddot`.
         what: &'static str,
         /// Configurations in `q`.
         rows: usize,
-        /// The chain's dof.
+        /// Entries of `q_dot` (and `q_ddot`) per configuration: the chain's dof.
         dof: usize,
         /// Entries given.
         got: usize,

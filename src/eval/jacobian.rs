@@ -79,18 +79,34 @@ pub(crate) fn axis_parts(s: &impl State, body: &Body) -> ([f64; 3], [f64; 3], [f
 /// from `link` back to the base, of each body's turning and sliding columns (from `columns`)
 /// times its rate terms: a column can take several terms (a mimic joint's, a cylindrical
 /// joint's two), and entries of joints off the path stay zero.
+///
+/// A floating joint's body gives its six columns (entries 0–5 of `q̇`) from `floating`: for each
+/// world axis `e_k`, the columns of a slide along it and of a turn about it through the body's
+/// origin.
 #[inline(always)]
 fn path_columns(
     s: &impl State,
     link: LinkId,
     j: &mut [f64],
     mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
+    mut floating: impl FnMut(usize, [f64; 3]) -> ([f64; 6], [f64; 6]),
 ) {
     let chain = s.chain();
     j.fill(0.0);
     let mut body = chain.carrier(link).body;
     while let Some(b) = body {
         let bd = &chain.bodies[b];
+        if bd.floating {
+            for k in 0..3 {
+                let mut e = [0.0; 3];
+                e[k] = 1.0;
+                let (turning, sliding) = floating(b, e);
+                j[6 * k..6 * k + 6].copy_from_slice(&sliding);
+                j[6 * (3 + k)..6 * (3 + k) + 6].copy_from_slice(&turning);
+            }
+            body = bd.parent;
+            continue;
+        }
         let (turning, sliding) = columns(bd);
         for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
             if rate.scale != 0.0 {
@@ -135,12 +151,22 @@ fn to_link_axes(pose: &Transform, j: &mut [f64]) {
 #[cfg(test)]
 pub(crate) fn jacobian(s: &impl State, link: LinkId, frame: JacobianFrame, j: &mut [f64]) {
     let (p, pose) = point_of(s, link, frame);
-    path_columns(s, link, j, |bd| {
-        let (parent_origin, offset, z) = axis_parts(s, bd);
-        let origin = add3(parent_origin, offset);
-        let turning = cross3(z, sub3(p, origin));
-        (join(turning, z), join(z, [0.0; 3]))
-    });
+    path_columns(
+        s,
+        link,
+        j,
+        |bd| {
+            let (parent_origin, offset, z) = axis_parts(s, bd);
+            let origin = add3(parent_origin, offset);
+            let turning = cross3(z, sub3(p, origin));
+            (join(turning, z), join(z, [0.0; 3]))
+        },
+        |b, e| {
+            let origin = s.body_frame(b).p;
+            let turning = cross3(e, sub3(p, origin));
+            (join(turning, e), join(e, [0.0; 3]))
+        },
+    );
     if frame == JacobianFrame::Link {
         to_link_axes(&pose, j);
     }
@@ -161,44 +187,65 @@ pub(crate) fn jacobian_dot(s: &impl State, link: LinkId, frame: JacobianFrame, j
         JacobianFrame::Point(u) => add3(v, cross3(omega, pose.apply(u))),
         _ => v,
     };
-    path_columns(s, link, j, |bd| {
-        let (parent_origin, offset, z) = axis_parts(s, bd);
-        let origin = add3(parent_origin, offset);
-        // The frame before the joint turns at ω and its origin moves at v; the axis point
-        // at v + ω × offset (the offset in world axes, not a difference of origins).
-        let (omega_j, origin_dot) = match bd.parent {
-            Some(parent) => {
-                let [omega, v] = s.body_rates(parent);
-                (omega, add3(v, cross3(omega, offset)))
-            }
-            None => ([0.0; 3], [0.0; 3]),
-        };
-        let z_dot = cross3(omega_j, z);
-        let turning = add3(
-            cross3(z_dot, sub3(p, origin)),
-            cross3(z, sub3(p_dot, origin_dot)),
+    // Aᵀ (ċ − ω × c) for each half c of a world column (the link's ω).
+    let less_spin = |dot: [f64; 6], c: [f64; 6]| {
+        let (a, b) = (
+            cross3(omega, [c[0], c[1], c[2]]),
+            cross3(omega, [c[3], c[4], c[5]]),
         );
-        let (turning_dot, sliding_dot) = (join(turning, z_dot), join(z_dot, [0.0; 3]));
-        if frame != JacobianFrame::Link {
-            return (turning_dot, sliding_dot);
-        }
-        // Aᵀ (ċ − ω × c) for each half c of the world column at the origin.
-        let less_spin = |dot: [f64; 6], c: [f64; 6]| {
-            let (a, b) = (
-                cross3(omega, [c[0], c[1], c[2]]),
-                cross3(omega, [c[3], c[4], c[5]]),
-            );
-            join(
-                sub3([dot[0], dot[1], dot[2]], a),
-                sub3([dot[3], dot[4], dot[5]], b),
-            )
-        };
-        let turning = cross3(z, sub3(p, origin));
-        (
-            less_spin(turning_dot, join(turning, z)),
-            less_spin(sliding_dot, join(z, [0.0; 3])),
+        join(
+            sub3([dot[0], dot[1], dot[2]], a),
+            sub3([dot[3], dot[4], dot[5]], b),
         )
-    });
+    };
+    path_columns(
+        s,
+        link,
+        j,
+        |bd| {
+            let (parent_origin, offset, z) = axis_parts(s, bd);
+            let origin = add3(parent_origin, offset);
+            // The frame before the joint turns at ω and its origin moves at v; the axis point
+            // at v + ω × offset (the offset in world axes, not a difference of origins).
+            let (omega_j, origin_dot) = match bd.parent {
+                Some(parent) => {
+                    let [omega, v] = s.body_rates(parent);
+                    (omega, add3(v, cross3(omega, offset)))
+                }
+                None => ([0.0; 3], [0.0; 3]),
+            };
+            let z_dot = cross3(omega_j, z);
+            let turning = add3(
+                cross3(z_dot, sub3(p, origin)),
+                cross3(z, sub3(p_dot, origin_dot)),
+            );
+            let (turning_dot, sliding_dot) = (join(turning, z_dot), join(z_dot, [0.0; 3]));
+            if frame != JacobianFrame::Link {
+                return (turning_dot, sliding_dot);
+            }
+            let turning = cross3(z, sub3(p, origin));
+            (
+                less_spin(turning_dot, join(turning, z)),
+                less_spin(sliding_dot, join(z, [0.0; 3])),
+            )
+        },
+        |b, e| {
+            // World axes do not turn; the turning column's point is the body's origin, moving
+            // at the body's v.
+            let origin = s.body_frame(b).p;
+            let origin_dot = s.body_rates(b)[1];
+            let turning_dot = join(cross3(e, sub3(p_dot, origin_dot)), [0.0; 3]);
+            let sliding_dot = [0.0; 6];
+            if frame != JacobianFrame::Link {
+                return (turning_dot, sliding_dot);
+            }
+            let turning = cross3(e, sub3(p, origin));
+            (
+                less_spin(turning_dot, join(turning, e)),
+                less_spin(sliding_dot, join(e, [0.0; 3])),
+            )
+        },
+    );
     if frame == JacobianFrame::Link {
         to_link_axes(&pose, j);
     }
@@ -288,6 +335,29 @@ fn stored_jacobian_generic<A: Arith>(
     let mut at = Some(body);
     while let Some(b) = at {
         let bd = &chain.bodies[b];
+        if bd.floating {
+            // Six columns: a slide along and a turn about each world axis, the turns through
+            // the body's origin (see `path_columns`).
+            let origin = Frame4::<C<A>>::load(&frames[b]).0[3];
+            for k in 0..3 {
+                let mut e = [0.0; 4];
+                e[k] = 1.0;
+                let z = C::<A>::from_entries(e);
+                let turning = cross4(z, C::<A>::sub(p, origin));
+                for (index, halves) in [(k, [z, zero]), (3 + k, [turning, z])] {
+                    let column = &mut j[6 * index..6 * index + 6];
+                    for (half, x) in column.chunks_exact_mut(3).zip(halves) {
+                        let mut x = entries(x);
+                        if link_axes {
+                            x = entries(to_link(x));
+                        }
+                        half.copy_from_slice(&x);
+                    }
+                }
+            }
+            at = bd.parent;
+            continue;
+        }
         let (origin, z) = match bd.parent {
             Some(parent) => {
                 let c = Frame4::<C<A>>::load(&frames[parent]).0;

@@ -29,6 +29,7 @@ pub(crate) mod single;
 pub use checks::{LimitPolicy, check_q};
 pub use error::StateError;
 pub use jacobian::JacobianFrame;
+pub use kernel::floating::QUATERNION_TOLERANCE;
 pub use layout::chain::Chain;
 pub use link_rates::{
     AccelerationParts, LinkAcceleration, LinkVelocity, PointMotion, PointVelocity,

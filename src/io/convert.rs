@@ -119,6 +119,7 @@ enum UrdfType {
     Continuous,
     Prismatic,
     Fixed,
+    Floating,
 }
 
 impl UrdfType {
@@ -128,6 +129,7 @@ impl UrdfType {
             UrdfType::Continuous => "continuous",
             UrdfType::Prismatic => "prismatic",
             UrdfType::Fixed => "fixed",
+            UrdfType::Floating => "floating",
         }
     }
 }
@@ -179,7 +181,7 @@ impl Writer {
             escaped(parent)?,
             escaped(child)?,
         );
-        if kind != UrdfType::Fixed {
+        if !matches!(kind, UrdfType::Fixed | UrdfType::Floating) {
             let _ = writeln!(text, "    <axis xyz=\"{}\"/>", triple(axis));
         }
         if let Some(Limits { lower, upper }) = limits {
@@ -326,6 +328,17 @@ fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
             &Transform::IDENTITY,
             axis,
             js.limits[1],
+            None,
+        )?;
+    } else if js.kind == JointKind::Floating {
+        w.joint(
+            js.name.clone(),
+            UrdfType::Floating,
+            &js.parent,
+            &after_motion,
+            &origin,
+            axis,
+            None,
             None,
         )?;
     } else {

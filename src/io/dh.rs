@@ -76,6 +76,7 @@ enum RawKind {
     Prismatic,
     Cylindrical,
     Fixed,
+    Floating,
 }
 
 #[derive(Debug, Deserialize)]
@@ -449,7 +450,7 @@ impl Reader<'_> {
                 }
                 Ok(spec.with_axis(v))
             }
-            (None, JointKind::Fixed) => Ok(spec),
+            (None, JointKind::Fixed | JointKind::Floating) => Ok(spec),
             (None, _) => Err(self.problem("axis", FieldProblem::Missing { context })),
         }
     }
@@ -463,12 +464,14 @@ impl Reader<'_> {
     ) -> Result<[Option<Limits>; 2], LoadErrorKind> {
         match (&j.limits, kind) {
             (None, _) => Ok([None, None]),
-            (Some(_), JointKind::Fixed | JointKind::Continuous) => Err(self.problem(
-                "limits",
-                FieldProblem::NotAllowed {
-                    context: "for a fixed or continuous joint",
-                },
-            )),
+            (Some(_), JointKind::Fixed | JointKind::Continuous | JointKind::Floating) => {
+                Err(self.problem(
+                    "limits",
+                    FieldProblem::NotAllowed {
+                        context: "for a fixed, continuous or floating joint",
+                    },
+                ))
+            }
             (Some(RawLimits::Pair(pair)), JointKind::Revolute | JointKind::Prismatic) => {
                 Ok([Some(self.limits(pair, kind == JointKind::Revolute)?), None])
             }
@@ -531,9 +534,18 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
             RawKind::Prismatic => JointKind::Prismatic,
             RawKind::Cylindrical => JointKind::Cylindrical,
             RawKind::Fixed => JointKind::Fixed,
+            RawKind::Floating => JointKind::Floating,
         };
         let spec = JointSpec::new(j.name.clone(), kind, parent.clone(), link.clone());
         let mut spec = match raw.convention {
+            Convention::Standard | Convention::Modified if kind == JointKind::Floating => {
+                return Err(r.problem(
+                    "type",
+                    FieldProblem::NotAllowed {
+                        context: "in a DH table: a floating joint is written in the axis convention (convention: axis)",
+                    },
+                ));
+            }
             Convention::Standard | Convention::Modified => {
                 r.dh_row(raw.convention, j, spec, &mut b)?
             }

@@ -253,7 +253,7 @@ pub enum FieldProblem {
     },
     /// A URDF joint type kinechain does not model.
     #[error(
-        "joint type '{kind}' is not supported (supported: revolute, continuous, prismatic, fixed)"
+        "joint type '{kind}' is not supported (supported: revolute, continuous, prismatic, fixed, floating)"
     )]
     UnsupportedJointType {
         /// The type found in the file.

@@ -40,7 +40,76 @@ impl Format {
     }
 }
 
+/// How a robot file is loaded, beyond what it says.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct LoadOptions {
+    /// Add a floating joint between the world and the robot's root link
+    /// ([`ChainBuilder::floating_base`](crate::ChainBuilder::floating_base)): the base of a
+    /// humanoid or a quadruped, whose pose leads `q`.
+    pub floating_base: bool,
+}
+
+impl LoadOptions {
+    /// With a floating base (see [`LoadOptions::floating_base`]).
+    #[must_use]
+    pub fn with_floating_base(mut self, floating_base: bool) -> Self {
+        self.floating_base = floating_base;
+        self
+    }
+}
+
 impl Chain {
+    /// [`Chain::from_file`] with `options`.
+    ///
+    /// # Errors
+    /// As [`Chain::from_file`].
+    ///
+    /// # Examples
+    /// ```
+    /// use kinechain::{Chain, io::LoadOptions};
+    /// let chain = Chain::from_file_with("robots/panda.urdf", &LoadOptions::default().with_floating_base(true))?;
+    /// assert_eq!((chain.nq(), chain.nv()), (15, 14));
+    /// # Ok::<(), kinechain::LoadError>(())
+    /// ```
+    pub fn from_file_with(
+        path: impl AsRef<Path>,
+        options: &LoadOptions,
+    ) -> Result<Chain, LoadError> {
+        let path = path.as_ref();
+        let text = read_robot_file(path)?;
+        Chain::from_file_text_with(path, &text, options)
+    }
+
+    /// [`Chain::from_file_text`] with `options`.
+    ///
+    /// # Errors
+    /// As [`Chain::from_file_text`].
+    pub fn from_file_text_with(
+        path: &Path,
+        text: &str,
+        options: &LoadOptions,
+    ) -> Result<Chain, LoadError> {
+        let fail = |kind| LoadError::new(path, kind);
+        let format = format_of(path)?;
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
+        parse(text, format, stem, options).map_err(fail)
+    }
+
+    /// [`Chain::from_str_named`] with `options`.
+    ///
+    /// # Errors
+    /// As [`Chain::from_str_named`].
+    pub fn from_str_with(
+        text: &str,
+        format: Format,
+        default_name: &str,
+        options: &LoadOptions,
+    ) -> Result<Chain, LoadError> {
+        parse(text, format, default_name, options)
+            .map_err(|k| LoadError::new(Path::new("<string>"), k))
+    }
+
     /// Loads a robot file, its format chosen by extension (`.yaml`/`.yml`: DH YAML, `.urdf`:
     /// URDF). Files larger than [`MAX_FILE_BYTES`] are refused.
     ///
@@ -65,10 +134,7 @@ impl Chain {
     /// # Errors
     /// [`LoadError`] naming `path` and, where it applies, the line, joint and field.
     pub fn from_file_text(path: &Path, text: &str) -> Result<Chain, LoadError> {
-        let fail = |kind| LoadError::new(path, kind);
-        let format = format_of(path)?;
-        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
-        parse(text, format, stem).map_err(fail)
+        Chain::from_file_text_with(path, text, &LoadOptions::default())
     }
 
     /// Builds a chain from text in `format`, named `default_name` where the text names no robot
@@ -81,7 +147,7 @@ impl Chain {
         format: Format,
         default_name: &str,
     ) -> Result<Chain, LoadError> {
-        parse(text, format, default_name).map_err(|k| LoadError::new(Path::new("<string>"), k))
+        Chain::from_str_with(text, format, default_name, &LoadOptions::default())
     }
 
     /// Builds a chain from DH YAML text (see the README for the format).
@@ -89,7 +155,7 @@ impl Chain {
     /// # Errors
     /// [`LoadError`] with path `<string>`.
     pub fn from_dh_yaml_str(text: &str) -> Result<Chain, LoadError> {
-        parse(text, Format::DhYaml, "robot").map_err(|k| LoadError::new(Path::new("<string>"), k))
+        Chain::from_str_named(text, Format::DhYaml, "robot")
     }
 
     /// Builds a chain from URDF text.
@@ -97,7 +163,7 @@ impl Chain {
     /// # Errors
     /// [`LoadError`] with path `<string>`.
     pub fn from_urdf_str(text: &str) -> Result<Chain, LoadError> {
-        parse(text, Format::Urdf, "robot").map_err(|k| LoadError::new(Path::new("<string>"), k))
+        Chain::from_str_named(text, Format::Urdf, "robot")
     }
 }
 
@@ -159,17 +225,28 @@ pub fn read_robot_file(path: &Path) -> Result<String, LoadError> {
     })
 }
 
-fn parse(text: &str, format: Format, default_name: &str) -> Result<Chain, LoadErrorKind> {
+fn parse(
+    text: &str,
+    format: Format,
+    default_name: &str,
+    options: &LoadOptions,
+) -> Result<Chain, LoadErrorKind> {
     if is_blank(text, format) {
         return Err(LoadErrorKind::Empty);
     }
+    let with_options = |mut b: crate::model::builder::ChainBuilder| {
+        if options.floating_base {
+            b.floating_base();
+        }
+        b
+    };
     match format {
-        Format::DhYaml => dh::parse(text, default_name)?
+        Format::DhYaml => with_options(dh::parse(text, default_name)?)
             .into_chain()
             .map_err(|failed| failed.0.into()),
         Format::Urdf => {
             let (builder, places) = urdf::parse(text)?;
-            builder.into_chain().map_err(|failed| {
+            with_options(builder).into_chain().map_err(|failed| {
                 let (e, builder) = *failed;
                 places.locate(text, &builder, e.into())
             })

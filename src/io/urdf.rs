@@ -393,6 +393,7 @@ impl<'d, 'i> Reader<'d, 'i> {
             "continuous" => JointKind::Continuous,
             "prismatic" => JointKind::Prismatic,
             "fixed" => JointKind::Fixed,
+            "floating" => JointKind::Floating,
             other => {
                 return Err(self.field(
                     type_offset,
@@ -419,7 +420,7 @@ impl<'d, 'i> Reader<'d, 'i> {
             let rpy = self.vector(origin, name, "origin", "rpy", [0.0; 3])?;
             spec = spec.with_origin(Transform::from_xyz_rpy(xyz, rpy));
         }
-        if kind != JointKind::Fixed {
+        if !matches!(kind, JointKind::Fixed | JointKind::Floating) {
             let axis = match parts.axis {
                 Some(axis) => self.vector(axis, name, "axis", "xyz", [1.0, 0.0, 0.0])?,
                 None => [1.0, 0.0, 0.0],

@@ -179,6 +179,52 @@ impl ChainBuilder {
         self
     }
 
+    /// Adds a floating joint between the world and the robot's root link, so that the whole
+    /// robot moves with the seven entries it takes first in `q` (a position, then a quaternion
+    /// w, x, y, z) and six in `q̇`: what a humanoid's or a quadruped's base needs (Pinocchio's
+    /// `buildModelFromUrdf(path, JointModelFreeFlyer())`). The joint is called `root_joint` and
+    /// hangs from a new root link `world` (`_1`, `_2`, … appended to a name already taken), at
+    /// the old root's place in the world ([`ChainBuilder::world_from_root`]); the old root
+    /// link's pose is then that placement moved by the joint.
+    ///
+    /// A description whose root link it cannot tell (none, or several) is left as it is, for
+    /// [`ChainBuilder::build`] to report.
+    ///
+    /// ```
+    /// use kinechain::{ChainBuilder, JointKind, JointSpec};
+    /// let mut b = ChainBuilder::new("cart");
+    /// b.link("body").link("wheel");
+    /// b.joint(JointSpec::new("axle", JointKind::Continuous, "body", "wheel"));
+    /// let chain = b.floating_base().build()?;
+    /// assert_eq!((chain.nq(), chain.nv(), chain.dof()), (8, 7, 7));
+    /// assert_eq!(chain.joints()[0].name(), "root_joint");
+    /// assert_eq!(chain.links()[0].name(), "world");
+    /// # Ok::<(), kinechain::ModelError>(())
+    /// ```
+    pub fn floating_base(&mut self) -> &mut Self {
+        let children: std::collections::HashSet<&str> =
+            self.joints.iter().map(|j| j.child.as_str()).collect();
+        let mut roots = self.links.iter().filter(|l| !children.contains(l.as_str()));
+        let (Some(root), None) = (roots.next(), roots.next()) else {
+            return self;
+        };
+        let root = root.clone();
+        let world = self.unique_name("world");
+        let joint = self.unique_name("root_joint");
+        self.links.insert(0, world.clone());
+        self.joints
+            .insert(0, JointSpec::new(joint, JointKind::Floating, world, root));
+        self
+    }
+
+    /// `base`, or `base_1`, `base_2`, … : the first that no link or joint has.
+    fn unique_name(&self, base: &str) -> String {
+        std::iter::once(base.to_string())
+            .chain((1..).map(|i| format!("{base}_{i}")))
+            .find(|n| self.name_owner(n).is_none())
+            .unwrap_or_else(|| base.to_string())
+    }
+
     /// Robot name.
     #[must_use]
     pub fn name(&self) -> &str {

@@ -136,6 +136,16 @@ pub enum ModelError {
         /// The target's kind.
         kind: &'static str,
     },
+    /// A floating joint where kinechain cannot evaluate one.
+    #[error(
+        "floating joint '{joint}': {problem} (a floating joint moves the whole robot below the root link)"
+    )]
+    FloatingJoint {
+        /// The floating joint.
+        joint: String,
+        /// What is wrong with where it is.
+        problem: String,
+    },
     /// A mimic joint is not revolute, continuous or prismatic.
     #[error("joint '{joint}' is {kind} and cannot mimic another joint")]
     BadMimicKind {

@@ -20,16 +20,48 @@ pub enum JointKind {
     Cylindrical,
     /// No motion.
     Fixed,
+    /// A free rigid motion of the child relative to the parent: a translation, then a rotation
+    /// by a unit quaternion. Seven entries of `q` (x, y, z in the joint frame, then the
+    /// quaternion w, x, y, z: Shabana's Euler parameters θ0…θ3) and six of `q̇` (the velocity of
+    /// the child's origin and the child's angular velocity, relative to the parent, in world
+    /// axes; `q̈` their time derivatives). Only between the root link and the rest of a robot.
+    Floating,
 }
 
 impl JointKind {
-    /// Number of entries of `q` an independent joint of this kind takes.
+    /// Degrees of freedom of an independent joint of this kind: its entries of `q̇` (and of
+    /// `q`, but for a floating joint, [`JointKind::nq`]).
     #[must_use]
     pub const fn dof(self) -> usize {
         match self {
             JointKind::Revolute | JointKind::Continuous | JointKind::Prismatic => 1,
             JointKind::Cylindrical => 2,
             JointKind::Fixed => 0,
+            JointKind::Floating => 6,
+        }
+    }
+
+    /// Entries of `q` an independent joint of this kind takes: its degrees of freedom, but seven
+    /// for a floating joint (a position and a quaternion).
+    #[must_use]
+    pub const fn nq(self) -> usize {
+        match self {
+            JointKind::Floating => 7,
+            kind => kind.dof(),
+        }
+    }
+
+    /// The names of the components of `q` a joint of this kind takes, when it takes more than
+    /// one (`NAME.theta` and `NAME.d` of a cylindrical joint), and of `q̇`.
+    #[must_use]
+    pub const fn components(self) -> (&'static [&'static str], &'static [&'static str]) {
+        match self {
+            JointKind::Cylindrical => (&["theta", "d"], &["theta", "d"]),
+            JointKind::Floating => (
+                &["x", "y", "z", "qw", "qx", "qy", "qz"],
+                &["vx", "vy", "vz", "wx", "wy", "wz"],
+            ),
+            _ => (&[], &[]),
         }
     }
 
@@ -42,6 +74,7 @@ impl JointKind {
             JointKind::Prismatic => "prismatic",
             JointKind::Cylindrical => "cylindrical",
             JointKind::Fixed => "fixed",
+            JointKind::Floating => "floating",
         }
     }
 
@@ -290,6 +323,7 @@ mod tests {
             (Prismatic, 1, false, true, "prismatic"),
             (Cylindrical, 2, true, true, "cylindrical"),
             (Fixed, 0, false, false, "fixed"),
+            (Floating, 6, false, false, "floating"),
         ];
         for (kind, dof, rotates, translates, name) in table {
             assert_eq!(kind.dof(), dof, "{name}");

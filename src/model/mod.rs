@@ -9,3 +9,4 @@ pub mod chain;
 pub mod error;
 pub mod joint;
 pub mod transform;
+pub(crate) mod validate;

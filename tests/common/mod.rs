@@ -89,9 +89,15 @@ pub fn robots_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("robots")
 }
 
-/// The chain of a robot file given relative to the repository root.
+/// The chain of a robot file given relative to the repository root; `FILE+floating` loads it
+/// with a floating base.
 pub fn repo_chain(file: &str) -> Chain {
-    Chain::from_file(Path::new(env!("CARGO_MANIFEST_DIR")).join(file))
+    let (path, floating) = match file.strip_suffix("+floating") {
+        Some(path) => (path, true),
+        None => (file, false),
+    };
+    let options = kinechain::io::LoadOptions::default().with_floating_base(floating);
+    Chain::from_file_with(Path::new(env!("CARGO_MANIFEST_DIR")).join(path), &options)
         .unwrap_or_else(|e| panic!("{file}: {e}"))
 }
 
@@ -417,13 +423,21 @@ pub fn rng(seed: u64) -> rand_chacha::ChaCha8Rng {
     rand_chacha::ChaCha8Rng::seed_from_u64(seed)
 }
 
-/// A random configuration within the joints' limits (±π where a joint has none).
+/// A random configuration within the joints' limits (±π where a joint has none); a floating
+/// joint anywhere in the cube [-1, 1]³ m, turned by a uniformly random unit quaternion.
 pub fn random_q(chain: &Chain, rng: &mut impl rand::Rng) -> Vec<f64> {
-    let mut q = vec![0.0; chain.dof()];
+    let mut q = vec![0.0; chain.nq()];
     for joint in chain.joints() {
         let Some(first) = joint.q_index() else {
             continue;
         };
+        if joint.kind() == kinechain::JointKind::Floating {
+            for x in &mut q[first..first + 3] {
+                *x = 2.0 * rng.random::<f64>() - 1.0;
+            }
+            q[first + 3..first + 7].copy_from_slice(&random_quaternion(rng));
+            continue;
+        }
         for (k, limits) in joint.limits().iter().enumerate() {
             let (lo, hi) = match limits {
                 Some(l) if l.lower.is_finite() && l.upper.is_finite() => (l.lower, l.upper),
@@ -433,6 +447,19 @@ pub fn random_q(chain: &Chain, rng: &mut impl rand::Rng) -> Vec<f64> {
         }
     }
     q
+}
+
+/// A uniformly random unit quaternion (w, x, y, z), by Shoemake's method.
+pub fn random_quaternion(rng: &mut impl rand::Rng) -> [f64; 4] {
+    let (u1, u2, u3): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
+    let tau = 2.0 * std::f64::consts::PI;
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    [
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+        b * (tau * u3).cos(),
+    ]
 }
 
 /// A random vector with entries uniform in [-scale, scale].
@@ -538,14 +565,18 @@ pub fn assert_batches_equal_single_evaluations(files: &[&str], seed: u64) {
         let mut qs: Vec<f64> = (0..37).flat_map(|_| random_q(&chain, &mut rng)).collect();
         // Angles beyond the fast reduction's range, which the lanes hand to the standard library:
         // single entries among ordinary ones, and one configuration with every entry there.
-        let dof = chain.dof();
-        for (configuration, entry, x) in [(3, 0, 1e6 + 0.3), (20, dof - 1, -2.5e7), (21, 0, 3e9)] {
-            qs[configuration * dof + entry] = x;
+        // (With a floating base, the first entries are its position, the last joint's last.)
+        let nq = chain.nq();
+        for (configuration, entry, x) in [(3, 0, 1e6 + 0.3), (20, nq - 1, -2.5e7), (21, 0, 3e9)] {
+            qs[configuration * nq + entry] = x;
         }
-        qs[25 * dof..26 * dof].fill(-8.4e5);
+        qs[25 * nq..26 * nq].fill(-8.4e5);
+        if chain.floating_joint().is_some() {
+            qs[25 * nq + 3..25 * nq + 7].copy_from_slice(&[0.5, -0.5, 0.5, 0.5]);
+        }
         let links = link_ids(&chain);
         let expected: Vec<Vec<Transform>> = qs
-            .chunks(chain.dof())
+            .chunks(nq)
             .map(|q| {
                 let p = forward_kinematics(&chain, &mut single, q).unwrap();
                 links.iter().map(|&l| p.world_from_link(l)).collect()

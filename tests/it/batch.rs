@@ -13,6 +13,7 @@ fn batches_equal_single_evaluations_bit_for_bit() {
     assert_batches_equal_single_evaluations(
         &[
             "robots/panda.urdf",
+            "robots/ur5.yaml+floating",
             "robots/snake50.yaml",
             "robots/cylindrical.yaml",
             "robots/stanford.yaml",

@@ -208,7 +208,7 @@ fn bad_rates_are_errors_naming_configuration_and_joint() {
     ));
     assert_eq!(
         e.source.to_string(),
-        "q_ddot has 54 entries, the batch's q has 10 configurations of 6 entries"
+        "q_ddot has 54 entries, the batch's q has 10 configurations, each of 6 entries in q_ddot"
     );
     let longer = vec![0.0; 61];
     let e = forward_velocities_batch_par(&chain, &mut data, &qs, &longer).unwrap_err();

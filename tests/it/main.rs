@@ -19,6 +19,7 @@ mod csv;
 #[cfg(feature = "cli")]
 mod docs;
 mod evaluation_modes;
+mod floating;
 mod fuzz_pass;
 mod interop;
 mod k_crosscheck;

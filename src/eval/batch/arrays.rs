@@ -334,8 +334,8 @@ pub fn write_link_batch(
     workers: Workers<'_>,
     interrupt: &mut dyn Interrupt,
 ) -> Result<(), ArrayError> {
-    let (dof, l) = (chain.dof(), links.ids.len());
-    if dof == 0 {
+    let (nq, nv, l) = (chain.nq(), chain.nv(), links.ids.len());
+    if nq == 0 {
         return Err(ArrayError::NoDegreesOfFreedom(
             StateError::NoDegreesOfFreedom,
         ));
@@ -347,12 +347,12 @@ pub fn write_link_batch(
         (None, Some(_)) => {
             return Err(ArrayError::Length {
                 what: "qd",
-                expected: n.saturating_mul(dof),
+                expected: n.saturating_mul(nv),
                 got: 0,
             });
         }
     };
-    let rows = n.checked_mul(dof).ok_or(ArrayError::Length {
+    let rows = n.checked_mul(nq).ok_or(ArrayError::Length {
         what: "q",
         expected: usize::MAX,
         got: motion.q.len(),
@@ -360,7 +360,7 @@ pub fn write_link_batch(
     need("q", motion.q.len(), rows)?;
     for (what, x) in [("qd", motion.qd), ("qdd", motion.qdd)] {
         if let Some(x) = x {
-            need(what, x.len(), rows)?;
+            need(what, x.len(), n.saturating_mul(nv))?;
         }
     }
     need("poses", out.poses.len(), n.saturating_mul(l * 16))?;
@@ -402,8 +402,8 @@ pub fn write_link_batch(
     let eval = |data: &mut BatchData, (b, pose, rates): Part<'_>| {
         let range = b * block..((b + 1) * block).min(n);
         let first = range.start;
-        let span = range.start * dof..range.end * dof;
-        let q = &motion.q[span.clone()];
+        let q = &motion.q[range.start * nq..range.end * nq];
+        let span = range.start * nv..range.end * nv;
         let [omega, v, alpha, a] = rates;
         match (motion.qd, motion.qdd) {
             (Some(qd), None) => {
@@ -470,13 +470,13 @@ pub fn write_jacobian_batch(
     workers: Workers<'_>,
     interrupt: &mut dyn Interrupt,
 ) -> Result<(), ArrayError> {
-    let dof = chain.dof();
+    let (nq, dof) = (chain.nq(), chain.nv());
     if dof == 0 {
         return Err(ArrayError::NoDegreesOfFreedom(
             StateError::NoDegreesOfFreedom,
         ));
     }
-    need("q", qs.len(), n.saturating_mul(dof))?;
+    need("q", qs.len(), n.saturating_mul(nq))?;
     need("jacobians", out.len(), n.saturating_mul(6 * dof))?;
     let mut rest = out;
     let block = block_len(JACOBIAN_BLOCK, n, &workers);
@@ -485,7 +485,7 @@ pub fn write_jacobian_batch(
         .collect();
     let eval = |data: &mut BatchData, (b, dst): (usize, &mut [f64])| {
         let first = b * block;
-        let q = &qs[first * dof..(first * dof + dst.len() / 6)];
+        let q = &qs[first * nq..(first + dst.len() / (6 * dof)) * nq];
         jacobian_batch(chain, data, q, link, frame, dst).map_err(at(first))?;
         match dst.iter().position(|x| !x.is_finite()) {
             None => Ok(()),

@@ -52,7 +52,7 @@ pub(crate) fn chunk_frames<A: Arith, const STREAM: bool>(
     q: &[Lanes],
     kept: &mut [Frame<Lanes>],
 ) {
-    let dof = chain.dof();
+    let dof = chain.nq();
     // Each body's `sin`/`cos` next to its composition, on eight lanes in one register or as two
     // parts of four. With eight lanes, computing them first for all bodies (into `frames`, read
     // back body by body) was slower on Zen 4: UR5 17.8 → 18.2 ns, Panda 23.5 → 25.3, modified DH
@@ -75,9 +75,9 @@ pub(crate) fn chunk_frames<A: Arith, const STREAM: bool>(
                         sin_cos,
                     )
                 }
-                None => crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
-                    None, body, qp, sin_cos,
-                ),
+                None => {
+                    crate::eval::kernel::pose_lanes::root_step::<A::Lanes, A>(body, qp, sin_cos)
+                }
             };
             if STREAM {
                 f.stream(&mut frames[k]);
@@ -172,7 +172,7 @@ pub(super) fn block_path_generic<A: Arith>(
     c0: usize,
     out: &mut [Frame<Lanes>],
 ) -> bool {
-    let dof = chain.dof();
+    let dof = chain.nq();
     let mut ok = true;
     for (i, qc) in q.chunks_exact_mut(dof).take(out.len()).enumerate() {
         ok &= transpose_chunk::<A::Lanes>(check, qc, qs, c0 + i);
@@ -193,9 +193,7 @@ pub(super) fn block_path_generic<A: Arith>(
                 let sin_cos = crate::eval::kernel::joint::body_sin_cos::<A::Lanes, A>(body, qp);
                 // The first body hangs from the world, each next one from the one before it.
                 f = if i == 0 {
-                    crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
-                        None, body, qp, sin_cos,
-                    )
+                    crate::eval::kernel::pose_lanes::root_step::<A::Lanes, A>(body, qp, sin_cos)
                 } else {
                     crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
                         Some(&f),
@@ -222,7 +220,7 @@ fma_dispatch!(pub(super) fn block_path(chain: &Chain, check: Option<LaneCheck<'_
 /// [`crate::eval::kernel::pose_lanes::pose_step`], so the frames are those of a single evaluation, bit for bit.
 #[inline(always)]
 pub(super) fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &mut [Frame<Lanes>]) {
-    let (Some(pre), Some(tail)) = (&body.pre_steps, &body.z_tail) else {
+    let (Some(pre), Some(tail), false) = (&body.pre_steps, &body.z_tail, body.floating) else {
         for (qc, f_out) in q.chunks_exact(dof).zip(out.iter_mut()) {
             for (part, qp) in A::Lanes::cast(qc).chunks_exact(dof).enumerate() {
                 let sin_cos = crate::eval::kernel::joint::body_sin_cos::<A::Lanes, A>(body, qp);
@@ -236,9 +234,9 @@ pub(super) fn block_body<A: Arith>(body: &Body, q: &[Lanes], dof: usize, out: &m
                             sin_cos,
                         )
                     }
-                    None => crate::eval::kernel::pose_lanes::pose_step::<A::Lanes, A>(
-                        None, body, qp, sin_cos,
-                    ),
+                    None => {
+                        crate::eval::kernel::pose_lanes::root_step::<A::Lanes, A>(body, qp, sin_cos)
+                    }
                 };
                 f.put(f_out, part);
             }

@@ -63,19 +63,19 @@ impl BatchData {
     pub fn new(chain: &Chain) -> Self {
         BatchData {
             frames: Vec::new(),
-            q_lanes: vec![Lanes::splat(0.0); BLOCK * chain.dof()],
+            q_lanes: vec![Lanes::splat(0.0); BLOCK * chain.nq()],
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
             kept: Vec::new(),
             velocities: Vec::new(),
             accelerations: Vec::new(),
-            rate_lanes: vec![Lanes::splat(0.0); 3 * chain.dof()],
-            jacobian: vec![0.0; 6 * chain.dof()],
+            rate_lanes: vec![Lanes::splat(0.0); chain.nq() + 2 * chain.nv()],
+            jacobian: vec![0.0; 6 * chain.nv()],
             jacobian_lanes: Vec::new(),
             axes: Vec::new(),
             len: 0,
             bodies: chain.bodies.len(),
-            dof: chain.dof(),
+            dof: chain.nq(),
             limit_policy: LimitPolicy::Enforce,
         }
     }
@@ -141,26 +141,22 @@ pub(crate) fn kept_len(chain: &Chain) -> usize {
         .map_or(0, |k| k + 1)
 }
 
-/// The number of configurations in `qs` (rows of the chain's dof), or the error for a length
-/// that is not a multiple of it (the index given is that of the incomplete row) or for a chain
-/// without moving joints.
+/// The number of configurations in `qs` (rows of the chain's [`nq`](crate::Model::nq)
+/// entries), or the error for a length that is not a multiple of it (the index given is that of
+/// the incomplete row) or for a chain without moving joints.
 pub(crate) fn configurations(chain: &Chain, qs: &[f64]) -> Result<usize, BatchError> {
-    let dof = chain.dof();
-    if dof == 0 {
+    let nq = chain.nq();
+    if nq == 0 {
         return Err(BatchError {
             index: 0,
             source: StateError::NoDegreesOfFreedom,
         });
     }
-    let n = qs.len() / dof;
-    if !qs.len().is_multiple_of(dof) {
+    let n = qs.len() / nq;
+    if !qs.len().is_multiple_of(nq) {
         return Err(BatchError {
             index: n,
-            source: StateError::WrongLength {
-                what: "q",
-                expected: dof,
-                got: qs.len() % dof,
-            },
+            source: crate::eval::checks::wrong_length(chain, "q", nq, qs.len() % nq),
         });
     }
     Ok(n)
@@ -194,28 +190,36 @@ pub(crate) fn first_error(
     qs: &[f64],
     policy: LimitPolicy,
 ) -> Result<(), BatchError> {
-    for (index, q) in qs.chunks_exact(chain.dof()).enumerate() {
+    for (index, q) in qs.chunks_exact(chain.nq()).enumerate() {
         check_q(chain, q, policy).map_err(|source| BatchError { index, source })?;
     }
     Ok(())
 }
 
 /// What a chunk kernel checks on its lanes after transposing them: every entry finite, and
-/// within the chain's limit columns under [`LimitPolicy::Enforce`] (the decisions of
-/// [`check_q`], made on eight configurations per vector).
+/// within the chain's limit columns under [`LimitPolicy::Enforce`], and a floating joint's
+/// quaternion near unit length (the decisions of [`check_q`], made on eight configurations per
+/// vector).
 #[derive(Clone, Copy, Debug)]
-pub(crate) enum LaneCheck<'a> {
-    Finite,
-    Limits(&'a DenseLimits),
+pub(crate) struct LaneCheck<'a> {
+    pub(crate) limits: Option<&'a DenseLimits>,
+    pub(crate) quaternion: bool,
 }
 
 impl<'a> LaneCheck<'a> {
     /// `None` when the limits do not fit one check per entry ([`Chain::dense_limits`]): the
     /// configurations are then checked before evaluation.
     pub(crate) fn of(chain: &'a Chain, policy: LimitPolicy) -> Option<LaneCheck<'a>> {
+        let quaternion = chain.floating_joint().is_some();
         match (policy, &chain.dense_limits) {
-            (LimitPolicy::Ignore, _) => Some(LaneCheck::Finite),
-            (LimitPolicy::Enforce, Some(limits)) => Some(LaneCheck::Limits(limits)),
+            (LimitPolicy::Ignore, _) => Some(LaneCheck {
+                limits: None,
+                quaternion,
+            }),
+            (LimitPolicy::Enforce, Some(limits)) => Some(LaneCheck {
+                limits: Some(limits),
+                quaternion,
+            }),
             (LimitPolicy::Enforce, None) => None,
         }
     }
@@ -224,19 +228,27 @@ impl<'a> LaneCheck<'a> {
     #[inline(always)]
     pub(crate) fn admits<N: LaneNum>(check: Option<Self>, q: &[N]) -> bool {
         let mut ok = true;
-        match check {
-            None => {}
-            Some(LaneCheck::Finite) => {
+        let Some(check) = check else {
+            return ok;
+        };
+        match check.limits {
+            None => {
                 for &x in q {
                     ok &= N::admitted(x, 1.0, 0.0, f64::NEG_INFINITY, f64::INFINITY);
                 }
             }
-            Some(LaneCheck::Limits(limits)) => {
+            Some(limits) => {
                 for (j, &x) in q.iter().enumerate() {
                     let (scale, offset, lower, upper) = limits.entry(j);
                     ok &= N::admitted(x, scale, offset, lower, upper);
                 }
             }
+        }
+        if check.quaternion {
+            // `floating::admits`: the squared norm within the squared tolerance band.
+            let n2 = ((q[3] * q[3] + q[4] * q[4]) + q[5] * q[5]) + q[6] * q[6];
+            let (lo, hi) = crate::eval::kernel::floating::squared_norm_band();
+            ok &= N::admitted(n2, 1.0, 0.0, lo, hi);
         }
         ok
     }

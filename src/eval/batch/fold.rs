@@ -134,7 +134,7 @@ pub(crate) fn fold_blocks<E: BlockEval, T: Send>(
     // The length is checked once for the whole batch, so that blocks hold whole configurations.
     configurations(chain, qs)?;
     let block = block_len::<E>(chain);
-    let rows = block * chain.dof();
+    let rows = block * chain.nq();
     // Folds block `i` into `acc`.
     let step = |data: &mut E::Data, acc: T, (i, qs): (usize, &[f64])| {
         let first = i * block;
@@ -146,7 +146,7 @@ pub(crate) fn fold_blocks<E: BlockEval, T: Send>(
             }),
         }
     };
-    if !(parallel && worth_parallel(qs, chain.dof(), chain.bodies.len())) {
+    if !(parallel && worth_parallel(qs, chain.nq(), chain.bodies.len())) {
         let mut data = E::data(chain, policy);
         return qs
             .chunks(rows)

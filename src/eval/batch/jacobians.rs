@@ -89,10 +89,10 @@ fn chunk_jacobian_generic<A: Arith>(
     type N<A> = <A as Arith>::Lanes;
     let ok = transpose_chunk::<N<A>>(check, q, qs, c);
     let q = &*q;
-    let dof = chain.dof();
+    let (nq, dof) = (chain.nq(), chain.nv());
     columns.fill(Lanes::splat(0.0));
     let zero = N::<A>::splat(0.0);
-    for (part, qp) in N::<A>::cast(q).chunks_exact(dof).enumerate() {
+    for (part, qp) in N::<A>::cast(q).chunks_exact(nq).enumerate() {
         let mut f = Frame::<N<A>>::splat(&Transform::IDENTITY);
         for (i, &k) in path.iter().enumerate() {
             let body = &chain.bodies[k];
@@ -116,10 +116,16 @@ fn chunk_jacobian_generic<A: Arith>(
                 }
             }
             f = if i == 0 {
-                crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(None, body, qp, sin_cos)
+                crate::eval::kernel::pose_lanes::root_step::<N<A>, A>(body, qp, sin_cos)
             } else {
                 crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(Some(&f), body, qp, sin_cos)
             };
+            if body.floating {
+                // Its turns are about the world axes through its own origin.
+                for (x, y) in axes[i][0].iter_mut().zip(f.p) {
+                    y.put(x, part);
+                }
+            }
         }
         crate::eval::kernel::frame::place::<N<A>, A>(&mut f, offset);
         let p: [N<A>; 3] = match frame {
@@ -131,6 +137,29 @@ fn chunk_jacobian_generic<A: Arith>(
         };
         for (i, &k) in path.iter().enumerate().rev() {
             let body = &chain.bodies[k];
+            if body.floating {
+                // Six columns, written once (see `crate::eval::jacobian::path_columns`): a slide
+                // along and a turn about each world axis.
+                let origin = axes[i][0].map(|x| N::<A>::get(&x, part));
+                let d: [N<A>; 3] = std::array::from_fn(|e| p[e] - origin[e]);
+                let (one, zero) = (N::<A>::splat(1.0), N::<A>::splat(0.0));
+                for k in 0..3 {
+                    let z: [N<A>; 3] = std::array::from_fn(|e| if e == k { one } else { zero });
+                    let turning = [
+                        z[1] * d[2] - z[2] * d[1],
+                        z[2] * d[0] - z[0] * d[2],
+                        z[0] * d[1] - z[1] * d[0],
+                    ];
+                    let slide = [z[0], z[1], z[2], zero, zero, zero];
+                    let turn = [turning[0], turning[1], turning[2], z[0], z[1], z[2]];
+                    for (column, terms) in [(k, slide), (3 + k, turn)] {
+                        for (r, x) in terms.into_iter().enumerate() {
+                            x.put(&mut columns[r * dof + column], part);
+                        }
+                    }
+                }
+                continue;
+            }
             let [origin, z] = axes[i].map(|v| v.map(|x| N::<A>::get(&x, part)));
             let d: [N<A>; 3] = std::array::from_fn(|e| p[e] - origin[e]);
             let turning = [
@@ -194,11 +223,11 @@ fn piece_jacobian(
     let chunks = data.prepare(chain, qs, check.is_none())?;
     let carrier = chain.carrier(link);
     chain.body_path(carrier.body, &mut data.path);
-    let dof = chain.dof();
+    let dof = chain.nv();
     data.axes
         .resize(data.path.len(), [[Lanes::splat(0.0); 3]; 2]);
     data.jacobian_lanes.resize(6 * dof, Lanes::splat(0.0));
-    let q = &mut data.q_lanes[..dof];
+    let q = &mut data.q_lanes[..chain.nq()];
     let mut all_ok = true;
     for (c, out) in out.chunks_mut(LANES * 6 * dof).enumerate().take(chunks) {
         all_ok &= chunk_jacobian(
@@ -275,7 +304,7 @@ fn run(
             },
         });
     }
-    if !(parallel && n > PIECE && worth_parallel(qs, dof, chain.bodies.len())) {
+    if !(parallel && n > PIECE && worth_parallel(qs, chain.nq(), chain.bodies.len())) {
         return piece(chain, data, qs, qds, link, frame, out);
     }
     // Checked here, so that an error names the first bad configuration of the whole batch.
@@ -292,14 +321,18 @@ fn run(
         crate::eval::batch::rates::check_rates(chain, qds, "q_dot", n)?;
     }
     use rayon::prelude::*;
+    let nq = chain.nq();
     out.par_chunks_mut(PIECE * 6 * dof)
         .enumerate()
         .try_for_each_init(
             || BatchData::new(chain).with_limit_policy(policy),
             |data, (k, out)| {
-                let rows = k * PIECE * dof..((k + 1) * PIECE * dof).min(qs.len());
-                let qds = qds.map(|qds| &qds[rows.clone()]);
-                piece(chain, data, &qs[rows], qds, link, frame, out).map_err(|e| BatchError {
+                let rows = |width: usize, len: usize| {
+                    k * PIECE * width..((k + 1) * PIECE * width).min(len)
+                };
+                let qds = qds.map(|qds| &qds[rows(dof, qds.len())]);
+                let qs = &qs[rows(nq, qs.len())];
+                piece(chain, data, qs, qds, link, frame, out).map_err(|e| BatchError {
                     index: k * PIECE + e.index,
                     ..e
                 })

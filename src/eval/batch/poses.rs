@@ -94,7 +94,7 @@ pub fn forward_kinematics_batch<'a>(
             chain,
             check,
             frames,
-            &mut data.q_lanes[..chain.dof()],
+            &mut data.q_lanes[..chain.nq()],
             qs,
             c,
             stream,
@@ -130,7 +130,7 @@ pub fn forward_kinematics_batch_par<'a>(
     data: &'a mut BatchData,
     qs: &[f64],
 ) -> Result<BatchPoses<'a>, BatchError> {
-    if !worth_parallel(qs, chain.dof(), chain.bodies.len()) {
+    if !worth_parallel(qs, chain.nq(), chain.bodies.len()) {
         return forward_kinematics_batch(chain, data, qs);
     }
     // The first bad configuration is looked for only on failure.
@@ -146,7 +146,7 @@ pub fn forward_kinematics_batch_par<'a>(
         bodies,
         &mut data.frames[..chunks * chain.bodies.len()],
         bodies,
-        || vec![Lanes::splat(0.0); chain.dof()],
+        || vec![Lanes::splat(0.0); chain.nq()],
         |check, q_lanes, c, frames| {
             chunk_poses(chain, check, frames, q_lanes, qs, c, false, &mut [])
         },
@@ -274,7 +274,7 @@ fn batch_to<'a>(
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
     chain.body_path(chain.carrier(link).body, &mut data.path);
-    let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
+    let parallel = parallel && worth_parallel(qs, chain.nq(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, !parallel && check.is_none())?;
     let zero = Frame::splat(&Transform::IDENTITY);
@@ -292,7 +292,7 @@ fn batch_to<'a>(
             path.len(),
             &mut data.link_frames[..chunks],
             per_item,
-            || vec![Lanes::splat(0.0); per_item * chain.dof()],
+            || vec![Lanes::splat(0.0); per_item * chain.nq()],
             |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
         );
         if !all_ok {
@@ -340,7 +340,7 @@ mod tests {
                         + 13
                 };
                 let n = n.unwrap_or_else(past_cache);
-                let qs = (0..n * chain.dof())
+                let qs = (0..n * chain.nq())
                     .map(|i| ((i as f64) * 0.754_877_666_246_692_7).fract() * 5.0 - 2.5)
                     .collect();
                 (file, chain, qs)
@@ -355,7 +355,7 @@ mod tests {
     #[test]
     fn streamed_chunks_equal_cached_chunks() {
         for (file, chain, qs) in chains_and_qs(Some(37)) {
-            let (bodies, dof) = (chain.bodies.len(), chain.dof());
+            let (bodies, dof) = (chain.bodies.len(), chain.nq());
             let zero = Frame::splat(&Transform::IDENTITY);
             let evaluate = |stream: bool, baseline: bool| {
                 let mut frames = vec![zero; 5 * bodies];
@@ -392,7 +392,7 @@ mod tests {
     #[test]
     fn streamed_batches_equal_single_evaluations() {
         for (file, chain, qs) in chains_and_qs(None) {
-            let (bodies, dof) = (chain.bodies.len(), chain.dof());
+            let (bodies, dof) = (chain.bodies.len(), chain.nq());
             let n = qs.len() / dof;
             assert!(streams(n.div_ceil(LANES) * bodies), "{file}");
             // Frames that fill the cache exactly are written through it.

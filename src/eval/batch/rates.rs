@@ -43,10 +43,10 @@ fn chunk_motion<A: Arith, const ACC: bool>(
 ) {
     type N<A> = <A as Arith>::Lanes;
     chunk_frames::<A, false>(chain, frames, q, &mut []);
-    let dof = chain.dof();
+    let nv = chain.nv();
     let (qd, qdd) = (N::<A>::cast(qd), N::<A>::cast(qdd));
     for part in 0..N::<A>::PARTS {
-        let span = part * dof..(part + 1) * dof;
+        let span = part * nv..(part + 1) * nv;
         let (qdp, qddp) = (&qd[span.clone()], &qdd[span]);
         let mut prev = Motion::zero();
         for (k, body) in chain.bodies.iter().enumerate() {
@@ -73,6 +73,17 @@ fn chunk_motion<A: Arith, const ACC: bool>(
                         qddp,
                     )
                 }
+                // A floating joint's body: its rates are the first entries of q̇ and q̈.
+                None if body.floating => {
+                    let three = |x: &[N<A>], i: usize| [x[i], x[i + 1], x[i + 2]];
+                    let zero = [N::<A>::splat(0.0); 3];
+                    Motion {
+                        omega: three(qdp, 3),
+                        v: three(qdp, 0),
+                        alpha: if ACC { three(qddp, 3) } else { zero },
+                        a: if ACC { three(qddp, 0) } else { zero },
+                    }
+                }
                 None => body_motion::<N<A>, A, ACC>(None, body, &f, qdp, qddp),
             };
             velocities[k].put([m.omega, m.v], part);
@@ -97,17 +108,19 @@ fn chunk_generic<A: Arith>(
     velocities: &mut [Pair],
     accelerations: &mut [Pair],
 ) {
-    let dof = chain.dof();
-    let n = rows[0].len() / dof;
+    let (nq, nv) = (chain.nq(), chain.nv());
+    let n = rows[0].len() / nq;
     let which: [usize; LANES] = std::array::from_fn(|l| (c * LANES + l).min(n - 1));
     let acc = !accelerations.is_empty();
-    for (x, out) in rows.iter().zip(lanes.chunks_exact_mut(dof)) {
+    let (q, rest) = lanes.split_at_mut(nq);
+    let (qd, qdd) = rest.split_at_mut(nv);
+    for (x, out) in rows.iter().zip([q, qd, &mut qdd[..nv]]) {
         if !x.is_empty() {
             A::Lanes::transpose(out, x, which);
         }
     }
-    let (q, rest) = lanes.split_at(dof);
-    let (qd, qdd) = rest.split_at(dof);
+    let (q, rest) = lanes.split_at(nq);
+    let (qd, qdd) = rest.split_at(nv);
     if acc {
         chunk_motion::<A, true>(chain, frames, velocities, accelerations, [q, qd, qdd]);
     } else {
@@ -125,20 +138,20 @@ pub(crate) fn check_rates(
     what: &'static str,
     n: usize,
 ) -> Result<(), BatchError> {
-    let dof = chain.dof();
-    if values.len() != n * dof {
+    let nv = chain.nv();
+    if values.len() != n * nv {
         return Err(BatchError {
-            index: (values.len() / dof).min(n),
+            index: (values.len() / nv).min(n),
             source: StateError::WrongRows {
                 what,
                 rows: n,
-                dof,
+                dof: nv,
                 got: values.len(),
             },
         });
     }
     if !values.iter().all(|x| x.is_finite()) {
-        for (index, row) in values.chunks_exact(dof).enumerate() {
+        for (index, row) in values.chunks_exact(nv).enumerate() {
             check_values(chain, row, what).map_err(|source| BatchError { index, source })?;
         }
     }
@@ -174,11 +187,11 @@ pub(crate) fn evaluate(
     let frames = &mut data.frames[..size];
     let velocities = &mut data.velocities[..size];
     let accelerations = &mut data.accelerations[..acc_size];
-    let dof = chain.dof();
-    if parallel && worth_parallel(qs, dof, bodies) {
+    let nq = chain.nq();
+    if parallel && worth_parallel(qs, nq, bodies) {
         use rayon::prelude::*;
         let min_len = TASK_WORK.div_ceil(LANES * bodies);
-        let scratch = || vec![Lanes::splat(0.0); 3 * dof];
+        let scratch = || vec![Lanes::splat(0.0); nq + 2 * chain.nv()];
         let pieces = frames
             .par_chunks_mut(bodies)
             .zip(velocities.par_chunks_mut(bodies))

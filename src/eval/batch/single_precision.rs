@@ -110,10 +110,10 @@ impl BatchData {
             frames: Vec::new(),
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
-            scratch: Scratch::new(chain.dof()),
+            scratch: Scratch::new(chain.nq()),
             len: 0,
             bodies: chain.bodies.len(),
-            dof: chain.dof(),
+            dof: chain.nq(),
             limit_policy: LimitPolicy::Enforce,
         }
     }
@@ -180,7 +180,7 @@ fn all_links<'a>(
     qs: &[f64],
     parallel: bool,
 ) -> Result<BatchPoses<'a>, BatchError> {
-    let parallel = parallel && worth_parallel(qs, chain.dof(), chain.bodies.len());
+    let parallel = parallel && worth_parallel(qs, chain.nq(), chain.bodies.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, check, parallel)?;
     let bodies = chain.bodies.len().max(1);
@@ -249,7 +249,7 @@ fn batch_to<'a>(
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
     chain.body_path(chain.carrier(link).body, &mut data.path);
-    let parallel = parallel && worth_parallel(qs, chain.dof(), data.path.len());
+    let parallel = parallel && worth_parallel(qs, chain.nq(), data.path.len());
     let check = LaneCheck::of(chain, data.limit_policy);
     let chunks = data.prepare(chain, qs, check, parallel)?;
     data.link_frames
@@ -372,7 +372,7 @@ fn run_chunks(
     eval: impl Fn(Option<LaneCheck<'_>>, &mut Scratch, usize, &mut [Frame<F16>]) -> bool + Sync + Send,
 ) -> Result<(), BatchError> {
     let all_ok = if parallel {
-        let dof = chain.dof();
+        let dof = chain.nq();
         // Items of two eight-row chunks (one of sixteen configurations), as the f64 batch counts.
         par_chunks_checked(
             chain,
@@ -532,6 +532,7 @@ fn chunk_poses_generic<A: Wide32>(
                 q,
                 sin_cos,
             ),
+            None if body.floating => *N::<A>::frame(&floating_frame(body, lo, hi)),
             None => crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(None, body, q, sin_cos),
         };
         N::<A>::store(&f, &mut frames[k]);
@@ -572,15 +573,42 @@ fn chunk_path_generic<A: Wide32>(
         let (s, c) = body_sin_cos::<A>(body, lo, hi);
         let sin_cos = (N::<A>::from_f16(s), N::<A>::from_f16(c));
         // The first body hangs from the world, each next one from the one before it.
-        let f = crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(
-            (i > 0).then_some(N::<A>::frame(out)),
-            body,
-            q,
-            sin_cos,
-        );
+        let f = if i == 0 && body.floating {
+            *N::<A>::frame(&floating_frame(body, lo, hi))
+        } else {
+            crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(
+                (i > 0).then_some(N::<A>::frame(out)),
+                body,
+                q,
+                sin_cos,
+            )
+        };
         N::<A>::store(&f, out);
     }
     ok
+}
+
+/// A floating joint's body's frame in each of the sixteen lanes, from the lane's own seven
+/// entries of `q` in double precision (`lo`: configurations 0–7, `hi`: 8–15), then rounded.
+#[inline(never)]
+fn floating_frame(body: &Body, lo: &[Lanes], hi: &[Lanes]) -> Frame<F16> {
+    let zero = F16([0.0; WIDTH]);
+    let mut out = Frame {
+        r: [[zero; 3]; 3],
+        p: [zero; 3],
+    };
+    for lane in 0..WIDTH {
+        let half = if lane < LANES { lo } else { hi };
+        let own: [f64; 7] = std::array::from_fn(|j| half[j].0[lane % LANES]);
+        let t = crate::eval::kernel::floating::frame(body, &own);
+        for c in 0..3 {
+            for i in 0..3 {
+                out.r[c][i].0[lane] = t.r[c][i] as f32;
+            }
+            out.p[c].0[lane] = t.p[c] as f32;
+        }
+    }
+    out
 }
 
 fma_dispatch!(#[allow(clippy::too_many_arguments)] fn chunk_path(chain: &Chain, check: Option<LaneCheck<'_>>, path: &[usize], raw: &mut [Lanes], q64: &mut [Lanes], q32: &mut [F16], qs: &[f64], c: usize, out: &mut Frame<F16>) -> bool => chunk_path_generic);

@@ -44,7 +44,7 @@ pub(crate) fn par_chunks_checked<U: Send, S>(
     scratch: impl Fn() -> S + Sync,
     eval: impl Fn(Option<LaneCheck<'_>>, &mut S, usize, &mut [U]) -> bool + Sync,
 ) -> bool {
-    let dof = chain.dof();
+    let dof = chain.nq();
     let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
     // Groups per claim: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one

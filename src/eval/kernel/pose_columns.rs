@@ -318,6 +318,18 @@ pub(crate) fn pose_step<A: Arith>(
     Frame4(f)
 }
 
+/// The frame of a body that hangs from the world: [`pose_step`] from the world frame, or the
+/// frame of a floating joint's body ([`crate::eval::kernel::floating`]).
+#[cfg_attr(not(debug_assertions), inline(always))]
+pub(crate) fn root_step<A: Arith>(body: &Body, q: &[f64], sin_cos: (f64, f64)) -> Frame4<A::Col> {
+    if body.floating {
+        let t = crate::eval::kernel::floating::frame(body, q);
+        Frame4::load(&crate::eval::layout::stored::stored(&t))
+    } else {
+        pose_step::<A>(None, body, q, sin_cos)
+    }
+}
+
 /// The joint axis in the world frame from a frame whose rotation maps the joint's axis.
 #[inline(always)]
 pub(crate) fn axis_of<C: Col>(f: &[C; 4], axis: &Axis) -> C {

@@ -8,7 +8,8 @@
 use crate::eval::kernel::frame::{Frame, V3, apply_const_add, axpy, place, plane, rotate_columns};
 use crate::eval::kernel::joint::{by_shape, term_value};
 use crate::eval::layout::body::{Body, CheapPlacement, ZTail};
-use crate::eval::simd::traits::{Arith, Num};
+use crate::eval::simd::lanes::{LANES, Lanes};
+use crate::eval::simd::traits::{Arith, LaneNum, Num};
 use crate::model::joint::{Axis, Term};
 
 /// `f ← f · M(θ, d)` (eq. 2.119): translate by `d` along the axis, rotate by θ about it (the two
@@ -146,6 +147,41 @@ pub(crate) fn pose_step<N: Num, A: Arith>(
         place::<N, A>(&mut f, &body.post);
     }
     f
+}
+
+/// The frame of a body that hangs from the world: [`pose_step`] from the world frame, or the
+/// frame of a floating joint's body, each lane's from its own seven entries of `q`
+/// ([`crate::eval::kernel::floating`], in scalar code, so that every lane has the bits of a
+/// single evaluation).
+#[inline(always)]
+pub(crate) fn root_step<N: LaneNum, A: Arith>(body: &Body, q: &[N], sin_cos: (N, N)) -> Frame<N> {
+    if body.floating {
+        floating_frame(body, q)
+    } else {
+        pose_step::<N, A>(None, body, q, sin_cos)
+    }
+}
+
+/// A floating joint's body's frame in each lane of `N` (`q` one part's joint values).
+#[inline(always)]
+fn floating_frame<N: LaneNum>(body: &Body, q: &[N]) -> Frame<N> {
+    let width = LANES / N::PARTS;
+    let mut entries = [Lanes([0.0; LANES]); 7];
+    for (e, &x) in entries.iter_mut().zip(q) {
+        x.put(e, 0);
+    }
+    let mut out = Frame::<Lanes>::splat(&crate::model::transform::Transform::IDENTITY);
+    for lane in 0..width {
+        let own: [f64; 7] = std::array::from_fn(|j| entries[j].0[lane]);
+        let t = crate::eval::kernel::floating::frame(body, &own);
+        for c in 0..3 {
+            for i in 0..3 {
+                out.r[c][i].0[lane] = t.r[c][i];
+            }
+            out.p[c].0[lane] = t.p[c];
+        }
+    }
+    Frame::get(&out, 0)
 }
 
 #[cfg(test)]

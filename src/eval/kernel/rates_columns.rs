@@ -100,6 +100,33 @@ pub(crate) fn rates_step<A: Arith, const ACC: bool>(
     (f, rates)
 }
 
+/// Frame and rates of a body that hangs from the world: [`rates_step`] from the world, or those
+/// of a floating joint's body, whose rates are entries of `q̇` and `q̈`
+/// ([`crate::eval::kernel::floating`]).
+#[inline(always)]
+pub(crate) fn root_rates_step<A: Arith, const ACC: bool>(
+    body: &Body,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+    sin_cos: (f64, f64),
+) -> State<A::Col> {
+    if !body.floating {
+        return rates_step::<A, ACC>(None, body, q, q_dot, q_ddot, sin_cos);
+    }
+    let f = crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos);
+    let [omega, v, alpha, a] =
+        crate::eval::kernel::floating::rates(q_dot, if ACC { Some(q_ddot) } else { None });
+    let pad = |x: [f64; 3]| A::Col::load(&[x[0], x[1], x[2], 0.0]);
+    let rates = Rates4 {
+        omega: pad(omega),
+        v: pad(v),
+        alpha: pad(alpha),
+        a: pad(a),
+    };
+    (f, rates)
+}
+
 /// `α = α_p + ω_p × θ̇ z + θ̈ z` (eq. 2.123) for a joint turning about `z` at rates θ̇, θ̈: the
 /// body's own terms summed first, so that the chain from parent to child is one addition.
 #[inline(always)]

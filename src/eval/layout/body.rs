@@ -126,6 +126,11 @@ pub(crate) struct Body {
     /// The rates of θ and d as read by the rate recursion.
     pub(crate) theta_rate: RateTerm,
     pub(crate) d_rate: RateTerm,
+    /// The body of a floating joint (always the first body, hanging from the world): its frame
+    /// is `pre · [R(e) | p] · post` with `p` and the Euler parameters `e` the first seven
+    /// entries of `q` ([`crate::eval::kernel::floating`]), and its rates are the first six
+    /// entries of `q̇` and `q̈`; `motion` is unused.
+    pub(crate) floating: bool,
 }
 
 /// How the rate of a joint term follows from `q̇` (or `q̈`): `scale · q̇[index]`, with scale zero
@@ -321,7 +326,14 @@ impl Body {
             d_rate: RateTerm::of(&motion.d),
             pre_frame,
             axis_in_parent,
+            floating: false,
         }
+    }
+
+    /// The entries of `q` this body's frame reads.
+    pub(crate) fn variables(&self) -> impl Iterator<Item = usize> {
+        let own = if self.floating { 0..7 } else { 0..0 };
+        own.chain(self.motion.variables())
     }
 }
 

@@ -100,8 +100,8 @@ impl Chain {
 
     /// The smallest value of each entry of `q` that the limit checks admit (`-∞` where none
     /// bounds it from below): the intersection of the joint's own limits and, mapped back
-    /// through `θ = scale · q + offset`, those of every mimic joint that follows it. `dof`
-    /// entries, in `q` order.
+    /// through `θ = scale · q + offset`, those of every mimic joint that follows it. `nq`
+    /// entries, in `q` order (a floating joint's unlimited).
     #[must_use]
     pub fn lower(&self) -> Vec<f64> {
         self.admitted_ranges().into_iter().map(|r| r.0).collect()
@@ -117,10 +117,12 @@ impl Chain {
     /// A configuration inside the limits: each entry is 0 where 0 is admitted, otherwise the
     /// middle of its admitted range (the finite bound where the other is infinite). An entry
     /// whose range is empty (a mimic joint's limits that its primary's cannot reach) is the
-    /// middle of the empty range, which [`crate::check_q`] then refuses, naming the joint.
+    /// middle of the empty range, which [`crate::check_q`] then refuses, naming the joint. A
+    /// floating joint is at the origin, unturned (the quaternion 1, 0, 0, 0).
     #[must_use]
     pub fn neutral(&self) -> Vec<f64> {
-        self.admitted_ranges()
+        let mut q: Vec<f64> = self
+            .admitted_ranges()
             .into_iter()
             .map(|(lo, hi)| {
                 if lo <= 0.0 && 0.0 <= hi {
@@ -133,12 +135,16 @@ impl Chain {
                     hi
                 }
             })
-            .collect()
+            .collect();
+        if self.floating_joint().is_some() {
+            q[3] = 1.0;
+        }
+        q
     }
 
     /// `[lower, upper]` of each entry of `q`, bounds that pass the checks' own arithmetic.
     fn admitted_ranges(&self) -> Vec<(f64, f64)> {
-        let mut ranges = vec![(f64::NEG_INFINITY, f64::INFINITY); self.dof()];
+        let mut ranges = vec![(f64::NEG_INFINITY, f64::INFINITY); self.nq()];
         for c in &self.limit_checks {
             let range = &mut ranges[c.index];
             if c.scale == 0.0 {
@@ -178,7 +184,8 @@ impl Chain {
     /// and d; a mimic joint follows its primary.
     ///
     /// # Errors
-    /// [`StateError::WrongLength`] if a vector does not have [`Chain::dof`](crate::Model::dof) entries.
+    /// [`StateError::WrongLength`] if `q` does not have [`Model::nq`] entries or a rate
+    /// [`Model::nv`]; [`StateError::NoScrew`] for a floating joint.
     ///
     /// # Panics
     /// If `joint` comes from another chain with more joints.
@@ -189,19 +196,29 @@ impl Chain {
         q_dot: &[f64],
         q_ddot: &[f64],
     ) -> Result<JointScrew, StateError> {
-        for (what, v) in [("q", q), ("q_dot", q_dot), ("q_ddot", q_ddot)] {
-            if v.len() != self.dof() {
+        for (what, v, n) in [
+            ("q", q, self.nq()),
+            ("q_dot", q_dot, self.nv()),
+            ("q_ddot", q_ddot, self.nv()),
+        ] {
+            if v.len() != n {
                 return Err(StateError::WrongLength {
                     what,
-                    expected: self.dof(),
+                    expected: n,
                     got: v.len(),
                 });
             }
         }
         let j = &self.joints[joint.0];
         let source = self.coordinate_source(joint);
+        // Entries of `q̇` after a floating joint's are one before those of `q`.
+        let shift = self.nq() - self.nv();
         let coordinate = |k: usize| match source {
-            Some((i, m, o)) => (m * q[i + k] + o, m * q_dot[i + k], m * q_ddot[i + k]),
+            Some((i, m, o)) => (
+                m * q[i + k] + o,
+                m * q_dot[i + k - shift],
+                m * q_ddot[i + k - shift],
+            ),
             None => (0.0, 0.0, 0.0),
         };
         let (rot, slide) = match j.kind {
@@ -209,6 +226,11 @@ impl Chain {
             JointKind::Prismatic => ((0.0, 0.0, 0.0), coordinate(0)),
             JointKind::Cylindrical => (coordinate(0), coordinate(1)),
             JointKind::Fixed => ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+            JointKind::Floating => {
+                return Err(StateError::NoScrew {
+                    joint: j.name.clone(),
+                });
+            }
         };
         Ok(JointScrew {
             axis: Unit::new_unchecked(Vector3::from(j.axis)),

@@ -49,10 +49,10 @@ impl Data {
             cos: vec![Lanes([1.0; LANES]); trig],
             path: Vec::with_capacity(n),
             dirty: vec![true; n],
-            last_q: vec![0.0; chain.dof()],
+            last_q: vec![0.0; chain.nq()],
             poses_valid: false,
             limit_policy: LimitPolicy::Enforce,
-            dof: chain.dof(),
+            dof: chain.nq(),
         }
     }
 

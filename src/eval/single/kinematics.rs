@@ -144,7 +144,7 @@ pub fn forward_kinematics_incremental<'a>(
 /// # Errors
 /// As [`check_q`].
 fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<(usize, usize), StateError> {
-    if q.len() != chain.dof() {
+    if q.len() != chain.nq() {
         check_values(chain, q, "q")?;
     }
     let start = first_difference(q, &data.last_q);
@@ -158,7 +158,7 @@ fn first_changed(chain: &Chain, data: &Data, q: &[f64]) -> Result<(usize, usize)
             (start..).zip(rest).all(|(i, &x)| limits.admits(i, x))
         }
         (LimitPolicy::Enforce, None) => false,
-    };
+    } && crate::eval::checks::check_quaternion(chain, q).is_ok();
     if !ok {
         // Decides, and names the entry at fault.
         check_q(chain, q, data.limit_policy)?;
@@ -238,7 +238,7 @@ pub fn forward_velocities<'a>(
 ) -> Result<Velocities<'a>, StateError> {
     data.assert_matches(chain);
     let done = match kernel_check(chain, q, data.limit_policy) {
-        Some(limits) if q_dot.len() == chain.dof() => {
+        Some(limits) if q_dot.len() == chain.nv() => {
             rates_admitted(chain, data, q, q_dot, None, limits)
         }
         _ => false,
@@ -272,9 +272,9 @@ pub fn forward_accelerations<'a>(
     q_ddot: &[f64],
 ) -> Result<Accelerations<'a>, StateError> {
     data.assert_matches(chain);
-    let dof = chain.dof();
+    let nv = chain.nv();
     let done = match kernel_check(chain, q, data.limit_policy) {
-        Some(limits) if q_dot.len() == dof && q_ddot.len() == dof => {
+        Some(limits) if q_dot.len() == nv && q_ddot.len() == nv => {
             rates_admitted(chain, data, q, q_dot, Some(q_ddot), limits)
         }
         _ => false,
@@ -310,7 +310,9 @@ fn kernel_check<'a>(
     policy: LimitPolicy,
 ) -> Option<Option<&'a DenseLimits>> {
     match (policy, &chain.dense_limits) {
-        _ if q.len() != chain.dof() => None,
+        _ if q.len() != chain.nq() => None,
+        // A floating joint's quaternion is checked here, before the kernels.
+        _ if crate::eval::checks::check_quaternion(chain, q).is_err() => None,
         (LimitPolicy::Ignore, _) => Some(None),
         (LimitPolicy::Enforce, Some(limits)) => Some(Some(limits)),
         (LimitPolicy::Enforce, None) => None,
@@ -403,7 +405,7 @@ fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize)
                 q,
                 sin_cos,
             ),
-            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
+            None => crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -444,7 +446,7 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
             Some(_) => {
                 crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
             }
-            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
+            None => crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -468,7 +470,8 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
     for (k, body) in (first..).zip(&chain.bodies[first..]) {
         let dirty = body.parent.is_some_and(|p| p >= first && data.dirty[p])
             || changed(&body.motion.theta)
-            || changed(&body.motion.d);
+            || changed(&body.motion.d)
+            || (body.floating && (0..7).any(|i| q[i].to_bits() != data.last_q[i].to_bits()));
         data.dirty[k] = dirty;
         if dirty {
             // The frame just computed stays in registers when it is the parent's.
@@ -483,7 +486,7 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
                     q,
                     sin_cos,
                 ),
-                None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
+                None => crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos),
             };
             f.store(&mut frames[k]);
         }
@@ -510,7 +513,7 @@ fn poses_from<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first: usize)
             Some(_) => {
                 crate::eval::kernel::pose_columns::pose_step::<A>(Some(&f), body, q, sin_cos)
             }
-            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
+            None => crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -548,7 +551,7 @@ fn poses_tail_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], first
                 q,
                 sin_cos,
             ),
-            None => crate::eval::kernel::pose_columns::pose_step::<A>(None, body, q, sin_cos),
+            None => crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos),
         };
         f.store(&mut frames[k]);
     }
@@ -592,8 +595,8 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
                         sin_cos,
                     )
                 }
-                None => crate::eval::kernel::rates_columns::rates_step::<A, ACC>(
-                    None, body, q, q_dot, q_ddot, sin_cos,
+                None => crate::eval::kernel::rates_columns::root_rates_step::<A, ACC>(
+                    body, q, q_dot, q_ddot, sin_cos,
                 ),
             };
         previous.0.store(&mut frames[k]);
