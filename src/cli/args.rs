@@ -16,6 +16,18 @@ use std::path::PathBuf;
 pub(super) struct Cli {
     #[command(subcommand)]
     pub(super) command: Command,
+    /// Add a floating joint `root_joint` between the world and the robot's root link (a
+    /// humanoid's or a quadruped's base): q then starts with its position x, y, z and
+    /// quaternion w, x, y, z, and q̇ with its velocity and angular velocity (world axes).
+    #[arg(long, global = true)]
+    pub(super) floating_base: bool,
+}
+
+impl Cli {
+    /// How the robot files of the command are loaded.
+    pub(super) fn load_options(&self) -> crate::io::LoadOptions {
+        crate::io::LoadOptions::default().with_floating_base(self.floating_base)
+    }
 }
 
 #[derive(Debug, Subcommand)]

@@ -40,12 +40,13 @@ pub(super) fn kernels_name() -> String {
 
 pub(super) fn bench(
     path: &PathBuf,
+    options: &crate::io::LoadOptions,
     level: Level,
     n: usize,
     link: Option<&str>,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    let chain = &load(path)?;
+    let chain = &load(path, options)?;
     if chain.dof() == 0 {
         return Err(CliError::NothingToTime);
     }

@@ -2,6 +2,7 @@
 
 use crate::cli::error::CliError;
 use crate::eval::Chain;
+use crate::io::LoadOptions;
 use crate::model::error::escape_controls;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -11,8 +12,8 @@ fn shown(path: &Path) -> String {
     escape_controls(&path.display().to_string()).into_owned()
 }
 
-pub(super) fn load(path: &PathBuf) -> Result<Chain, CliError> {
-    let chain = Chain::from_file(path)?;
+pub(super) fn load(path: &PathBuf, options: &LoadOptions) -> Result<Chain, CliError> {
+    let chain = Chain::from_file_with(path, options)?;
     for w in chain.warnings() {
         eprintln!("warning: {}: {w}", shown(path));
     }

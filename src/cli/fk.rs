@@ -10,8 +10,12 @@ use crate::eval::{Data, LimitPolicy};
 use crate::io::input::joint_vector_from_str;
 use std::io::Write;
 
-pub(super) fn fk(args: &FkArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let chain = load(&args.robot)?;
+pub(super) fn fk(
+    args: &FkArgs,
+    options: &crate::io::LoadOptions,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let chain = load(&args.robot, options)?;
     let mut data = Data::new(&chain);
     if args.ignore_limits {
         data.set_limit_policy(LimitPolicy::Ignore);

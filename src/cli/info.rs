@@ -44,12 +44,15 @@ pub(super) fn info(
         OutputFormat::Json => {
             let joints: Vec<Value> = independent
                 .map(|j| {
-                    json!({
-                        "name": j.name(),
-                        "type": j.kind().as_str(),
-                        "dof": j.dof(),
-                        "limits": limits_json(j),
-                    })
+                    let mut m = Map::new();
+                    m.insert("name".into(), json!(j.name()));
+                    m.insert("type".into(), json!(j.kind().as_str()));
+                    m.insert("dof".into(), json!(j.dof()));
+                    if j.nq() != j.dof() {
+                        m.insert("nq".into(), json!(j.nq()));
+                    }
+                    m.insert("limits".into(), limits_json(j));
+                    Value::Object(m)
                 })
                 .collect();
             let passive: Vec<Value> = passive
@@ -74,6 +77,10 @@ pub(super) fn info(
             let value = json!({
                 "name": chain.name(),
                 "dof": chain.dof(),
+                "nq": chain.nq(),
+                "nv": chain.nv(),
+                "q_names": crate::regression::variable_names(chain),
+                "v_names": crate::regression::velocity_names(chain),
                 "joints": joints,
                 "passive_joints": passive,
                 "links": links,
@@ -85,10 +92,18 @@ pub(super) fn info(
         )),
         OutputFormat::Table => {
             let mut text = format!(
-                "{}: {} degree{} of freedom\n",
+                "{}: {} degree{} of freedom{}\n",
                 chain.name(),
                 chain.dof(),
-                if chain.dof() == 1 { "" } else { "s" }
+                if chain.dof() == 1 { "" } else { "s" },
+                match chain.floating_joint() {
+                    Some(f) => format!(
+                        "; q has {} entries (the floating joint '{}': x y z, then the quaternion qw qx qy qz)",
+                        chain.nq(),
+                        chain.joint(f).name()
+                    ),
+                    None => String::new(),
+                }
             );
             text.push_str(&format!(
                 "{:>4}  {:<28} {:<12} {}\n",
@@ -96,9 +111,14 @@ pub(super) fn info(
             ));
             for j in independent {
                 let limits = limits_text(j);
+                let first = j.q_index().unwrap_or(0);
+                let q = match j.nq() {
+                    1 => first.to_string(),
+                    n => format!("{first}-{}", first + n - 1),
+                };
                 text.push_str(&format!(
                     "{:>4}  {:<28} {:<12} {}\n",
-                    j.q_index().unwrap_or(0),
+                    q,
                     j.name(),
                     j.kind().as_str(),
                     limits

@@ -3,18 +3,20 @@
 use crate::cli::args::{OutputFormat, SampleArgs, TolArgs};
 use crate::cli::common::{load, output_error, refuse_overwrite};
 use crate::cli::error::CliError;
+use crate::io::LoadOptions;
 use crate::regression::{self, Report};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 pub(super) fn record(
     robot: &PathBuf,
+    options: &LoadOptions,
     output: Option<&PathBuf>,
     sampling: &SampleArgs,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     refuse_overwrite(output, robot)?;
-    let chain = load(robot)?;
+    let chain = load(robot, options)?;
     let golden = regression::record(&chain, &sampling.options())?;
     let bytes = regression::golden_bytes(&golden)?;
     match output {
@@ -25,26 +27,28 @@ pub(super) fn record(
 
 pub(super) fn verify(
     robot: &PathBuf,
+    options: &LoadOptions,
     golden: &Path,
     tol: &TolArgs,
     format: OutputFormat,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let golden = regression::read_golden_file(golden)?;
-    let chain = load(robot)?;
+    let chain = load(robot, options)?;
     let report = regression::verify(&chain, &golden, &tol.tolerances())?;
     print_report(&report, format, out)
 }
 
 pub(super) fn compare(
     robots: [&PathBuf; 2],
+    options: &LoadOptions,
     renames: &[(String, String)],
     sampling: &SampleArgs,
     tol: &TolArgs,
     format: OutputFormat,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
-    let (a, b) = (load(robots[0])?, load(robots[1])?);
+    let (a, b) = (load(robots[0], options)?, load(robots[1], options)?);
     let report =
         regression::compare_renamed(&a, &b, &sampling.options(), &tol.tolerances(), renames)?;
     print_report(&report, format, out)

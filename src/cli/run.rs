@@ -11,6 +11,7 @@ use crate::cli::regression::{compare, record, verify};
 use crate::error::error_chain;
 use crate::eval::forward_kinematics;
 use crate::eval::{Data, LimitPolicy};
+use crate::io::LoadOptions;
 use crate::io::input::joint_vector_from_str;
 use crate::model::error::escape_controls;
 use clap::Parser;
@@ -74,7 +75,9 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
     );
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
-    let result = run(cli.command, &mut out).and_then(|()| out.flush().map_err(output_error));
+    let options = cli.load_options();
+    let result =
+        run(cli.command, &options, &mut out).and_then(|()| out.flush().map_err(output_error));
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Moved { .. }) => match out.flush() {
@@ -97,19 +100,23 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
     }
 }
 
-pub(super) fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError> {
+pub(super) fn run(
+    command: Command,
+    options: &LoadOptions,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
     match command {
-        Command::Info { robot, format } => info(&load(&robot)?, format, out),
-        Command::Fk(args) => fk(&args, out),
+        Command::Info { robot, format } => info(&load(&robot, options)?, format, out),
+        Command::Fk(args) => fk(&args, options, out),
         Command::Bench {
             robot,
             level,
             configurations,
             link,
-        } => bench(&robot, level, configurations, link.as_deref(), out),
+        } => bench(&robot, options, level, configurations, link.as_deref(), out),
         Command::Convert { robot, output } => {
             refuse_overwrite(output.as_ref(), &robot)?;
-            let chain = load(&robot)?;
+            let chain = load(&robot, options)?;
             let text = crate::io::convert::to_urdf(&chain)?;
             if crate::io::Format::from_path(&robot) == Some(crate::io::Format::Urdf) {
                 warn_dropped(&robot);
@@ -123,7 +130,7 @@ pub(super) fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError>
             ignore_limits,
         } => {
             refuse_overwrite(output.as_ref(), &robot)?;
-            let chain = load(&robot)?;
+            let chain = load(&robot, options)?;
             let q = joint_vector_from_str(&chain, &q, "q")?;
             let mut data = Data::new(&chain);
             if ignore_limits {
@@ -141,13 +148,13 @@ pub(super) fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError>
             robot,
             output,
             sampling,
-        } => record(&robot, output.as_ref(), &sampling, out),
+        } => record(&robot, options, output.as_ref(), &sampling, out),
         Command::Verify {
             robot,
             golden,
             tolerances,
             format,
-        } => verify(&robot, &golden, &tolerances, format, out),
+        } => verify(&robot, options, &golden, &tolerances, format, out),
         Command::Compare {
             robot_a,
             robot_b,
@@ -157,6 +164,7 @@ pub(super) fn run(command: Command, out: &mut dyn Write) -> Result<(), CliError>
             format,
         } => compare(
             [&robot_a, &robot_b],
+            options,
             &renames,
             &sampling,
             &tolerances,

@@ -4,7 +4,7 @@
 
 use crate::eval::Chain;
 use crate::model::error::did_you_mean;
-use crate::model::joint::JointKind;
+
 use serde::de::{self, DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
 use std::borrow::Cow;
@@ -125,7 +125,7 @@ pub enum InputError {
         /// The joint.
         name: String,
         /// What it takes.
-        expected: &'static str,
+        expected: String,
     },
     /// A CSV header's quoted name is not closed, or text follows its closing quote.
     #[error(
@@ -171,12 +171,13 @@ pub fn joint_vector_from_json(
     value: &Value,
     what: &'static str,
 ) -> Result<Vec<f64>, InputError> {
+    let width = width(chain, what);
     match value {
         Value::Array(items) => {
-            if items.len() != chain.dof() {
+            if items.len() != width {
                 return Err(InputError::WrongLength {
                     what,
-                    expected: chain.dof(),
+                    expected: width,
                     got: items.len(),
                 });
             }
@@ -187,26 +188,38 @@ pub fn joint_vector_from_json(
                 .collect()
         }
         Value::Object(map) => {
-            let mut out = vec![0.0; chain.dof()];
+            let mut out = vec![0.0; width];
             for (name, v) in map {
                 let (joint, index) = independent_joint(chain, name, what)?;
-                let shape = |expected| InputError::Shape {
-                    what,
-                    name: name.clone(),
-                    expected,
-                };
-                if joint.kind() == JointKind::Cylindrical {
-                    let pair = v
-                        .as_array()
-                        .filter(|a| a.len() == 2)
-                        .ok_or_else(|| shape("[theta, d] (two numbers)"))?;
-                    out[index] = number(&pair[0], what, index)?;
-                    out[index + 1] = number(&pair[1], what, index + 1)?;
-                } else {
+                let parts = joint_parts(joint, what);
+                if parts.is_empty() {
                     if v.is_array() {
-                        return Err(shape("one number"));
+                        return Err(InputError::Shape {
+                            what,
+                            name: name.clone(),
+                            expected: "one number".into(),
+                        });
                     }
                     out[index] = number(v, what, index)?;
+                } else {
+                    let values =
+                        v.as_array()
+                            .filter(|a| a.len() == parts.len())
+                            .ok_or_else(|| InputError::Shape {
+                                what,
+                                name: name.clone(),
+                                expected: format!(
+                                    "[{}] ({} numbers)",
+                                    parts.join(", "),
+                                    ["two", "three", "four", "five", "six", "seven"]
+                                        .get(parts.len().wrapping_sub(2))
+                                        .copied()
+                                        .unwrap_or("several")
+                                ),
+                            })?;
+                    for (k, x) in values.iter().enumerate() {
+                        out[index + k] = number(x, what, index + k)?;
+                    }
                 }
             }
             // serde_json objects keep one value per key, so a repeated name cannot reach here;
@@ -228,8 +241,31 @@ pub fn joint_vector_from_json(
     }
 }
 
-/// The joint named `name` and its first entry of `q`; an error naming the joint unless it is one
-/// that takes values (not fixed, not a mimic).
+/// Whether `what` names joint positions (`q`, or a header of them) rather than rates (`qd`,
+/// `qdd`, `q_dot`, `q_ddot`): positions have [`Model::nq`](crate::Model::nq) entries, rates
+/// [`Model::nv`](crate::Model::nv) (they differ for a floating joint).
+fn is_positions(what: &str) -> bool {
+    !(what.starts_with("qd") || what.starts_with("q_d"))
+}
+
+/// Entries of a vector `what` of `chain`.
+fn width(chain: &Chain, what: &str) -> usize {
+    if is_positions(what) {
+        chain.nq()
+    } else {
+        chain.nv()
+    }
+}
+
+/// The names of a joint's entries in a vector `what` when it has more than one
+/// ([`JointKind::components`](crate::JointKind::components)).
+fn joint_parts(joint: &crate::model::chain::Joint, what: &str) -> &'static [&'static str] {
+    let (q, v) = joint.kind().components();
+    if is_positions(what) { q } else { v }
+}
+
+/// The joint named `name` and its first entry of the vector `what` (`q`, or a rate); an error
+/// naming the joint unless it is one that takes values (not fixed, not a mimic).
 fn independent_joint<'c>(
     chain: &'c Chain,
     name: &str,
@@ -241,7 +277,12 @@ fn independent_joint<'c>(
         suggestion: e.suggestion().map(str::to_string),
     })?;
     let joint = chain.joint(id);
-    match joint.q_index() {
+    let first = if is_positions(what) {
+        joint.q_index()
+    } else {
+        joint.v_index()
+    };
+    match first {
         Some(index) => Ok((joint, index)),
         None => Err(InputError::NotIndependent {
             what,
@@ -272,7 +313,8 @@ fn list_values(
     what: &'static str,
     order: Option<&[usize]>,
 ) -> Result<Vec<f64>, InputError> {
-    let mut q = vec![0.0; chain.dof()];
+    let width = width(chain, what);
+    let mut q = vec![0.0; width];
     let mut count = 0;
     for (index, entry) in list_entries(trimmed).enumerate() {
         let x = entry.parse::<f64>().map_err(|_| InputError::ListEntry {
@@ -286,10 +328,10 @@ fn list_values(
         }
         count += 1;
     }
-    if count != chain.dof() {
+    if count != width {
         return Err(InputError::WrongLength {
             what,
-            expected: chain.dof(),
+            expected: width,
             got: count,
         });
     }
@@ -352,26 +394,24 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<CsvHeader, InputEr
         return None;
     }
     let read = || {
-        let mut order = Vec::with_capacity(chain.dof());
-        let mut named = vec![false; chain.dof()];
+        let mut order = Vec::with_capacity(chain.nq());
+        let mut named = vec![false; chain.nq()];
         for name in &names {
             let name = name.as_ref();
-            let (joint, index) = independent_joint(chain, name, WHAT)?;
-            if named[index] {
+            let columns = header_columns(chain, name)?;
+            if named[columns.clone()].iter().any(|&n| n) {
                 return Err(InputError::DuplicateMember {
                     what: WHAT,
                     name: name.to_string(),
                 });
             }
-            let columns = index..index + joint.dof();
             named[columns.clone()].fill(true);
             order.extend(columns);
         }
-        if let Some(joint) = chain
-            .joints()
-            .iter()
-            .find(|j| j.q_index().is_some_and(|i| !named[i]))
-        {
+        if let Some(joint) = chain.joints().iter().find(|j| {
+            j.q_index()
+                .is_some_and(|i| named[i..i + j.nq()].contains(&false))
+        }) {
             return Err(InputError::MissingJoint {
                 what: WHAT,
                 name: joint.name().to_string(),
@@ -380,6 +420,28 @@ pub fn csv_header(chain: &Chain, line: &str) -> Option<Result<CsvHeader, InputEr
         Ok(CsvHeader { columns: order })
     };
     Some(read())
+}
+
+/// The entries of `q` a header's column name stands for: every entry of a joint named by its
+/// name (a cylindrical joint's two, a floating joint's seven), or one entry of such a joint named
+/// `JOINT.COMPONENT` (`root_joint.qw`, `slide.d`), as [`Model::variables`](crate::Model::variables)
+/// names them.
+fn header_columns(chain: &Chain, name: &str) -> Result<std::ops::Range<usize>, InputError> {
+    const WHAT: &str = "header";
+    if chain.joint_id(name).is_err()
+        && let Some((joint_name, component)) = name.rsplit_once('.')
+        && let Ok(id) = chain.joint_id(joint_name)
+    {
+        let joint = chain.joint(id);
+        let parts = joint.kind().components().0;
+        if let (Some(k), Some(first)) =
+            (parts.iter().position(|&p| p == component), joint.q_index())
+        {
+            return Ok(first + k..first + k + 1);
+        }
+    }
+    let (joint, index) = independent_joint(chain, name, WHAT)?;
+    Ok(index..index + joint.nq())
 }
 
 /// The comma-separated entries of a CSV line in which entries may be quoted as RFC 4180 (and
@@ -494,10 +556,10 @@ pub fn parse_batch_row(
     header: Option<&CsvHeader>,
 ) -> Result<BatchLine, InputError> {
     let columns = match header {
-        Some(h) if h.columns.len() != chain.dof() => {
+        Some(h) if h.columns.len() != chain.nq() => {
             return Err(InputError::WrongLength {
                 what: "header",
-                expected: chain.dof(),
+                expected: chain.nq(),
                 got: h.columns.len(),
             });
         }

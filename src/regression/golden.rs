@@ -32,6 +32,10 @@ pub struct Header {
     /// The name of each entry of `q`, in the order the samples list them
     /// ([`super::variable_names`]).
     pub joints: Vec<String>,
+    /// The name of each entry of `q̇` and `q̈` ([`super::velocity_names`]) when they are not
+    /// `joints` (a robot with a floating joint); empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rates: Vec<String>,
     /// The links recorded, in the order each sample lists them.
     pub links: Vec<String>,
     /// The kinechain version that wrote the file.
@@ -42,6 +46,19 @@ pub struct Header {
     pub samples: usize,
     /// What each link's record holds.
     pub level: Level,
+}
+
+impl Header {
+    /// The names of the entries of `q̇` and `q̈`: [`Header::rates`], or the joints' when it is
+    /// empty.
+    #[must_use]
+    pub fn rate_names(&self) -> &[String] {
+        if self.rates.is_empty() {
+            &self.joints
+        } else {
+            &self.rates
+        }
+    }
 }
 
 /// One configuration and the links' kinematics there.
@@ -292,16 +309,19 @@ fn check_sample(header: &Header, s: &Sample, index: usize) -> Result<(), String>
     if s.sample != index {
         return Err(format!("sample {} where sample {index} belongs", s.sample));
     }
-    let sized = |what: &str, v: Option<&Vec<f64>>, needed: bool| match (v, needed) {
-        (Some(v), true) if v.len() == header.dof => Ok(()),
-        (Some(v), true) => Err(format!(
-            "{what} has {} entries, not {}",
-            v.len(),
+    let sized = |what: &str, v: Option<&Vec<f64>>, needed: bool| {
+        let n = if what == "q" {
             header.dof
-        )),
-        (None, true) => Err(format!("{what} is missing (level {})", header.level)),
-        (Some(_), false) => Err(format!("{what} does not belong to level {}", header.level)),
-        (None, false) => Ok(()),
+        } else {
+            header.rate_names().len()
+        };
+        match (v, needed) {
+            (Some(v), true) if v.len() == n => Ok(()),
+            (Some(v), true) => Err(format!("{what} has {} entries, not {n}", v.len())),
+            (None, true) => Err(format!("{what} is missing (level {})", header.level)),
+            (Some(_), false) => Err(format!("{what} does not belong to level {}", header.level)),
+            (None, false) => Ok(()),
+        }
     };
     sized("q", Some(&s.q), true)?;
     sized("qd", s.qd.as_ref(), header.level != Level::Pose)?;

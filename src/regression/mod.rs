@@ -37,17 +37,39 @@ use crate::model::chain::LinkId;
 use crate::model::transform::Transform;
 use std::f64::consts::PI;
 
-/// The name of each entry of `q`: the joint's, or `NAME.theta` / `NAME.d` for a cylindrical
-/// joint's two.
+/// The name of each entry of `q`: the joint's, or `NAME.COMPONENT` for a joint of several
+/// (`NAME.theta` / `NAME.d` of a cylindrical joint, `NAME.x` … `NAME.qz` of a floating one).
 #[must_use]
 pub fn variable_names(chain: &Chain) -> Vec<String> {
-    chain
-        .variables()
+    names(chain, chain.variables())
+}
+
+/// The name of each entry of `q̇` (and `q̈`): as [`variable_names`], but `NAME.vx` … `NAME.wz` for
+/// a floating joint's six.
+#[must_use]
+pub fn velocity_names(chain: &Chain) -> Vec<String> {
+    names(chain, chain.velocity_variables())
+}
+
+fn names<'c>(
+    chain: &Chain,
+    entries: impl Iterator<Item = (crate::model::chain::JointId, Option<&'c str>)>,
+) -> Vec<String> {
+    entries
         .map(|(j, component)| {
             let name = chain.joint(j).name();
             component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
         })
         .collect()
+}
+
+/// A uniformly random unit quaternion (w, x, y, z) from three uniform numbers (Shoemake).
+fn unit_quaternion(rng: &mut SplitMix) -> [f64; 4] {
+    let (u1, u2, u3) = (rng.unit(), rng.unit(), rng.unit());
+    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
+    let (s2, c2) = (2.0 * PI * u2).sin_cos();
+    let (s3, c3) = (2.0 * PI * u3).sin_cos();
+    [a * s2, a * c2, b * s3, b * c3]
 }
 
 /// The configurations a record is made at: zero, the lower and the upper corner of the limits
@@ -57,7 +79,9 @@ pub fn variable_names(chain: &Chain) -> Vec<String> {
 /// (as the level needs) drawn uniformly from `[−1, 1]`.
 fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     let (lower, upper, neutral) = (chain.lower(), chain.upper(), chain.neutral());
-    let dof = chain.dof();
+    let (dof, nv) = (chain.nq(), chain.nv());
+    // A floating joint's quaternion (entries 3–6), drawn as a uniformly random rotation.
+    let quaternion = chain.floating_joint().map(|_| 3..7);
     let admitted = |q: &Vec<f64>| check_q(chain, q, LimitPolicy::Enforce).is_ok();
     let corner = |bound: &[f64]| -> Vec<f64> {
         (0..dof)
@@ -78,7 +102,7 @@ fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, 
     }
     let mut rng = SplitMix(options.seed);
     for _ in 0..options.samples {
-        let q = (0..dof)
+        let mut q: Vec<f64> = (0..dof)
             .map(|i| {
                 let (lo, hi) = match (lower[i].is_finite(), upper[i].is_finite()) {
                     (true, true) => (lower[i], upper[i]),
@@ -89,20 +113,23 @@ fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, 
                 between(lo, hi, rng.unit())
             })
             .collect();
+        if let Some(e) = quaternion.clone() {
+            q[e].copy_from_slice(&unit_quaternion(&mut rng));
+        }
         qs.push(q);
     }
     let mut rates = |n| (0..n).map(|_| 2.0 * rng.unit() - 1.0).collect::<Vec<f64>>();
     qs.into_iter()
         .map(|q| {
             let qd = if options.level == Level::Pose {
-                vec![0.0; dof]
+                vec![0.0; nv]
             } else {
-                rates(dof)
+                rates(nv)
             };
             let qdd = if options.level == Level::Acc {
-                rates(dof)
+                rates(nv)
             } else {
-                vec![0.0; dof]
+                vec![0.0; nv]
             };
             (q, qd, qdd)
         })
@@ -233,8 +260,12 @@ pub fn record(chain: &Chain, options: &Options) -> Result<Golden, RegressionErro
         header: Header {
             kinechain_golden: golden::FORMAT,
             robot: chain.name().to_string(),
-            dof: chain.dof(),
+            dof: chain.nq(),
             joints: variable_names(chain),
+            rates: match chain.nq() == chain.nv() {
+                true => Vec::new(),
+                false => velocity_names(chain),
+            },
             links: links
                 .iter()
                 .map(|&l| chain.link(l).name().to_string())
@@ -274,20 +305,17 @@ pub fn verify(
     if !missing.is_empty() || !extra.is_empty() {
         return Err(RegressionError::Joints { missing, extra });
     }
-    let order: Vec<usize> = names
-        .iter()
-        .map(|n| {
-            golden
-                .header
-                .joints
-                .iter()
-                .position(|j| j == n)
-                .unwrap_or(0)
-        })
-        .collect();
+    let order = |mine: &[String], theirs: &[String]| -> Vec<usize> {
+        mine.iter()
+            .map(|n| theirs.iter().position(|j| j == n).unwrap_or(0))
+            .collect()
+    };
+    let q_order = order(&names, &golden.header.joints);
+    let v_order = order(&velocity_names(chain), golden.header.rate_names());
     check_links(chain, &golden.header.links)?;
     let mut report = Report::new(chain, &golden.header.links, golden.header.level, tolerances);
-    evaluate_against(chain, golden, &mut report, |recorded| {
+    evaluate_against(chain, golden, &mut report, |recorded, rates| {
+        let order = if rates { &v_order } else { &q_order };
         order.iter().map(|&k| recorded[k]).collect()
     })?;
     Ok(report)
@@ -308,20 +336,20 @@ fn check_links(chain: &Chain, links: &[String]) -> Result<(), RegressionError> {
 }
 
 /// Evaluates `chain` at each sample (its `q`, `q̇`, `q̈` mapped by `to_chain`, told whether it
-/// maps positions) and adds the differences to `report`.
+/// maps rates) and adds the differences to `report`.
 fn evaluate_against(
     chain: &Chain,
     golden: &Golden,
     report: &mut Report,
-    to_chain: impl Fn(&[f64]) -> Vec<f64>,
+    to_chain: impl Fn(&[f64], bool) -> Vec<f64>,
 ) -> Result<(), RegressionError> {
     let links = chosen_links(chain, &golden.header.links)?;
     let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
-    let zero = vec![0.0; golden.header.dof];
+    let zero = vec![0.0; golden.header.rate_names().len()];
     for s in &golden.samples {
-        let q = to_chain(&s.q);
-        let qd = to_chain(s.qd.as_deref().unwrap_or(&zero));
-        let qdd = to_chain(s.qdd.as_deref().unwrap_or(&zero));
+        let q = to_chain(&s.q, false);
+        let qd = to_chain(s.qd.as_deref().unwrap_or(&zero), true);
+        let qdd = to_chain(s.qdd.as_deref().unwrap_or(&zero), true);
         if check_q(chain, &q, LimitPolicy::Enforce).is_err() {
             report.outside_limits += 1;
         }
@@ -412,17 +440,21 @@ pub fn compare_renamed(
         options.links.clone()
     };
     // `a`'s entries under `b`'s names.
-    let joints_a: Vec<String> = a
-        .variables()
-        .map(|(j, component)| {
-            let name = a.joint(j).name();
-            let name = renames
-                .iter()
-                .find(|(old, _)| old == name)
-                .map_or(name, |(_, new)| new.as_str());
-            component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
-        })
-        .collect();
+    let renamed =
+        |entries: &mut dyn Iterator<Item = (crate::model::chain::JointId, Option<&str>)>| {
+            entries
+                .map(|(j, component)| {
+                    let name = a.joint(j).name();
+                    let name = renames
+                        .iter()
+                        .find(|(old, _)| old == name)
+                        .map_or(name, |(_, new)| new.as_str());
+                    component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
+                })
+                .collect::<Vec<String>>()
+        };
+    let joints_a = renamed(&mut a.variables());
+    let rates_a = renamed(&mut a.velocity_variables());
     let joints_b = variable_names(b);
     let only_in_first: Vec<String> = joints_a
         .iter()
@@ -449,10 +481,14 @@ pub fn compare_renamed(
         },
     )?;
     // Every entry of `b` is one of `a`'s (checked above).
-    let from_a: Vec<usize> = joints_b
-        .iter()
-        .map(|n| joints_a.iter().position(|j| j == n).unwrap_or(0))
-        .collect();
+    let from = |b_names: &[String], a_names: &[String]| -> Vec<usize> {
+        b_names
+            .iter()
+            .map(|n| a_names.iter().position(|j| j == n).unwrap_or(0))
+            .collect()
+    };
+    let from_a = from(&joints_b, &joints_a);
+    let rates_from_a = from(&velocity_names(b), &rates_a);
     let mut report = Report::new(b, &shared, options.level, tolerances);
     report.only_in_first = Names {
         joints: Vec::new(),
@@ -470,8 +506,9 @@ pub fn compare_renamed(
             .cloned()
             .collect(),
     };
-    evaluate_against(b, &golden, &mut report, |values| {
-        from_a.iter().map(|&k| values[k]).collect()
+    evaluate_against(b, &golden, &mut report, |values, rates| {
+        let from = if rates { &rates_from_a } else { &from_a };
+        from.iter().map(|&k| values[k]).collect()
     })?;
     Ok(report)
 }

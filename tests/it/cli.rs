@@ -1979,3 +1979,154 @@ fn batch_lines_with_rates_equal_single_runs() {
     let out = kinechain(&["fk", "robots/stanford.yaml", "--batch", &bad]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn a_floating_base_on_the_command_line() {
+    use kinechain::{Chain, Data, forward_velocities, io::LoadOptions};
+    let fb = LoadOptions::default().with_floating_base(true);
+    let chain = Chain::from_file_with("robots/ur5.yaml", &fb).unwrap();
+    // info: the sizes and the names of every entry.
+    let info = &ok_json(&["info", "robots/ur5.yaml", "--floating-base"])[0];
+    assert_eq!(
+        (
+            info["nq"].as_u64(),
+            info["nv"].as_u64(),
+            info["dof"].as_u64()
+        ),
+        (Some(13), Some(12), Some(12))
+    );
+    let q_names: Vec<&str> = info["q_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        q_names[..8],
+        [
+            "root_joint.x",
+            "root_joint.y",
+            "root_joint.z",
+            "root_joint.qw",
+            "root_joint.qx",
+            "root_joint.qy",
+            "root_joint.qz",
+            "shoulder_pan"
+        ]
+    );
+    let v_names: Vec<&str> = info["v_names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        v_names[..7],
+        [
+            "root_joint.vx",
+            "root_joint.vy",
+            "root_joint.vz",
+            "root_joint.wx",
+            "root_joint.wy",
+            "root_joint.wz",
+            "shoulder_pan"
+        ]
+    );
+    // fk: the array, object and list forms agree, with rates; the same bits as the library.
+    let q = [
+        0.5, -0.2, 0.1, 0.5, 0.5, -0.5, 0.5, 0.1, -0.4, 0.3, 0.2, 0.5, -0.6,
+    ];
+    let qd = [
+        0.3, 0.0, -0.1, 0.2, -0.7, 0.4, 1.0, 0.5, -0.5, 0.2, 0.1, 0.0,
+    ];
+    let array = serde_json::to_string(&q).unwrap();
+    let object = serde_json::json!({"root_joint": &q[..7], "shoulder_pan": q[7], "shoulder_lift": q[8], "elbow": q[9], "wrist_1": q[10], "wrist_2": q[11], "wrist_3": q[12]}).to_string();
+    let rates = serde_json::to_string(&qd).unwrap();
+    let a = &ok_json(&[
+        "fk",
+        "robots/ur5.yaml",
+        "--floating-base",
+        "--q",
+        &array,
+        "--qd",
+        &rates,
+    ])[0];
+    let b = &ok_json(&[
+        "--floating-base",
+        "fk",
+        "robots/ur5.yaml",
+        "--q",
+        &object,
+        "--qd",
+        &rates,
+    ])[0];
+    assert_eq!(a, b);
+    let mut data = Data::new(&chain);
+    let vel = forward_velocities(&chain, &mut data, &q, &qd).unwrap();
+    let tool = chain.link_id("tool0").unwrap();
+    let want = vel.velocity(tool);
+    let got = numbers(&a["links"]["tool0"]["v"]);
+    assert_eq!(got, want.v.as_slice());
+    // A CSV batch with a header naming the base's entries one by one, in another order.
+    let dir = Scratch::new("floating-cli");
+    let header = "shoulder_pan,shoulder_lift,elbow,wrist_1,wrist_2,wrist_3,root_joint.qw,root_joint.qx,root_joint.qy,root_joint.qz,root_joint.x,root_joint.y,root_joint.z";
+    let row: Vec<String> = [&q[7..], &q[3..7], &q[..3]]
+        .concat()
+        .iter()
+        .map(f64::to_string)
+        .collect();
+    let file = dir.write("rows.csv", &format!("{header}\n{}\n", row.join(",")));
+    let lines = ok_json(&["fk", "robots/ur5.yaml", "--floating-base", "--batch", &file]);
+    let plain = &ok_json(&["fk", "robots/ur5.yaml", "--floating-base", "--q", &array])[0];
+    assert_eq!(lines[0]["links"], plain["links"]);
+    // Errors: the length names the floating joint's share; a bad quaternion names the joint.
+    let e = error(&[
+        "fk",
+        "robots/ur5.yaml",
+        "--floating-base",
+        "--q",
+        "[0,0,0,1,0,0,0,0,0,0,0,0]",
+    ]);
+    assert!(e.contains("13"), "{e}");
+    let e = error(&[
+        "fk",
+        "robots/ur5.yaml",
+        "--floating-base",
+        "--q",
+        "[0,0,0,0,0,0,0,0,0,0,0,0,0]",
+    ]);
+    assert!(
+        e.contains("quaternion of floating joint 'root_joint'"),
+        "{e}"
+    );
+    // record / verify with a floating base, and convert: the URDF written has the floating
+    // joint, and loads back to the same poses.
+    let golden = dir.path("golden.jsonl");
+    ok_text(&[
+        "record",
+        "robots/ur5.yaml",
+        "--floating-base",
+        "--level",
+        "acc",
+        "-o",
+        &golden,
+    ]);
+    let report = ok_text(&["verify", "robots/ur5.yaml", "--floating-base", &golden]);
+    assert!(
+        report.contains("pass") || report.contains("PASS") || report.contains("ok"),
+        "{report}"
+    );
+    let urdf = dir.path("ur5_floating.urdf");
+    ok_text(&["convert", "robots/ur5.yaml", "--floating-base", "-o", &urdf]);
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    assert!(text.contains("type=\"floating\""), "{text}");
+    let back = &ok_json(&["fk", &urdf, "--q", &array])[0];
+    for link in chain.links() {
+        let (x, y) = (position(back, link.name()), position(plain, link.name()));
+        for k in 0..3 {
+            assert!((x[k] - y[k]).abs() < 1e-12, "{}: {x:?} {y:?}", link.name());
+        }
+    }
+    // And the converted robot verifies against the golden file of the original.
+    ok_text(&["verify", &urdf, &golden]);
+}

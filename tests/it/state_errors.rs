@@ -383,7 +383,7 @@ fn json_vectors() {
         InputError::Shape {
             what: "q",
             name: "joint".into(),
-            expected: "[theta, d] (two numbers)"
+            expected: "[theta, d] (two numbers)".into()
         }
     );
     assert!(matches!(
