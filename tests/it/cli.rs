@@ -2075,7 +2075,7 @@ fn a_floating_base_on_the_command_line() {
         .iter()
         .map(f64::to_string)
         .collect();
-    let file = dir.write("rows.csv", &format!("{header}\n{}\n", row.join(",")));
+    let file = dir.write("rows.csv", format!("{header}\n{}\n", row.join(",")));
     let lines = ok_json(&["fk", "robots/ur5.yaml", "--floating-base", "--batch", &file]);
     let plain = &ok_json(&["fk", "robots/ur5.yaml", "--floating-base", "--q", &array])[0];
     assert_eq!(lines[0]["links"], plain["links"]);
