@@ -3,26 +3,14 @@
 //! timing their own code can do likewise).
 
 use crate::eval::Chain;
-use std::f64::consts::{PI, TAU};
 use std::time::{Duration, Instant};
 
-/// SplitMix64: a small, fast, seedable generator (reproducible across platforms).
-pub(crate) struct SplitMix(pub(crate) u64);
+pub(crate) use crate::eval::sampling::{SplitMix, between};
 
-impl SplitMix {
-    /// Uniform in `[0, 1)`.
-    pub(crate) fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// `n` configurations drawn uniformly within the joint limits, the same for the same `seed`. An
-/// entry without limits is drawn from `[−π, π]`, one with only a finite lower (upper) limit from
-/// the 2π above (below) it.
+/// `n` configurations drawn uniformly within the joint limits, the same for the same `seed`
+/// ([`Chain::random_configurations`], a floating base within a metre of the origin). An entry
+/// without limits is drawn from `[−π, π]`, one with only a finite lower (upper) limit from the
+/// 2π above (below) it.
 ///
 /// # Examples
 /// ```
@@ -35,37 +23,14 @@ impl SplitMix {
 /// ```
 #[must_use]
 pub fn configurations(chain: &Chain, n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = SplitMix(seed);
-    (0..n)
-        .map(|_| {
-            let mut q = vec![0.0; chain.dof()];
-            for j in chain.joints() {
-                let Some(first) = j.q_index() else { continue };
-                for (k, l) in j.limits().iter().enumerate() {
-                    let (lower, upper) = l.map_or((f64::NAN, f64::NAN), |l| (l.lower, l.upper));
-                    let (lo, hi) = match (lower.is_finite(), upper.is_finite()) {
-                        (true, true) => (lower, upper),
-                        (true, false) => (lower, lower + TAU),
-                        (false, true) => (upper - TAU, upper),
-                        (false, false) => (-PI, PI),
-                    };
-                    q[first + k] = between(lo, hi, rng.unit());
-                }
-            }
-            q
-        })
-        .collect()
-}
-
-/// The point a fraction `u` of the way from `lo` to `hi`. When `hi − lo` overflows (limits such
-/// as ±10³⁰⁸), as a weighted mean, which stays within the two; otherwise `lo + (hi − lo) u`.
-pub(crate) fn between(lo: f64, hi: f64, u: f64) -> f64 {
-    let span = hi - lo;
-    if span.is_finite() {
-        lo + span * u
-    } else {
-        (lo * (1.0 - u) + hi * u).clamp(lo, hi)
+    if chain.nq() == 0 {
+        return vec![Vec::new(); n];
     }
+    chain
+        .random_configurations(n, seed, (-1.0, 1.0))
+        .chunks(chain.nq())
+        .map(<[f64]>::to_vec)
+        .collect()
 }
 
 /// The larger of two errors, NaN if either is: `f64::max` drops a NaN, and a result that is NaN
@@ -203,6 +168,7 @@ pub fn time_per_call(min_run: Duration, runs: usize, mut f: impl FnMut()) -> f64
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::{PI, TAU};
 
     #[test]
     fn the_generator_is_splitmix64() {

@@ -81,9 +81,46 @@ fn term(t: &Term, q: &[f64]) -> F {
     }
 }
 
+/// The frame of a floating joint's body, `pre · [A(e) p] · post` with `A(e)` the matrix of the
+/// normalised Euler parameters (eq. 2.13), as `eval::kernel::floating` writes it.
+fn floating_local(body: &Body, q: &[f64]) -> BigFrame {
+    let pre = BigFrame::from_transform(&body.pre_frame);
+    let e: [F; 4] = std::array::from_fn(|k| exact(q[3 + k]));
+    let n2 = &e[0] * &e[0] + &e[1] * &e[1] + &e[2] * &e[2] + &e[3] * &e[3];
+    let s = exact(2.0) / n2;
+    let one = exact(1.0);
+    let sq = |i: usize, j: usize| &e[i] * &e[j];
+    let r = [
+        [
+            &one - &s * (sq(2, 2) + sq(3, 3)),
+            &s * (sq(1, 2) + sq(0, 3)),
+            &s * (sq(1, 3) - sq(0, 2)),
+        ],
+        [
+            &s * (sq(1, 2) - sq(0, 3)),
+            &one - &s * (sq(1, 1) + sq(3, 3)),
+            &s * (sq(2, 3) + sq(0, 1)),
+        ],
+        [
+            &s * (sq(1, 3) + sq(0, 2)),
+            &s * (sq(2, 3) - sq(0, 1)),
+            &one - &s * (sq(1, 1) + sq(2, 2)),
+        ],
+    ];
+    let own = BigFrame {
+        r,
+        p: [exact(q[0]), exact(q[1]), exact(q[2])],
+    };
+    let post = BigFrame::from_transform(&body.post.to_transform());
+    pre.compose(&own).compose(&post)
+}
+
 /// `pre · M(θ, d) · post` of one body, exactly (Rodrigues' formula, eq. 2.112, with the model's
 /// unit axis taken as exact).
 fn local(body: &Body, q: &[f64]) -> BigFrame {
+    if body.floating {
+        return floating_local(body, q);
+    }
     let pre = BigFrame::from_transform(&body.pre_frame);
     let v = body.motion.axis.vector().map(exact);
     let theta = term(&body.motion.theta, q);
@@ -121,10 +158,10 @@ fn local(body: &Body, q: &[f64]) -> BigFrame {
 /// mantissas and rounded to `f64`.
 ///
 /// # Panics
-/// If `q` does not have [`Chain::dof`](crate::Model::dof) entries (this is a measuring tool; check `q` first).
+/// If `q` does not have [`Chain::nq`](crate::Model::nq) entries (this is a measuring tool; check `q` first).
 #[must_use]
 pub fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
-    assert_eq!(q.len(), chain.dof(), "q has the wrong length");
+    assert_eq!(q.len(), chain.nq(), "q has the wrong length");
     let mut frames: Vec<BigFrame> = Vec::with_capacity(chain.bodies.len());
     for body in &chain.bodies {
         let m = local(body, q);
@@ -225,10 +262,12 @@ fn scale(s: &F, a: &[F; 3]) -> [F; 3] {
     std::array::from_fn(|k| s * &a[k])
 }
 
-fn rate(t: &Term, rates: &[f64]) -> F {
+/// The rate of a term from `q̇` or `q̈` (whose entries are `shift` before those of `q`: one after
+/// a floating joint).
+fn rate(t: &Term, rates: &[f64], shift: usize) -> F {
     match *t {
         Term::Const(_) => F::ZERO,
-        Term::Var { index, scale, .. } => exact(scale) * exact(rates[index]),
+        Term::Var { index, scale, .. } => exact(scale) * exact(rates[index - shift]),
     }
 }
 
@@ -249,17 +288,31 @@ struct BigMotion {
 /// order), by the recursion of `eval::single::kinematics` in [`PRECISION_BITS`]-bit arithmetic.
 ///
 /// # Panics
-/// If a vector does not have [`Chain::dof`](crate::Model::dof) entries.
+/// If `q` does not have [`Chain::nq`](crate::Model::nq) entries or a rate
+/// [`Chain::nv`](crate::Model::nv).
 #[must_use]
 pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> Vec<LinkMotion> {
     assert!(
-        q.len() == chain.dof() && q_dot.len() == chain.dof() && q_ddot.len() == chain.dof(),
+        q.len() == chain.nq() && q_dot.len() == chain.nv() && q_ddot.len() == chain.nv(),
         "joint vectors have the wrong length"
     );
+    let shift = chain.nq() - chain.nv();
     let zero = || [F::ZERO, F::ZERO, F::ZERO];
     let mut bodies: Vec<BigMotion> = Vec::with_capacity(chain.bodies.len());
     for body in &chain.bodies {
         let local = local(body, q);
+        if body.floating {
+            // Its rates are entries of q̇ and q̈ (world axes).
+            let three = |x: &[f64], i: usize| [exact(x[i]), exact(x[i + 1]), exact(x[i + 2])];
+            bodies.push(BigMotion {
+                frame: local,
+                omega: three(q_dot, 3),
+                v: three(q_dot, 0),
+                alpha: three(q_ddot, 3),
+                a: three(q_ddot, 0),
+            });
+            continue;
+        }
         let pre = BigFrame::from_transform(&body.pre_frame);
         let axis = body.motion.axis.vector().map(exact);
         let axis_in_parent = pre.apply_add(&axis, &zero());
@@ -286,8 +339,8 @@ pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> V
             None => (zero(), zero(), zero(), zero(), zero()),
         };
         let m = &body.motion;
-        let (th_d, d_d) = (rate(&m.theta, q_dot), rate(&m.d, q_dot));
-        let (th_dd, d_dd) = (rate(&m.theta, q_ddot), rate(&m.d, q_ddot));
+        let (th_d, d_d) = (rate(&m.theta, q_dot, shift), rate(&m.d, q_dot, shift));
+        let (th_dd, d_dd) = (rate(&m.theta, q_ddot, shift), rate(&m.d, q_ddot, shift));
         let u = sub(&frame.p, &p_joint);
         let r = sub(&frame.p, &p_parent);
         let z_u = cross(&z, &u);

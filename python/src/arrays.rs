@@ -8,31 +8,52 @@ use kinechain::regression::variable_names;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-/// The rows of a `(dof,)` or `(N, dof)` array: `(N, batched)`.
+/// The rows of a `(n,)` or `(N, n)` array of `what` (`q`, of the chain's `nq` entries; a
+/// rate, of `nv`): `(N, batched)`.
 pub(crate) fn rows(
     chain: &Inner,
     a: &PyReadonlyArrayDyn<'_, f64>,
     what: &str,
 ) -> PyResult<(usize, bool)> {
     let shape = a.shape();
-    let dof = chain.dof();
+    let width = if what == "q" { chain.nq() } else { chain.nv() };
     let (n, batched, len) = match shape {
         [len] => (1, false, *len),
         [n, len] => (*n, true, *len),
         _ => {
             return Err(StateError::new_err(format!(
-                "{what} has shape {shape:?}: expected ({dof},) or (N, {dof})"
+                "{what} has shape {shape:?}: expected ({width},) or (N, {width})"
             )));
         }
     };
-    if len != dof {
-        return Err(StateError::new_err(format!(
-            "{what} has {len} entries per configuration; the chain '{}' has {dof} degrees of freedom (joints in q order: {})",
-            chain.name(),
-            variable_names(chain).join(", ")
-        )));
+    if len != width {
+        return Err(StateError::new_err(wrong_width(chain, what, len)));
     }
     Ok((n, batched))
+}
+
+/// The message for a `what` of `len` entries per configuration where the chain takes another
+/// number: what makes the number up, and the names of the entries.
+pub(crate) fn wrong_width(chain: &Inner, what: &str, len: usize) -> String {
+    let (width, names) = if what == "q" {
+        (chain.nq(), variable_names(chain))
+    } else {
+        (chain.nv(), kinechain::regression::velocity_names(chain))
+    };
+    let share = match chain.floating_joint() {
+        Some(f) => format!(
+            ": {} for the floating joint '{}', {} for the others",
+            if what == "q" { 7 } else { 6 },
+            chain.joint(f).name(),
+            width - if what == "q" { 7 } else { 6 }
+        ),
+        None => String::new(),
+    };
+    format!(
+        "{what} has {len} entries per configuration; the chain '{}' takes {width}{share} (in order: {})",
+        chain.name(),
+        names.join(", ")
+    )
 }
 
 /// `x` as a C-contiguous float64 array: read as it is when it already is one, converted by numpy

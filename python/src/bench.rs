@@ -36,7 +36,7 @@ pub(crate) fn _rust_batch(
     let robot = &chain.get().robot;
     let inner = &robot.inner;
     let (n, batched) = rows(inner, &q, "q")?;
-    if !batched || inner.dof() == 0 {
+    if !batched || inner.nq() == 0 {
         return Err(StateError::new_err(
             "q must be a batch (N, dof) of a chain with joints",
         ));
@@ -49,7 +49,7 @@ pub(crate) fn _rust_batch(
     );
     let level = usize::from(qd.is_some()) + usize::from(qdd.is_some());
     let l = links.selection.ids().len();
-    let (dof, policy) = (inner.dof(), LimitPolicy::Enforce);
+    let (dof, policy) = (inner.nv(), LimitPolicy::Enforce);
     let jacobian = jacobian
         .map(|name| {
             inner

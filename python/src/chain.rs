@@ -1,17 +1,16 @@
-//! The `Chain` class: loading, pickling, names and limits; its evaluations are in [`crate::fk`]
-//! and [`crate::jacobian`].
+//! The `Chain` class: loading, pickling, names and limits; its evaluations are in
+//! [`crate::methods`] (the work in [`crate::fk`] and [`crate::jacobian`]).
 
-use crate::arrays::{float_array, rows};
 use crate::errors::{Error, LoadError, load_error};
 use crate::files;
-use crate::results::FkResult;
-use crate::robot::{Robot, policy};
+use crate::robot::Robot;
 use kinechain::Chain as Inner;
 use kinechain::error::error_chain;
+use kinechain::io::LoadOptions;
 use kinechain::regression::variable_names;
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyString, PyTuple};
+use pyo3::types::PyTuple;
 use std::path::PathBuf;
 
 /// A robot: links, joints, limits; immutable, shared between threads. Made by `kinechain.load`
@@ -24,6 +23,8 @@ pub(crate) struct Chain {
     /// (with the name, which may have come from the file name).
     source: String,
     format: &'static str,
+    /// How it was loaded (a floating base added), which pickling ships too.
+    options: LoadOptions,
     /// The file it was loaded from, which the files this package writes never replace.
     pub(crate) origin: Option<PathBuf>,
 }
@@ -32,21 +33,27 @@ impl Chain {
     fn new(
         py: Python<'_>,
         inner: Inner,
-        source: String,
-        format: &'static str,
+        (source, format, options): (String, &'static str, LoadOptions),
         origin: Option<PathBuf>,
     ) -> PyResult<Self> {
         Ok(Chain {
             robot: Robot::new(py, inner)?,
             source,
             format,
+            options,
             origin,
         })
     }
 
     /// A chain from `text` in `format` (`urdf` or `yaml`), named `name` where the text names no
     /// robot.
-    fn from_text(py: Python<'_>, text: String, format: &str, name: &str) -> PyResult<Self> {
+    fn from_text(
+        py: Python<'_>,
+        text: String,
+        format: &str,
+        name: &str,
+        options: LoadOptions,
+    ) -> PyResult<Self> {
         use kinechain::io::Format;
         let (kind, format) = match format {
             "urdf" => (Format::Urdf, "urdf"),
@@ -57,55 +64,77 @@ impl Chain {
                 )));
             }
         };
-        let inner = Inner::from_str_named(&text, kind, name).map_err(|e| load_error(&e))?;
-        Chain::new(py, inner, text, format, None)
+        let inner =
+            Inner::from_str_with(&text, kind, name, &options).map_err(|e| load_error(&e))?;
+        Chain::new(py, inner, (text, format, options), None)
     }
 }
 
 #[pymethods]
 impl Chain {
-    /// Loads a robot file: a DH table (`.yaml`, `.yml`) or a URDF file (`.urdf`).
+    /// Loads a robot file: a DH table (`.yaml`, `.yml`) or a URDF file (`.urdf`); with
+    /// `floating_base`, a floating joint `root_joint` between the world and its root link.
     #[staticmethod]
-    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, floating_base=false))]
+    fn from_file(py: Python<'_>, path: PathBuf, floating_base: bool) -> PyResult<Self> {
         // Read once (a FIFO can be read only once), bounded, off the GIL and open to Ctrl-C.
         let read = path.clone();
         let source = files::read_interruptibly(py, move || {
             kinechain::io::read_robot_file(&read).map_err(|e| error_chain(&e))
         })?
         .map_err(LoadError::new_err)?;
-        let inner = Inner::from_file_text(&path, &source).map_err(|e| load_error(&e))?;
+        let options = LoadOptions::default().with_floating_base(floating_base);
+        let inner =
+            Inner::from_file_text_with(&path, &source, &options).map_err(|e| load_error(&e))?;
         let format = match kinechain::io::Format::from_path(&path) {
             Some(kinechain::io::Format::Urdf) => "urdf",
             _ => "yaml",
         };
         let origin = std::fs::canonicalize(&path).ok().or(Some(path));
-        Chain::new(py, inner, source, format, origin)
+        Chain::new(py, inner, (source, format, options), origin)
     }
 
-    /// A robot from URDF text.
+    /// A robot from URDF text (with `floating_base`, a floating joint above its root link).
     #[staticmethod]
-    fn from_urdf_string(py: Python<'_>, text: String) -> PyResult<Self> {
-        Chain::from_text(py, text, "urdf", "robot")
+    #[pyo3(signature = (text, floating_base=false))]
+    fn from_urdf_string(py: Python<'_>, text: String, floating_base: bool) -> PyResult<Self> {
+        let options = LoadOptions::default().with_floating_base(floating_base);
+        Chain::from_text(py, text, "urdf", "robot", options)
     }
 
-    /// A robot from DH YAML text.
+    /// A robot from DH YAML text (with `floating_base`, a floating joint above its root link).
     #[staticmethod]
-    fn from_yaml_string(py: Python<'_>, text: String) -> PyResult<Self> {
-        Chain::from_text(py, text, "yaml", "robot")
+    #[pyo3(signature = (text, floating_base=false))]
+    fn from_yaml_string(py: Python<'_>, text: String, floating_base: bool) -> PyResult<Self> {
+        let options = LoadOptions::default().with_floating_base(floating_base);
+        Chain::from_text(py, text, "yaml", "robot", options)
     }
 
-    /// A robot from its text, format (`urdf` or `yaml`) and name (where the text names none);
-    /// what unpickling calls.
+    /// A robot from its text, format (`urdf` or `yaml`), name (where the text names none) and
+    /// whether a floating base was added; what unpickling calls.
     #[staticmethod]
-    #[pyo3(signature = (text, format, name="robot"))]
-    fn _from_source(py: Python<'_>, text: String, format: &str, name: &str) -> PyResult<Self> {
-        Chain::from_text(py, text, format, name)
+    #[pyo3(signature = (text, format, name="robot", floating_base=false))]
+    fn _from_source(
+        py: Python<'_>,
+        text: String,
+        format: &str,
+        name: &str,
+        floating_base: bool,
+    ) -> PyResult<Self> {
+        let options = LoadOptions::default().with_floating_base(floating_base);
+        Chain::from_text(py, text, format, name, options)
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
         let make = slf.get_type().getattr("_from_source")?;
         let me = slf.get();
-        (make, (me.source.clone(), me.format, me.robot.inner.name())).into_pyobject(slf.py())
+        let state = (
+            me.source.clone(),
+            me.format,
+            me.robot.inner.name(),
+            me.options.floating_base,
+        );
+        (make, state).into_pyobject(slf.py())
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
@@ -113,6 +142,7 @@ impl Chain {
             let o = o.get();
             o.source == self.source
                 && o.format == self.format
+                && o.options == self.options
                 && o.robot.inner.name() == self.robot.inner.name()
         })
     }
@@ -120,7 +150,13 @@ impl Chain {
     fn __hash__(&self) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        (&self.source, self.format, self.robot.inner.name()).hash(&mut h);
+        (
+            &self.source,
+            self.format,
+            self.options.floating_base,
+            self.robot.inner.name(),
+        )
+            .hash(&mut h);
         h.finish()
     }
 
@@ -139,14 +175,42 @@ impl Chain {
         self.robot.inner.name().to_string()
     }
 
-    /// Entries of a configuration `q`.
+    /// Degrees of freedom: the entries of `qd`, `qdd` and the columns of a Jacobian ([`nv`]);
+    /// `q` has as many but for a floating joint ([`nq`]).
     #[getter]
     fn dof(&self) -> usize {
         self.robot.inner.dof()
     }
 
+    /// Entries of a configuration `q`: `dof`, and one more for a floating joint (its
+    /// orientation is a quaternion).
+    #[getter]
+    fn nq(&self) -> usize {
+        self.robot.inner.nq()
+    }
+
+    /// Entries of `qd` and `qdd`: `dof`.
+    #[getter]
+    fn nv(&self) -> usize {
+        self.robot.inner.nv()
+    }
+
     /// The name of each entry of `q`, in order: the independent joints depth-first from the root
-    /// (as `kinechain info` lists them); a cylindrical joint's two as `NAME.theta`, `NAME.d`.
+    /// (as `kinechain info` lists them); a cylindrical joint's two as `NAME.theta`, `NAME.d`, a
+    /// floating joint's seven as `NAME.x` … `NAME.qz`.
+    #[getter]
+    fn q_names(&self) -> Vec<String> {
+        variable_names(&self.robot.inner)
+    }
+
+    /// The name of each entry of `qd` and `qdd`: as `q_names`, a floating joint's six as
+    /// `NAME.vx`, `NAME.vy`, `NAME.vz`, `NAME.wx`, `NAME.wy`, `NAME.wz`.
+    #[getter]
+    fn v_names(&self) -> Vec<String> {
+        kinechain::regression::velocity_names(&self.robot.inner)
+    }
+
+    /// `q_names` (the name the package first gave them).
     #[getter]
     fn joint_names(&self) -> Vec<String> {
         variable_names(&self.robot.inner)
@@ -178,120 +242,5 @@ impl Chain {
     /// A configuration inside the limits (0 where admitted, else the middle of the range).
     fn neutral<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_vec(py, self.robot.inner.neutral())
-    }
-
-    /// Poses (and with `qd`, `qdd` velocities and accelerations) of the links; see the
-    /// package's documentation of `Chain.fk`.
-    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, check_limits=true, threads=None, out=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn fk<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        qd: Option<&Bound<'py, PyAny>>,
-        qdd: Option<&Bound<'py, PyAny>>,
-        links: Option<&Bound<'py, PyAny>>,
-        check_limits: bool,
-        threads: Option<&Bound<'py, PyAny>>,
-        out: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<FkResult> {
-        crate::fk::fk(
-            &self.robot,
-            py,
-            (q, qd, qdd),
-            links,
-            policy(check_limits),
-            threads,
-            out,
-        )
-    }
-
-    /// The poses `world_from_link` of the links asked for, `(L, 4, 4)` for one configuration or
-    /// `(N, L, 4, 4)` for rows of them: `fk(q, ...).poses` without the result object.
-    #[pyo3(signature = (q, *, links=None, check_limits=true, threads=None, out=None))]
-    fn poses<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        links: Option<&Bound<'py, PyAny>>,
-        check_limits: bool,
-        threads: Option<&Bound<'py, PyAny>>,
-        out: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Py<PyAny>> {
-        let r = crate::fk::fk(
-            &self.robot,
-            py,
-            (q, None, None),
-            links,
-            policy(check_limits),
-            threads,
-            out,
-        )?;
-        Ok(r.poses)
-    }
-
-    /// The pose `world_from_link` of one link, `(4, 4)` for one configuration or `(N, 4, 4)`
-    /// for rows of them: `fk(q, links=[link]).poses[..., 0, :, :]` in one call.
-    #[pyo3(signature = (q, link, *, check_limits=true, threads=None))]
-    fn pose<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        link: &Bound<'py, PyString>,
-        check_limits: bool,
-        threads: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Py<PyAny>> {
-        crate::fk::pose(&self.robot, py, q, link, policy(check_limits), threads)
-    }
-
-    /// For each row of `q` (`(N, dof)`), whether `fk` would accept it: finite, and within the
-    /// limits when `check_limits`.
-    #[pyo3(signature = (q, check_limits=true))]
-    fn _admitted<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        check_limits: bool,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let chain = &self.robot.inner;
-        let q = float_array(q, "q")?;
-        let (n, _) = rows(chain, &q, "q")?;
-        let policy = policy(check_limits);
-        let dof = chain.dof();
-        let q = q.as_slice()?;
-        let ok: Vec<bool> = (0..n)
-            .map(|i| kinechain::check_q(chain, &q[i * dof..(i + 1) * dof], policy).is_ok())
-            .collect();
-        Ok(PyArray1::from_vec(py, ok))
-    }
-
-    /// The geometric Jacobian of `link`: `(6, dof)` or `(N, 6, dof)`, rows v then ω, so that
-    /// `[v; ω] = J q̇`. `frame="world"` (default): v of the link origin (or of `point`, link
-    /// coordinates) and ω in world axes; `frame="link"`: both in the link's own axes. A batch
-    /// runs the batch kernels without the GIL and writes straight into the returned array (or
-    /// into `out`, a C-contiguous float64 array of that shape).
-    #[pyo3(signature = (q, link, *, frame="world", point=None, check_limits=true, threads=None, out=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn jacobian<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'py, PyAny>,
-        link: &str,
-        frame: &str,
-        point: Option<[f64; 3]>,
-        check_limits: bool,
-        threads: Option<&Bound<'py, PyAny>>,
-        out: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Py<PyAny>> {
-        crate::jacobian::jacobian(
-            &self.robot,
-            py,
-            q,
-            link,
-            (frame, point),
-            policy(check_limits),
-            threads,
-            out,
-        )
     }
 }

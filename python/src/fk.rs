@@ -44,7 +44,7 @@ pub(crate) fn fk<'py>(
     if qd.is_none()
         && qdd.is_none()
         && out.is_none()
-        && let Some(q) = plain_vector(q, inner.dof())
+        && let Some(q) = plain_vector(q, inner.nq())
     {
         let (links, poses) = single_poses(robot, py, q, links, policy, false)?;
         return Ok(FkResult {
@@ -61,14 +61,15 @@ pub(crate) fn fk<'py>(
     let qdd = qdd.map(|a| float_array(a, "qdd")).transpose()?;
     let (n, batched) = rows(inner, &q, "q")?;
     for (a, what) in [(&qd, "qd"), (&qdd, "qdd")] {
-        if let Some(a) = a
-            && a.shape() != q.shape()
-        {
-            return Err(StateError::new_err(format!(
-                "{what} has shape {:?}, q {:?}: they must be the same",
-                a.shape(),
-                q.shape()
-            )));
+        if let Some(a) = a {
+            let rate_rows = rows(inner, a, what)?;
+            if rate_rows != (n, batched) {
+                return Err(StateError::new_err(format!(
+                    "{what} has shape {:?}, q {:?}: they must have the same rows",
+                    a.shape(),
+                    q.shape()
+                )));
+            }
         }
     }
     if qdd.is_some() && qd.is_none() {
@@ -122,7 +123,7 @@ pub(crate) fn fk<'py>(
     );
     let motion = Motion { q, qd, qdd };
     let mut signals = Signals::default();
-    let result = if !batched || inner.dof() == 0 {
+    let result = if !batched || inner.nq() == 0 {
         // One configuration: too little work to leave the GIL for, buffers reused. A chain
         // without moving joints has the same poses in every row (the batch kernels cannot count
         // the rows of an empty q).
@@ -179,7 +180,7 @@ pub(crate) fn pose<'py>(
 ) -> PyResult<Py<PyAny>> {
     // (`threads=` is checked on every path, though one configuration runs on this thread.)
     thread_count(threads)?;
-    if let Some(v) = plain_vector(q, robot.inner.dof()) {
+    if let Some(v) = plain_vector(q, robot.inner.nq()) {
         return Ok(single_poses(robot, py, v, Some(link.as_any()), policy, true)?.1);
     }
     let r = fk(
@@ -245,17 +246,17 @@ fn single_rows(
     poses: &mut [f64],
     rates: &mut [&mut [f64]; 4],
 ) -> Result<(), ArrayError> {
-    let (dof, ids) = (chain.dof(), links.selection.ids());
+    let (nq, nv, ids) = (chain.nq(), chain.nv(), links.selection.ids());
     let l = ids.len();
     for i in 0..n {
-        fn rows_of(a: &[f64], i: usize, dof: usize) -> &[f64] {
-            &a[i * dof..(i + 1) * dof]
+        fn rows_of(a: &[f64], i: usize, width: usize) -> &[f64] {
+            &a[i * width..(i + 1) * width]
         }
-        let row = |a| rows_of(a, i, dof);
+        let rate = |a| rows_of(a, i, nv);
         let motion = Motion {
-            q: row(motion.q),
-            qd: motion.qd.map(row),
-            qdd: motion.qdd.map(row),
+            q: rows_of(motion.q, i, nq),
+            qd: motion.qd.map(rate),
+            qdd: motion.qdd.map(rate),
         };
         let pose = &mut poses[i * l * 16..(i + 1) * l * 16];
         let [omega, v, alpha, a] = rates.each_mut().map(|r| {

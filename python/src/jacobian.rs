@@ -42,9 +42,9 @@ pub(crate) fn jacobian<'py>(
     let threads = thread_count(threads)?;
     let frame = frame_of(frame)?;
     let id = inner.link_id(link).map_err(|e| error(&e))?;
-    let dof = inner.dof();
+    let dof = inner.nv();
     if out.is_none()
-        && let Some(q) = plain_vector(q, dof)
+        && let Some(q) = plain_vector(q, inner.nq())
     {
         // The common call: `q` copied into the chain's buffer, the result into a spare array.
         return robot.with_reused(|r| {
@@ -102,7 +102,7 @@ fn single(
     let poses = forward_kinematics(chain, data, q.unwrap_or(copied))
         .map_err(|source| ArrayError::State { index: 0, source })?;
     poses.jacobian_in_into(id, frame, j);
-    let dof = chain.dof();
+    let dof = chain.nv();
     for (r, row) in dst.chunks_exact_mut(dof).enumerate().take(6) {
         for (c, x) in row.iter_mut().enumerate() {
             *x = j[(r, c)];

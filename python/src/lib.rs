@@ -22,6 +22,7 @@ mod files;
 mod fk;
 mod jacobian;
 mod links;
+mod methods;
 mod orientation;
 mod outputs;
 mod regression;

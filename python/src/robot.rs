@@ -40,8 +40,8 @@ impl Reused {
     pub(crate) fn scratch(&mut self, chain: &Inner, policy: LimitPolicy) -> &mut Scratch {
         let s = self.scratch.get_or_insert_with(|| Scratch {
             data: Data::new(chain),
-            q: vec![0.0; chain.dof()],
-            j: Matrix6xX::zeros(chain.dof()),
+            q: vec![0.0; chain.nq()],
+            j: Matrix6xX::zeros(chain.nv()),
         });
         s.data.set_limit_policy(policy);
         s
@@ -51,7 +51,7 @@ impl Reused {
 /// What a single evaluation works in: the core's buffers, and a copy of the joint values.
 pub(crate) struct Scratch {
     pub(crate) data: Data,
-    /// `dof` entries.
+    /// `nq` entries.
     pub(crate) q: Vec<f64>,
     /// A Jacobian.
     pub(crate) j: Matrix6xX<f64>,

@@ -44,6 +44,18 @@ pub enum StateError {
         /// How far from 1 the norm may be.
         tolerance: f64,
     },
+    /// A vector in another library's layout has the wrong number of entries.
+    #[error("{what} in the {layout} layout has {got} entries; the chain takes {expected} there")]
+    LayoutLength {
+        /// The layout (`pinocchio`, `mujoco`).
+        layout: &'static str,
+        /// `q`, `q_dot` or `q_ddot`.
+        what: &'static str,
+        /// Entries expected.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
     /// A joint asked for as a screw (θ and d about one axis) that is not one.
     #[error("joint '{joint}' is floating: its motion is not a screw about one axis")]
     NoScrew {

@@ -8,7 +8,7 @@
 //! | `layout` | the compiled chain: bodies, stored frames, limit tables, [`Chain`] | `simd`, `error`, [`crate::model`] |
 //! | `kernel` | one body's pose and rate steps, on lanes and on padded columns | `simd`, `layout` |
 //! | `compile` | [`crate::ChainBuilder`] → [`Chain`] | `layout`, `kernel` |
-//! | `checks`, `link_rates`, `jacobian` | input checks, link and point rates, Jacobians | the above |
+//! | `checks`, `link_rates`, `jacobian`, `layouts` | input checks, link and point rates, Jacobians, other libraries' joint vectors | the above |
 //! | `single` | [`forward_kinematics`] and its siblings, [`Data`], [`Poses`] | the above |
 //! | [`batch`] | many configurations at once, on one thread or several | the above, never `single` |
 //!
@@ -22,7 +22,9 @@ pub mod error;
 pub(crate) mod jacobian;
 pub(crate) mod kernel;
 pub(crate) mod layout;
+pub mod layouts;
 pub(crate) mod link_rates;
+pub(crate) mod sampling;
 pub(crate) mod simd;
 pub(crate) mod single;
 
@@ -31,6 +33,7 @@ pub use error::StateError;
 pub use jacobian::JacobianFrame;
 pub use kernel::floating::QUATERNION_TOLERANCE;
 pub use layout::chain::Chain;
+pub use layouts::{JointState, Layout};
 pub use link_rates::{
     AccelerationParts, LinkAcceleration, LinkVelocity, PointMotion, PointVelocity,
 };

@@ -63,15 +63,6 @@ fn names<'c>(
         .collect()
 }
 
-/// A uniformly random unit quaternion (w, x, y, z) from three uniform numbers (Shoemake).
-fn unit_quaternion(rng: &mut SplitMix) -> [f64; 4] {
-    let (u1, u2, u3) = (rng.unit(), rng.unit(), rng.unit());
-    let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
-    let (s2, c2) = (2.0 * PI * u2).sin_cos();
-    let (s3, c3) = (2.0 * PI * u3).sin_cos();
-    [a * s2, a * c2, b * s3, b * c3]
-}
-
 /// The configurations a record is made at: zero, the lower and the upper corner of the limits
 /// (each where the limits admit it; an entry without a finite bound takes its neutral value),
 /// then `samples` drawn uniformly within [`Chain::lower`] and [`Chain::upper`] (`[−π, π]` where
@@ -114,7 +105,7 @@ fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, 
             })
             .collect();
         if let Some(e) = quaternion.clone() {
-            q[e].copy_from_slice(&unit_quaternion(&mut rng));
+            q[e].copy_from_slice(&rng.unit_quaternion());
         }
         qs.push(q);
     }

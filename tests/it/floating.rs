@@ -627,3 +627,107 @@ fn every_single_evaluation_mode_gives_the_full_evaluations_bits() {
         }
     }
 }
+
+#[cfg(feature = "reference")]
+#[test]
+fn a_floating_base_is_within_a_few_ulps_of_the_256_bit_evaluation() {
+    let chain = floating("panda.urdf");
+    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+    let mut r = rng(55);
+    let (mut pose_worst, mut rate_worst) = (0.0_f64, [0.0_f64; 4]);
+    for _ in 0..50 {
+        let q = random_q(&chain, &mut r);
+        let qd = random_vec(chain.nv(), 2.0, &mut r);
+        let qdd = random_vec(chain.nv(), 2.0, &mut r);
+        let exact = kinechain::reference::link_motion(&chain, &q, &qd, &qdd);
+        let got = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
+        let poses: Vec<Transform> = (0..exact.len())
+            .map(|l| got.world_from_link(chain.link_id(chain.links()[l].name()).unwrap()))
+            .collect();
+        let want: Vec<Transform> = exact.iter().map(|m| m.pose).collect();
+        let (p, rot) = kinechain::reference::max_errors(&poses, &want);
+        pose_worst = pose_worst.max(p / 4.0).max(rot); // positions within 2 m of the origin
+        let rates: Vec<[[f64; 3]; 4]> = (0..exact.len())
+            .map(|l| {
+                let id = chain.link_id(chain.links()[l].name()).unwrap();
+                let (v, a) = (got.velocity(id), got.acceleration(id));
+                [v.omega.into(), v.v.into(), a.alpha.into(), a.a.into()]
+            })
+            .collect();
+        for (w, (_, ulps)) in rate_worst
+            .iter_mut()
+            .zip(kinechain::reference::max_rate_errors(&rates, &exact))
+        {
+            *w = w.max(ulps);
+        }
+    }
+    assert!(pose_worst < 8.0 * f64::EPSILON, "{pose_worst:e}");
+    assert!(rate_worst.iter().all(|&u| u < 8.0), "{rate_worst:?}");
+}
+
+#[test]
+fn joint_vectors_go_to_other_layouts_and_back() {
+    use kinechain::eval::layouts::Layout;
+    let chain = floating("panda.urdf");
+    let mut r = rng(61);
+    for layout in [Layout::Pinocchio, Layout::Mujoco] {
+        // The Panda's arm joints are limited (no cos/sin), its second finger a mimic.
+        assert_eq!(chain.layout_sizes(layout), (chain.nq() + 1, chain.nv() + 1));
+        for _ in 0..10 {
+            let q = random_q(&chain, &mut r);
+            let qd = random_vec(chain.nv(), 1.0, &mut r);
+            let qdd = random_vec(chain.nv(), 1.0, &mut r);
+            let theirs = chain.to_layout(layout, &q, Some(&qd), Some(&qdd)).unwrap();
+            let back = chain
+                .from_layout(
+                    layout,
+                    &theirs.q,
+                    theirs.q_dot.as_deref(),
+                    theirs.q_ddot.as_deref(),
+                )
+                .unwrap();
+            let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-14);
+            assert!(close(&back.q, &q), "{layout:?} q");
+            assert!(close(back.q_dot.as_deref().unwrap(), &qd), "{layout:?} qd");
+            assert!(
+                close(back.q_ddot.as_deref().unwrap(), &qdd),
+                "{layout:?} qdd"
+            );
+            // The mimicked finger follows its primary.
+            let finger = theirs.q[theirs.q.len() - 1];
+            assert_eq!(finger, q[q.len() - 1]);
+        }
+    }
+    // A continuous joint is cos, sin in Pinocchio's layout and its angle in MuJoCo's.
+    let wheel = Chain::from_urdf_str(
+        r#"<robot name="w"><link name="a"/><link name="b"/>
+        <joint name="spin" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint></robot>"#,
+    )
+    .unwrap();
+    let pin = wheel
+        .to_layout(Layout::Pinocchio, &[0.5], None, None)
+        .unwrap();
+    assert_eq!(pin.q, [0.5f64.cos(), 0.5f64.sin()]);
+    assert_eq!(
+        wheel
+            .from_layout(Layout::Pinocchio, &pin.q, None, None)
+            .unwrap()
+            .q,
+        [0.5]
+    );
+    assert_eq!(
+        wheel
+            .to_layout(Layout::Mujoco, &[0.5], None, None)
+            .unwrap()
+            .q,
+        [0.5]
+    );
+    let e = wheel
+        .from_layout(Layout::Pinocchio, &[1.0], None, None)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "q in the pinocchio layout has 1 entries; the chain takes 2 there"
+    );
+}

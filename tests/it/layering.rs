@@ -81,6 +81,8 @@ const EVAL_ORDER: &[&str] = &[
     "eval::kernel",
     "eval::compile",
     "eval::checks",
+    "eval::layouts",
+    "eval::sampling",
     "eval::link_rates",
     "eval::jacobian",
     "eval::single::data",
