@@ -7,7 +7,8 @@ link, from Denavit-Hartenberg YAML or URDF files, with numpy arrays in and out.
 >>> r["tool0"]                                      # doctest: +SKIP
 
 Units are radians, metres and seconds; every quantity is in the world (base) frame; ``q`` lists
-the independent joints in ``chain.joint_names`` order. A 2-D ``q`` (one configuration per row)
+the independent joints in ``chain.q_names`` order (a floating base's position and quaternion
+first). A 2-D ``q`` (one configuration per row)
 is evaluated in Rust with the GIL released, on all cores unless ``threads`` says otherwise.
 """
 
@@ -23,11 +24,16 @@ from ._kinechain import Chain, Error, FkResult, LoadError, StateError, __version
 __all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "orientation", "table", "testing", "__version__"]
 
 
-def load(path: Union[str, "os.PathLike[str]"]) -> Chain:
+def load(path: Union[str, "os.PathLike[str]"], *, floating_base: bool = False) -> Chain:
     """Loads a robot file: a DH table (``.yaml``/``.yml``) or a URDF file (``.urdf``).
 
+    With ``floating_base``, a floating joint ``root_joint`` is added between the world and the
+    robot's root link (a humanoid's or a quadruped's base, as Pinocchio's
+    ``JointModelFreeFlyer``): ``q`` then starts with its position and quaternion (w, x, y, z),
+    ``qd`` with its velocity and angular velocity in world axes.
+
     Raises ``LoadError`` (naming the file, line, column and joint) if it cannot be read."""
-    return Chain.from_file(os.fspath(path))
+    return Chain.from_file(os.fspath(path), floating_base=floating_base)
 
 
 def _float_array(x: Any, name: str) -> np.ndarray:

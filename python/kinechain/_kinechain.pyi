@@ -40,23 +40,37 @@ class Chain:
     """A robot: links, joints and limits; immutable and shared between threads."""
 
     @staticmethod
-    def from_file(path: str) -> "Chain":
-        """Loads a DH table (.yaml, .yml) or a URDF file (.urdf)."""
+    def from_file(path: str, floating_base: bool = False) -> "Chain":
+        """Loads a DH table (.yaml, .yml) or a URDF file (.urdf); with floating_base, a
+        floating joint root_joint between the world and the root link."""
     @staticmethod
-    def from_urdf_string(text: str) -> "Chain":
+    def from_urdf_string(text: str, floating_base: bool = False) -> "Chain":
         """A robot from URDF text."""
     @staticmethod
-    def from_yaml_string(text: str) -> "Chain":
+    def from_yaml_string(text: str, floating_base: bool = False) -> "Chain":
         """A robot from DH YAML text."""
     @property
     def name(self) -> str:
         """The robot's name."""
     @property
     def dof(self) -> int:
-        """Entries of a configuration q."""
+        """Degrees of freedom: entries of qd, qdd and columns of a Jacobian (nv)."""
+    @property
+    def nq(self) -> int:
+        """Entries of q: dof, plus one for a floating joint (a quaternion)."""
+    @property
+    def nv(self) -> int:
+        """Entries of qd and qdd."""
+    @property
+    def q_names(self) -> list[str]:
+        """The name of each entry of q (NAME.theta/NAME.d of a cylindrical joint, NAME.x ...
+        NAME.qz of a floating one)."""
+    @property
+    def v_names(self) -> list[str]:
+        """The name of each entry of qd (NAME.vx ... NAME.wz of a floating joint)."""
     @property
     def joint_names(self) -> list[str]:
-        """The name of each entry of q, in order (a cylindrical joint's as NAME.theta, NAME.d)."""
+        """q_names."""
     @property
     def link_names(self) -> list[str]:
         """Every link, in the chain's order."""
@@ -101,6 +115,29 @@ class Chain:
         threads: Optional[int] = None,
     ) -> npt.NDArray[np.float64]:
         """The pose world_from_link of one link: (4, 4) or (N, 4, 4)."""
+    def random(
+        self, n: Optional[int] = None, *, seed: int = 0, base: Tuple[float, float] = (-1.0, 1.0)
+    ) -> npt.NDArray[np.float64]:
+        """Random configurations, (nq,) or (n, nq): uniform within limits, a floating base in
+        the box base along each axis, turned by a uniformly random rotation."""
+    def to_layout(
+        self,
+        q: npt.ArrayLike,
+        qd: Optional[npt.ArrayLike] = None,
+        qdd: Optional[npt.ArrayLike] = None,
+        *,
+        layout: str,
+    ) -> Tuple[npt.NDArray[np.float64], Optional[npt.NDArray[np.float64]], Optional[npt.NDArray[np.float64]]]:
+        """(q, qd, qdd) in "pinocchio"'s or "mujoco"'s layout."""
+    def from_layout(
+        self,
+        q: npt.ArrayLike,
+        qd: Optional[npt.ArrayLike] = None,
+        qdd: Optional[npt.ArrayLike] = None,
+        *,
+        layout: str,
+    ) -> Tuple[npt.NDArray[np.float64], Optional[npt.NDArray[np.float64]], Optional[npt.NDArray[np.float64]]]:
+        """kinechain's (q, qd, qdd) from "pinocchio"'s or "mujoco"'s layout."""
     def jacobian(
         self,
         q: npt.ArrayLike,

@@ -5,8 +5,9 @@
 >>> ddf.map_partitions(kc.table.poses, chain, links=["panda_hand"],
 ...                    meta=kc.table.poses_meta(ddf._meta, chain, links=["panda_hand"]))  # doctest: +SKIP
 
-Joint values come from one float64 column per entry of ``q``, named as ``chain.joint_names``
-(a cylindrical joint's as ``NAME.theta`` and ``NAME.d``), or from one list column
+Joint values come from one float64 column per entry of ``q``, named as ``chain.q_names``
+(a cylindrical joint's as ``NAME.theta`` and ``NAME.d``, a floating base's as
+``root_joint.x`` … ``root_joint.qz``), or from one list column
 (``q_column=``). Every other column is carried through unchanged, in order; after them come, for
 each link asked for, ``<link>.x``, ``<link>.y``, ``<link>.z`` and its orientation:
 ``quaternion`` → ``<link>.qw .qx .qy .qz``; ``matrix`` → ``<link>.r00`` … ``<link>.r22``;
@@ -61,20 +62,20 @@ def _is_arrow(table: Any) -> bool:
 
 
 def _joint_values(table: Any, chain: Chain, q_column: Optional[str], arrow: bool) -> np.ndarray:
-    """The table's joint values as an ``(N, dof)`` float64 array (NaN where null)."""
-    names = chain.joint_names
+    """The table's joint values as an ``(N, nq)`` float64 array (NaN where null)."""
+    names = chain.q_names
     n = table.num_rows if arrow else len(table)
     if q_column is not None:
         if q_column not in (table.column_names if arrow else table.columns):
             raise StateError(f"no column {q_column!r} for q (columns: {', '.join(map(str, _columns(table, arrow)))})")
         values = table.column(q_column).to_pylist() if arrow else list(table[q_column])
-        q = np.full((n, chain.dof), np.nan)
+        q = np.full((n, chain.nq), np.nan)
         for i, row in enumerate(values):
             if row is None:
                 continue
             row = np.asarray(row, dtype=np.float64)
-            if row.shape != (chain.dof,):
-                raise StateError(f"row {i}: {q_column} has {row.size} values; the chain has {chain.dof} (joints: {', '.join(names)})")
+            if row.shape != (chain.nq,):
+                raise StateError(f"row {i}: {q_column} has {row.size} values; the chain takes {chain.nq} (in order: {', '.join(names)})")
             q[i] = row
         return q
     columns = _columns(table, arrow)
@@ -84,8 +85,8 @@ def _joint_values(table: Any, chain: Chain, q_column: Optional[str], arrow: bool
                          "which one holds the joint's values is ambiguous (rename or drop the others)")
     missing = [j for j in names if j not in columns]
     if missing:
-        raise StateError(f"no column for joints {', '.join(map(repr, missing))} (give one float64 column per joint, named as chain.joint_names, or q_column=)")
-    q = np.empty((n, chain.dof))
+        raise StateError(f"no column for joints {', '.join(map(repr, missing))} (give one float64 column per entry of q, named as chain.q_names, or q_column=)")
+    q = np.empty((n, chain.nq))
     for k, j in enumerate(names):
         if arrow:
             col = table.column(j)

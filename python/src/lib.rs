@@ -21,6 +21,7 @@ mod errors;
 mod files;
 mod fk;
 mod jacobian;
+mod layouts;
 mod links;
 mod methods;
 mod orientation;

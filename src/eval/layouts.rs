@@ -2,8 +2,8 @@
 //! `buildModelFromUrdf` lays out a model, with `JointModelFreeFlyer` for a floating base) and
 //! MuJoCo's (`qpos`, `qvel`, `qacc`).
 //!
-//! Joint by joint, in the chain's depth-first order (Pinocchio's and MuJoCo's order for a model
-//! built from the same tree):
+//! Joint by joint, depth first from the root: a link's children in file order for MuJoCo (as
+//! kinechain orders them), by joint name for Pinocchio (whose URDF reader keeps them so):
 //!
 //! | joint | kinechain `q` / `q̇` | Pinocchio `q` / `v` | MuJoCo `qpos` / `qvel` |
 //! |---|---|---|---|
@@ -95,10 +95,35 @@ impl Entry {
     }
 }
 
+/// The chain's joints in `layout`'s order: depth first from the root, a link's children in file
+/// order (MuJoCo, as kinechain orders them) or by joint name (Pinocchio, whose URDF reader
+/// keeps a link's child joints in a map by name).
+fn joint_order(chain: &Chain, layout: Layout) -> Vec<&Joint> {
+    let joints = chain.joints();
+    if layout == Layout::Mujoco {
+        return joints.iter().collect();
+    }
+    let mut children: Vec<Vec<&Joint>> = vec![Vec::new(); chain.links().len()];
+    for j in joints {
+        children[j.parent().index()].push(j);
+    }
+    for c in &mut children {
+        c.sort_by(|a, b| a.name().cmp(b.name()));
+    }
+    let mut order = Vec::with_capacity(joints.len());
+    // Depth first (iteratively: chains may be long); the root is link 0.
+    let mut stack: Vec<&Joint> = children[0].iter().rev().copied().collect();
+    while let Some(j) = stack.pop() {
+        order.push(j);
+        stack.extend(children[j.child().index()].iter().rev().copied());
+    }
+    order
+}
+
 /// Each moving joint's entries in `layout`, in order.
 fn entries(chain: &Chain, layout: Layout) -> Vec<Entry> {
     let mut out = Vec::new();
-    for joint in chain.joints() {
+    for joint in joint_order(chain, layout) {
         let source = chain
             .joint_id(joint.name())
             .ok()

@@ -375,9 +375,11 @@ impl<'d, 'i> Reader<'d, 'i> {
         let name = self.required(node, "name", "<joint>")?;
         let label = format!("joint '{name}'");
         let type_name = self.required(node, "type", &label)?;
+        // (`dont_collapse` is SDFormat's, on fixed joints it must not merge away: no kinematic
+        // meaning, and common in vendor files.)
         for attr in node.attributes() {
             let qname = &self.doc.input_text()[attr.range_qname()];
-            if !qname.contains(':') && !["name", "type"].contains(&qname) {
+            if !qname.contains(':') && !["name", "type", "dont_collapse"].contains(&qname) {
                 self.notes.add(attr.range().start, || {
                     format!(
                         "{label}: attribute {qname} is not a URDF joint attribute and is ignored"

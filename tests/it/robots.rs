@@ -9,6 +9,8 @@ use kinechain::{Chain, Data, LimitPolicy, forward_kinematics};
 fn every_robot_loads_with_its_published_dof() {
     let expected = [
         ("cylindrical.yaml", 2),
+        ("g1.urdf", 29),
+        ("go2.urdf", 12),
         ("iiwa7.yaml", 7),
         ("irb140.yaml", 6),
         ("panda.urdf", 8),
