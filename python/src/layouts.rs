@@ -209,6 +209,7 @@ impl Chain {
 
     /// The inverse of `to_layout`: kinechain's `(q, qd, qdd)` from another library's.
     #[pyo3(signature = (q, qd=None, qdd=None, *, layout))]
+    #[allow(clippy::wrong_self_convention)] // the chain converts; the name says from what
     fn from_layout<'py>(
         &self,
         py: Python<'py>,
