@@ -221,6 +221,8 @@ pub struct Model {
     pub(crate) joint_index: HashMap<String, usize>,
     /// [`Model::end_link`].
     pub(crate) end_link: LinkId,
+    /// [`Model::floating_joint`].
+    pub(crate) floating: Option<JointId>,
     /// The description the chain was built from (for writing it out again), with the loader's
     /// warnings.
     pub(crate) source: ChainBuilder,
@@ -257,11 +259,9 @@ impl Model {
     /// The floating joint, if the chain has one: it is then the first joint, and its entries
     /// come first in `q` (seven) and in `q̇` (six).
     #[must_use]
+    #[inline]
     pub fn floating_joint(&self) -> Option<JointId> {
-        self.joints
-            .iter()
-            .position(|j| j.kind == JointKind::Floating)
-            .map(JointId)
+        self.floating
     }
 
     /// All joints (fixed and mimic included), from the base outwards (depth first, children in

@@ -74,6 +74,10 @@ pub(crate) fn validate(spec: &ChainBuilder) -> Result<Validated, ModelError> {
 
     let model = Model {
         end_link: farthest_link(&links, &joints),
+        floating: joints
+            .iter()
+            .position(|j| j.kind == JointKind::Floating)
+            .map(JointId),
         name: spec.name.clone(),
         link_index: links
             .iter()

@@ -52,8 +52,10 @@ pub(crate) fn squared_norm_band() -> (f64, f64) {
 }
 
 /// The frame of the floating joint's body at `q` (its first seven entries; `q` holds at least
-/// seven).
-#[inline]
+/// seven). Out of line, and marked cold: the kernels of chains without a floating joint test
+/// one flag for it at their root bodies and keep their code as it was.
+#[cold]
+#[inline(never)]
 #[must_use]
 pub(crate) fn frame(body: &Body, q: &[f64]) -> Transform {
     let (p, e) = (&q[..3], &q[3..7]);
