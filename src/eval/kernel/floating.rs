@@ -58,10 +58,18 @@ pub(crate) fn squared_norm_band() -> (f64, f64) {
 #[inline(never)]
 #[must_use]
 pub(crate) fn frame(body: &Body, q: &[f64]) -> Transform {
+    placed(body, own(q))
+}
+
+/// The motion `[A(e) p]` of the joint at `q`, before `pre` and `post`: eq. 2.13 of the
+/// normalised parameters, column by column (`r[c]` is column `c`). The batch kernels compute the
+/// same expressions on lanes (`pose_lanes::floating_frame`).
+#[inline(always)]
+#[must_use]
+pub(crate) fn own(q: &[f64]) -> Transform {
     let (p, e) = (&q[..3], &q[3..7]);
     let (e0, e1, e2, e3) = (e[0], e[1], e[2], e[3]);
     let s = 2.0 / (((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3);
-    // Eq. 2.13 of the normalised parameters, column by column (`r[c]` is column `c`).
     let r = [
         [
             1.0 - s * (e2 * e2 + e3 * e3),
@@ -79,14 +87,24 @@ pub(crate) fn frame(body: &Body, q: &[f64]) -> Transform {
             1.0 - s * (e1 * e1 + e2 * e2),
         ],
     ];
-    let own = Transform {
+    Transform {
         r,
         p: [p[0], p[1], p[2]],
+    }
+}
+
+/// `pre · own · post`, each product only when its placement is not the identity (the usual
+/// floating base has neither).
+#[inline]
+pub(crate) fn placed(body: &Body, own: Transform) -> Transform {
+    use crate::eval::layout::body::Placement;
+    let before = match body.pre {
+        Placement::Identity => own,
+        _ => body.pre_frame * own,
     };
-    let placed = body.pre_frame * own;
     match body.post {
-        crate::eval::layout::body::Placement::Identity => placed,
-        post => placed * post.to_transform(),
+        Placement::Identity => before,
+        post => before * post.to_transform(),
     }
 }
 

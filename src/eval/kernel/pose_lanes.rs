@@ -162,26 +162,87 @@ pub(crate) fn root_step<N: LaneNum, A: Arith>(body: &Body, q: &[N], sin_cos: (N,
     }
 }
 
-/// A floating joint's body's frame in each lane of `N` (`q` one part's joint values).
+/// A floating joint's body's frame in each lane of `N` (`q` one part's joint values): the
+/// expressions of [`crate::eval::kernel::floating::frame`] in lane operations (plain products and
+/// sums, in the same order, so each lane has the single evaluation's bits), the one division
+/// lane by lane.
 #[inline(always)]
 fn floating_frame<N: LaneNum>(body: &Body, q: &[N]) -> Frame<N> {
-    let width = LANES / N::PARTS;
-    let mut entries = [Lanes([0.0; LANES]); 7];
-    for (e, &x) in entries.iter_mut().zip(q) {
-        x.put(e, 0);
+    let (e0, e1, e2, e3) = (q[3], q[4], q[5], q[6]);
+    let n2 = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3;
+    let mut lanes = Lanes([1.0; LANES]);
+    n2.put(&mut lanes, 0);
+    for x in &mut lanes.0[..LANES / N::PARTS] {
+        *x = 2.0 / *x;
     }
-    let mut out = Frame::<Lanes>::splat(&crate::model::transform::Transform::IDENTITY);
-    for lane in 0..width {
-        let own: [f64; 7] = std::array::from_fn(|j| entries[j].0[lane]);
-        let t = crate::eval::kernel::floating::frame(body, &own);
-        for c in 0..3 {
-            for i in 0..3 {
-                out.r[c][i].0[lane] = t.r[c][i];
-            }
-            out.p[c].0[lane] = t.p[c];
-        }
+    let s = N::get(&lanes, 0);
+    let one = N::splat(1.0);
+    let own = Frame {
+        r: [
+            [
+                one - s * (e2 * e2 + e3 * e3),
+                s * (e1 * e2 + e0 * e3),
+                s * (e1 * e3 - e0 * e2),
+            ],
+            [
+                s * (e1 * e2 - e0 * e3),
+                one - s * (e1 * e1 + e3 * e3),
+                s * (e2 * e3 + e0 * e1),
+            ],
+            [
+                s * (e1 * e3 + e0 * e2),
+                s * (e2 * e3 - e0 * e1),
+                one - s * (e1 * e1 + e2 * e2),
+            ],
+        ],
+        p: [q[0], q[1], q[2]],
+    };
+    use crate::eval::layout::body::Placement;
+    let before = match body.pre {
+        Placement::Identity => own,
+        _ => constant_times(&body.pre_frame, &own),
+    };
+    match body.post {
+        Placement::Identity => before,
+        post => times_constant(&before, &post.to_transform()),
     }
-    Frame::get(&out, 0)
+}
+
+/// `a u` for a constant rotation `a` (columns `a[c]`), as `Transform::apply` sums it.
+#[inline(always)]
+fn turn<N: Num>(a: &[[f64; 3]; 3], u: &[N; 3]) -> [N; 3] {
+    std::array::from_fn(|k| {
+        N::splat(a[0][k]) * u[0] + N::splat(a[1][k]) * u[1] + N::splat(a[2][k]) * u[2]
+    })
+}
+
+/// `a · f` for a constant `a`, in `Transform`'s composition order.
+#[inline(always)]
+fn constant_times<N: Num>(a: &crate::model::transform::Transform, f: &Frame<N>) -> Frame<N> {
+    let moved = turn(&a.r, &f.p);
+    Frame {
+        r: [
+            turn(&a.r, &f.r[0]),
+            turn(&a.r, &f.r[1]),
+            turn(&a.r, &f.r[2]),
+        ],
+        p: std::array::from_fn(|k| N::splat(a.p[k]) + moved[k]),
+    }
+}
+
+/// `f · b` for a constant `b`, in `Transform`'s composition order.
+#[inline(always)]
+fn times_constant<N: Num>(f: &Frame<N>, b: &crate::model::transform::Transform) -> Frame<N> {
+    let apply = |u: [f64; 3]| -> [N; 3] {
+        std::array::from_fn(|k| {
+            f.r[0][k] * N::splat(u[0]) + f.r[1][k] * N::splat(u[1]) + f.r[2][k] * N::splat(u[2])
+        })
+    };
+    let moved = apply(b.p);
+    Frame {
+        r: [apply(b.r[0]), apply(b.r[1]), apply(b.r[2])],
+        p: std::array::from_fn(|k| f.p[k] + moved[k]),
+    }
 }
 
 #[cfg(test)]

@@ -114,8 +114,7 @@ pub(crate) fn root_rates_step<A: Arith, const ACC: bool>(
     if !body.floating {
         return rates_step::<A, ACC>(None, body, q, q_dot, q_ddot, sin_cos);
     }
-    let t = crate::eval::kernel::floating::frame(body, q);
-    let f = Frame4::load(&crate::eval::layout::stored::stored(&t));
+    let f = crate::eval::kernel::pose_columns::root_step::<A>(body, q, sin_cos);
     let [omega, v, alpha, a] =
         crate::eval::kernel::floating::rates(q_dot, if ACC { Some(q_ddot) } else { None });
     let pad = |x: [f64; 3]| A::Col::load(&[x[0], x[1], x[2], 0.0]);

@@ -356,9 +356,31 @@ fn poses_path_admitted_generic<A: Arith>(
 /// (the identity for `n = 0`).
 #[inline(always)]
 fn poses_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
+    let floating = store_base::<A>(chain, data, q, n);
     let chunks = chain.turning_before[n].div_ceil(crate::eval::simd::lanes::LANES);
     sin_cos_chunks::<A>(chain, data, q, 0..chunks);
-    compose_prefix::<A>(chain, data, q, n)
+    match floating {
+        true => compose_prefix::<A, true>(chain, data, q, n),
+        false => compose_prefix::<A, false>(chain, data, q, n),
+    }
+}
+
+/// A floating joint's body's frame (body 0), when it is among bodies `0..n`, into its slot of
+/// `data` before the sines and cosines are computed: every body waits for it, and its division
+/// and products then run beside them. (Computed in the loop over the bodies, at its place, the
+/// Unitree G1's base added about 40 ns to an evaluation; carried into the loop in registers, it
+/// made the loop of chains without one slower.) The loop, compiled apart for chains with one
+/// (see [`compose_prefix`]), reads it back from the first-level cache. True if it stored one.
+#[inline(always)]
+fn store_base<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> bool {
+    match chain.bodies[..n].first().filter(|b| b.floating) {
+        Some(body) => {
+            crate::eval::kernel::pose_columns::root_step::<A>(body, q, (0.0, 1.0))
+                .store(&mut data.world_from_body[0]);
+            true
+        }
+        None => false,
+    }
 }
 
 /// `sin`/`cos` of the angles gathered in chunks `chunks` of [`Chain::theta_gather`], into the
@@ -385,13 +407,25 @@ fn same_length<'a>(a: &'a [Lanes], b: &'a [Lanes]) -> (&'a [f64], &'a [f64]) {
 
 /// [`poses_prefix`] once the trigonometry of bodies `0..n` is in `data`.
 #[inline(always)]
-fn compose_prefix<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], n: usize) -> Frame4<A::Col> {
+fn compose_prefix<A: Arith, const FLOATING: bool>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    n: usize,
+) -> Frame4<A::Col> {
     // Sliced to `n` first, so that indexing by `k < n` needs no bounds checks.
     let frames = &mut data.world_from_body[..n];
     let (bodies, slots) = (&chain.bodies[..n], &chain.trig_slot[..n]);
     let (sin, cos) = same_length(&data.sin, &data.cos);
-    let mut f = Frame4::<A::Col>::identity();
-    for (k, (body, &slot)) in bodies.iter().zip(slots).enumerate() {
+    // With `FLOATING`, body 0 is a floating base whose frame `store_base` has put in its slot:
+    // the loop starts after it. (Compiled apart, so that chains without one run the loop they
+    // ran before floating bases existed.)
+    let (start, mut f) = match FLOATING {
+        true => (1, Frame4::load(&frames[0])),
+        false => (0, Frame4::<A::Col>::identity()),
+    };
+    for (i, (body, &slot)) in bodies[start..].iter().zip(&slots[start..]).enumerate() {
+        let k = start + i;
         // The previous body's frame stays in registers; only branches read a parent from memory.
         // (One call per case, so that the frame is never reached through an optional pointer.)
         let sin_cos = (sin[slot], cos[slot]);
@@ -432,7 +466,10 @@ fn poses_path_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64], body:
         run = chain.bodies[b].parent;
     }
     let mut f = match run {
-        Some(b) => compose_prefix::<A>(chain, data, q, b + 1),
+        Some(b) => match store_base::<A>(chain, data, q, b + 1) {
+            true => compose_prefix::<A, true>(chain, data, q, b + 1),
+            false => compose_prefix::<A, false>(chain, data, q, b + 1),
+        },
         None => Frame4::identity(),
     };
     let frames = &mut data.world_from_body;
@@ -565,14 +602,47 @@ fn rates_all_generic<A: Arith, const ACC: bool>(
     q_dot: &[f64],
     q_ddot: &[f64],
 ) {
+    // A floating base's state first (see `store_base`); the loop, compiled apart for it, starts
+    // after it.
+    match chain.bodies.first().filter(|b| b.floating) {
+        Some(b) => {
+            let (f, r) = crate::eval::kernel::rates_columns::root_rates_step::<A, ACC>(
+                b,
+                q,
+                q_dot,
+                q_ddot,
+                (0.0, 1.0),
+            );
+            f.store(&mut data.world_from_body[0]);
+            r.store::<ACC>(&mut data.rates[0]);
+            rates_loop::<A, ACC, true>(chain, data, q, q_dot, q_ddot);
+        }
+        None => rates_loop::<A, ACC, false>(chain, data, q, q_dot, q_ddot),
+    }
+}
+
+/// The body loop of [`rates_all_generic`]; with `FLOATING`, body 0's state is already in `data`.
+#[inline(always)]
+fn rates_loop<A: Arith, const ACC: bool, const FLOATING: bool>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) {
     sin_cos_chunks::<A>(chain, data, q, 0..chain.theta_gather.len());
     // Sliced to the number of bodies first, so that indexing by body needs no bounds checks.
     let n = chain.bodies.len();
     let (frames, rates) = (&mut data.world_from_body[..n], &mut data.rates[..n]);
     let slots = &chain.trig_slot[..n];
     let (sin, cos) = same_length(&data.sin, &data.cos);
-    let mut previous = (Frame4::<A::Col>::identity(), Rates4::zero());
-    for (k, (body, &slot)) in chain.bodies.iter().zip(slots).enumerate() {
+    let (start, mut previous) = match FLOATING {
+        true => (1, (Frame4::load(&frames[0]), Rates4::from_rates(&rates[0]))),
+        false => (0, (Frame4::<A::Col>::identity(), Rates4::zero())),
+    };
+    let bodies = &chain.bodies[start..n];
+    for (i, (body, &slot)) in bodies.iter().zip(&slots[start..]).enumerate() {
+        let k = start + i;
         // The previous body's state stays in registers; only branches read a parent from memory.
         // (One call per case, as in `poses_prefix`.)
         let sin_cos = (sin[slot], cos[slot]);
