@@ -25,7 +25,9 @@ __all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "ori
 
 
 def load(path: Union[str, "os.PathLike[str]"], *, floating_base: bool = False) -> Chain:
-    """Loads a robot file: a DH table (``.yaml``/``.yml``) or a URDF file (``.urdf``).
+    """Loads a robot file: a DH table (``.yaml``/``.yml``), a URDF file (``.urdf``) or a
+    MuJoCo MJCF file (``.xml``; ``q`` is then MuJoCo's ``qpos``, entry for entry, and
+    ``chain.keyframes`` holds its ``<key>`` configurations).
 
     With ``floating_base``, a floating joint ``root_joint`` is added between the world and the
     robot's root link (a humanoid's or a quadruped's base, as Pinocchio's

@@ -41,11 +41,20 @@ class Chain:
 
     @staticmethod
     def from_file(path: str, floating_base: bool = False) -> "Chain":
-        """Loads a DH table (.yaml, .yml) or a URDF file (.urdf); with floating_base, a
+        """Loads a DH table (.yaml, .yml), a URDF file (.urdf) or an MJCF file (.xml); with floating_base, a
         floating joint root_joint between the world and the root link."""
     @staticmethod
     def from_urdf_string(text: str, floating_base: bool = False) -> "Chain":
         """A robot from URDF text."""
+    @staticmethod
+    def from_mjcf_string(
+        text: str, base_dir: Optional[str] = None, floating_base: bool = False
+    ) -> "Chain":
+        """A robot from MJCF text, its includes looked up in base_dir (default: the current
+        directory)."""
+    @property
+    def keyframes(self) -> dict[str, npt.NDArray[np.float64]]:
+        """The file's named configurations (MJCF <key>), each a q of nq entries."""
     @staticmethod
     def from_yaml_string(text: str, floating_base: bool = False) -> "Chain":
         """A robot from DH YAML text."""

@@ -19,11 +19,12 @@ use std::path::PathBuf;
 pub(crate) struct Chain {
     /// The chain, its links and its buffers: what evaluations use.
     pub(crate) robot: Robot,
-    /// The text it was loaded from, and its format (`urdf` or `yaml`): what pickling ships
+    /// The text it was loaded from, and its format (`urdf`, `yaml` or `mjcf`): what pickling ships
     /// (with the name, which may have come from the file name).
     source: String,
     format: &'static str,
-    /// How it was loaded (a floating base added), which pickling ships too.
+    /// How it was loaded (a floating base added; where an MJCF file's includes are), which
+    /// pickling ships too.
     options: LoadOptions,
     /// The file it was loaded from, which the files this package writes never replace.
     pub(crate) origin: Option<PathBuf>,
@@ -45,7 +46,7 @@ impl Chain {
         })
     }
 
-    /// A chain from `text` in `format` (`urdf` or `yaml`), named `name` where the text names no
+    /// A chain from `text` in `format` (`urdf`, `yaml` or `mjcf`), named `name` where the text names no
     /// robot.
     fn from_text(
         py: Python<'_>,
@@ -58,9 +59,10 @@ impl Chain {
         let (kind, format) = match format {
             "urdf" => (Format::Urdf, "urdf"),
             "yaml" => (Format::DhYaml, "yaml"),
+            "mjcf" => (Format::Mjcf, "mjcf"),
             other => {
                 return Err(Error::new_err(format!(
-                    "unknown format '{other}' (urdf or yaml)"
+                    "unknown format '{other}' (urdf, yaml or mjcf)"
                 )));
             }
         };
@@ -72,7 +74,8 @@ impl Chain {
 
 #[pymethods]
 impl Chain {
-    /// Loads a robot file: a DH table (`.yaml`, `.yml`) or a URDF file (`.urdf`); with
+    /// Loads a robot file: a DH table (`.yaml`, `.yml`), a URDF file (`.urdf`) or an MJCF file
+    /// (`.xml`, its includes looked up beside it); with
     /// `floating_base`, a floating joint `root_joint` between the world and its root link.
     #[staticmethod]
     #[pyo3(signature = (path, floating_base=false))]
@@ -83,14 +86,21 @@ impl Chain {
             kinechain::io::read_robot_file(&read).map_err(|e| error_chain(&e))
         })?
         .map_err(LoadError::new_err)?;
-        let options = LoadOptions::default().with_floating_base(floating_base);
+        let mut options = LoadOptions::default().with_floating_base(floating_base);
         let inner =
             Inner::from_file_text_with(&path, &source, &options).map_err(|e| load_error(&e))?;
+        let origin = std::fs::canonicalize(&path).ok().or(Some(path.clone()));
         let format = match kinechain::io::Format::from_path(&path) {
             Some(kinechain::io::Format::Urdf) => "urdf",
+            Some(kinechain::io::Format::Mjcf) => {
+                // An unpickled copy reads the includes from the same directory.
+                if let Some(dir) = origin.as_deref().and_then(std::path::Path::parent) {
+                    options = options.with_base_dir(dir);
+                }
+                "mjcf"
+            }
             _ => "yaml",
         };
-        let origin = std::fs::canonicalize(&path).ok().or(Some(path));
         Chain::new(py, inner, (source, format, options), origin)
     }
 
@@ -102,6 +112,23 @@ impl Chain {
         Chain::from_text(py, text, "urdf", "robot", options)
     }
 
+    /// A robot from MJCF text, its includes looked up in `base_dir` (by default the current
+    /// directory); with `floating_base`, a floating joint above its root link.
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=None, floating_base=false))]
+    fn from_mjcf_string(
+        py: Python<'_>,
+        text: String,
+        base_dir: Option<PathBuf>,
+        floating_base: bool,
+    ) -> PyResult<Self> {
+        let mut options = LoadOptions::default().with_floating_base(floating_base);
+        if let Some(dir) = base_dir {
+            options = options.with_base_dir(dir);
+        }
+        Chain::from_text(py, text, "mjcf", "robot", options)
+    }
+
     /// A robot from DH YAML text (with `floating_base`, a floating joint above its root link).
     #[staticmethod]
     #[pyo3(signature = (text, floating_base=false))]
@@ -110,18 +137,23 @@ impl Chain {
         Chain::from_text(py, text, "yaml", "robot", options)
     }
 
-    /// A robot from its text, format (`urdf` or `yaml`), name (where the text names none) and
-    /// whether a floating base was added; what unpickling calls.
+    /// A robot from its text, format (`urdf`, `yaml` or `mjcf`), name (where the text names
+    /// none), whether a floating base was added and where an MJCF file's includes are; what
+    /// unpickling calls.
     #[staticmethod]
-    #[pyo3(signature = (text, format, name="robot", floating_base=false))]
+    #[pyo3(signature = (text, format, name="robot", floating_base=false, base_dir=None))]
     fn _from_source(
         py: Python<'_>,
         text: String,
         format: &str,
         name: &str,
         floating_base: bool,
+        base_dir: Option<PathBuf>,
     ) -> PyResult<Self> {
-        let options = LoadOptions::default().with_floating_base(floating_base);
+        let mut options = LoadOptions::default().with_floating_base(floating_base);
+        if let Some(dir) = base_dir {
+            options = options.with_base_dir(dir);
+        }
         Chain::from_text(py, text, format, name, options)
     }
 
@@ -133,6 +165,7 @@ impl Chain {
             me.format,
             me.robot.inner.name(),
             me.options.floating_base,
+            me.options.base_dir.clone(),
         );
         (make, state).into_pyobject(slf.py())
     }
@@ -201,6 +234,17 @@ impl Chain {
     #[getter]
     fn q_names(&self) -> Vec<String> {
         variable_names(&self.robot.inner)
+    }
+
+    /// The robot file's named configurations (MJCF `<key>` elements), by name, in file order:
+    /// each a `q` of `nq` entries (MuJoCo's `qpos`).
+    #[getter]
+    fn keyframes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let dict = pyo3::types::PyDict::new(py);
+        for (name, q) in self.robot.inner.keyframes() {
+            dict.set_item(name, PyArray1::from_slice(py, q))?;
+        }
+        Ok(dict)
     }
 
     /// The name of each entry of `qd` and `qdd`: as `q_names`, a floating joint's six as

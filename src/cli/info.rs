@@ -74,6 +74,11 @@ pub(super) fn info(
                 })
                 .collect();
             let links: Vec<&str> = chain.links().iter().map(|l| l.name()).collect();
+            let keyframes: serde_json::Map<String, Value> = chain
+                .keyframes()
+                .iter()
+                .map(|(name, q)| (name.clone(), json!(q)))
+                .collect();
             let value = json!({
                 "name": chain.name(),
                 "dof": chain.dof(),
@@ -84,6 +89,7 @@ pub(super) fn info(
                 "joints": joints,
                 "passive_joints": passive,
                 "links": links,
+                "keyframes": keyframes,
             });
             write_line(out, &value.to_string())
         }
@@ -146,6 +152,13 @@ pub(super) fn info(
             for l in chain.links() {
                 text.push(' ');
                 text.push_str(l.name());
+            }
+            if !chain.keyframes().is_empty() {
+                text.push_str("\nkeyframes:");
+                for (name, _) in chain.keyframes() {
+                    text.push(' ');
+                    text.push_str(name);
+                }
             }
             write_line(out, &text)
         }

@@ -348,6 +348,13 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
         limit_checks,
     } = assemble(spec, &v.tree, &v.axes, &v.q_index, &v.mimic, &v.new_joint);
     let (nq, nv) = (v.model.nq(), v.model.nv());
+    if let Some((name, q)) = spec.keyframes.iter().find(|(_, q)| q.len() != nq) {
+        return Err(ModelError::KeyframeLength {
+            name: name.clone(),
+            len: q.len(),
+            nq,
+        });
+    }
     let EvalTables {
         theta_gather,
         trig_slot,

@@ -52,6 +52,7 @@ impl LoadErrorKind {
             LoadErrorKind::Yaml { line, column, .. }
             | LoadErrorKind::Urdf { line, column, .. }
             | LoadErrorKind::Xacro { line, column, .. }
+            | LoadErrorKind::Mjcf { line, column, .. }
             | LoadErrorKind::Field { line, column, .. }
             | LoadErrorKind::Model { line, column, .. } => line.map(|l| (l, *column)),
             _ => None,
@@ -76,7 +77,7 @@ pub enum LoadErrorKind {
         limit: u64,
     },
     /// The file name has no extension kinechain knows.
-    #[error("unknown robot file type (expected .yaml, .yml or .urdf)")]
+    #[error("unknown robot file type (expected .yaml, .yml, .urdf or .xml)")]
     UnknownFormat,
     /// The file holds nothing but whitespace or comments.
     #[error("file is empty")]
@@ -106,6 +107,23 @@ pub enum LoadErrorKind {
         /// and not already named by the message.
         field: Option<String>,
         /// The parser's description.
+        message: String,
+    },
+    /// The file (or a file it includes) is not well-formed XML, or its MJCF elements are not
+    /// what MJCF defines, or use what kinechain does not read.
+    #[error(
+        "invalid MJCF: {}{}{message}",
+        file.as_ref().map(|f| format!("in included file {}: ", f.display())).unwrap_or_default(),
+        location_prefix(*line, *column)
+    )]
+    Mjcf {
+        /// The included file the problem is in; `None` for the main file.
+        file: Option<PathBuf>,
+        /// 1-based line of the element or attribute at fault, when known.
+        line: Option<u32>,
+        /// 1-based column of the element or attribute at fault, when known.
+        column: Option<u32>,
+        /// What is wrong, in the terms of the file.
         message: String,
     },
     /// The file is not well-formed XML, or its URDF elements are not what URDF defines.

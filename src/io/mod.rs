@@ -1,9 +1,10 @@
-//! Loading robot files: DH YAML (`.yaml`, `.yml`) and URDF (`.urdf`).
+//! Loading robot files: DH YAML (`.yaml`, `.yml`), URDF (`.urdf`) and MJCF (`.xml`).
 
 pub mod convert;
 mod dh;
 pub mod error;
 pub mod input;
+mod mjcf;
 pub mod output;
 pub mod render;
 mod urdf;
@@ -25,16 +26,21 @@ pub enum Format {
     DhYaml,
     /// URDF (XML).
     Urdf,
+    /// MJCF, MuJoCo's XML (an `.xml` file whose root element is `<mujoco>`; one whose root is
+    /// `<robot>` is read as URDF).
+    Mjcf,
 }
 
 impl Format {
-    /// The format a file name's extension says (`.yaml`/`.yml`: DH YAML, `.urdf`: URDF).
+    /// The format a file name's extension says (`.yaml`/`.yml`: DH YAML, `.urdf`: URDF,
+    /// `.xml`/`.mjcf`: MJCF).
     #[must_use]
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
             "yaml" | "yml" => Some(Format::DhYaml),
             "urdf" => Some(Format::Urdf),
+            "xml" | "mjcf" => Some(Format::Mjcf),
             _ => None,
         }
     }
@@ -48,6 +54,9 @@ pub struct LoadOptions {
     /// ([`ChainBuilder::floating_base`](crate::ChainBuilder::floating_base)): the base of a
     /// humanoid or a quadruped, whose pose leads `q`.
     pub floating_base: bool,
+    /// The directory an MJCF file's `<include>`s are looked up in first (by default the main
+    /// file's; for text given as a string, the current directory).
+    pub base_dir: Option<std::path::PathBuf>,
 }
 
 impl LoadOptions {
@@ -55,6 +64,13 @@ impl LoadOptions {
     #[must_use]
     pub fn with_floating_base(mut self, floating_base: bool) -> Self {
         self.floating_base = floating_base;
+        self
+    }
+
+    /// With `dir` as the directory includes are looked up in (see [`LoadOptions::base_dir`]).
+    #[must_use]
+    pub fn with_base_dir(mut self, dir: impl Into<std::path::PathBuf>) -> Self {
+        self.base_dir = Some(dir.into());
         self
     }
 }
@@ -93,7 +109,7 @@ impl Chain {
         let fail = |kind| LoadError::new(path, kind);
         let format = format_of(path)?;
         let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("robot");
-        parse(text, format, stem, options).map_err(fail)
+        parse(text, format, stem, options, Some(path)).map_err(fail)
     }
 
     /// [`Chain::from_str_named`] with `options`.
@@ -106,12 +122,12 @@ impl Chain {
         default_name: &str,
         options: &LoadOptions,
     ) -> Result<Chain, LoadError> {
-        parse(text, format, default_name, options)
+        parse(text, format, default_name, options, None)
             .map_err(|k| LoadError::new(Path::new("<string>"), k))
     }
 
     /// Loads a robot file, its format chosen by extension (`.yaml`/`.yml`: DH YAML, `.urdf`:
-    /// URDF). Files larger than [`MAX_FILE_BYTES`] are refused.
+    /// URDF, `.xml`: MJCF, or URDF when its root element is `<robot>`). Files larger than [`MAX_FILE_BYTES`] are refused.
     ///
     /// # Errors
     /// [`LoadError`] naming the file and, where it applies, the line, joint and field.
@@ -230,6 +246,7 @@ fn parse(
     format: Format,
     default_name: &str,
     options: &LoadOptions,
+    path: Option<&Path>,
 ) -> Result<Chain, LoadErrorKind> {
     if is_blank(text, format) {
         return Err(LoadErrorKind::Empty);
@@ -244,7 +261,18 @@ fn parse(
         Format::DhYaml => with_options(dh::parse(text, default_name)?)
             .into_chain()
             .map_err(|failed| failed.0.into()),
-        Format::Urdf => {
+        Format::Mjcf if !xml_root_is(text, "robot") => {
+            let files = (path, options.base_dir.as_deref());
+            let builder = mjcf::parse(text, files, default_name, MAX_FILE_BYTES)?;
+            with_options(builder)
+                .into_chain()
+                .map_err(|failed| LoadErrorKind::Model {
+                    line: None,
+                    column: None,
+                    error: failed.0,
+                })
+        }
+        Format::Urdf | Format::Mjcf => {
             let (builder, places) = urdf::parse(text)?;
             with_options(builder).into_chain().map_err(|failed| {
                 let (e, builder) = *failed;
@@ -261,6 +289,32 @@ fn is_blank(text: &str, format: Format) -> bool {
             .lines()
             .map(str::trim)
             .all(|l| l.is_empty() || l.starts_with('#') || l == "---" || l == "..."),
-        Format::Urdf => text.trim().is_empty(),
+        Format::Urdf | Format::Mjcf => text.trim().is_empty(),
+    }
+}
+
+/// Whether the first element of XML text `text` is called `name` (comments, declarations and
+/// processing instructions before it skipped).
+fn xml_root_is(text: &str, name: &str) -> bool {
+    let mut rest = text.trim_start_matches('\u{feff}');
+    loop {
+        rest = rest.trim_start();
+        if let Some(r) = rest.strip_prefix("<!--") {
+            let Some(end) = r.find("-->") else {
+                return false;
+            };
+            rest = &r[end + 3..];
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            let Some(end) = rest.find('>') else {
+                return false;
+            };
+            rest = &rest[end + 1..];
+        } else {
+            return rest.strip_prefix('<').is_some_and(|r| {
+                r.starts_with(name)
+                    && r[name.len()..]
+                        .starts_with(|c: char| c.is_whitespace() || c == '>' || c == '/')
+            });
+        }
     }
 }

@@ -15,7 +15,7 @@ use roxmltree::{Document, Node, ParsingOptions};
 use xml_errors::{BYTES_PER_NODE, line_column, too_many_nodes, xml_error};
 
 mod links;
-mod xml_errors;
+pub(crate) mod xml_errors;
 
 /// Deepest element nesting accepted (real URDFs nest about 6 deep).
 pub(crate) const MAX_XML_DEPTH: usize = 100;

@@ -139,6 +139,7 @@ pub struct ChainBuilder {
     pub(crate) joints: Vec<JointSpec>,
     pub(crate) world_from_root: Option<Transform>,
     pub(crate) warnings: Vec<String>,
+    pub(crate) keyframes: Vec<(String, Vec<f64>)>,
 }
 impl ChainBuilder {
     /// What already has `name`, if anything: `"joint"` or `"link"`.
@@ -247,6 +248,19 @@ impl ChainBuilder {
     #[must_use]
     pub fn root_placement(&self) -> Option<Transform> {
         self.world_from_root
+    }
+
+    /// Records a named configuration of the robot (an MJCF `<key>`): `q` in the chain's
+    /// layout, `nq` entries (checked by [`ChainBuilder::build`]).
+    pub fn keyframe(&mut self, name: impl Into<String>, q: Vec<f64>) -> &mut Self {
+        self.keyframes.push((name.into(), q));
+        self
+    }
+
+    /// The named configurations given with [`ChainBuilder::keyframe`].
+    #[must_use]
+    pub fn keyframes(&self) -> &[(String, Vec<f64>)] {
+        &self.keyframes
     }
 
     /// Records a warning that the built chain will carry (see [`Model::warnings`](crate::model::chain::Model::warnings)), with its

@@ -354,6 +354,13 @@ impl Model {
         &self.source.warnings
     }
 
+    /// The robot file's named configurations (MJCF `<key>` elements), in file order: each a
+    /// name and a `q` of [`Model::nq`] entries.
+    #[must_use]
+    pub fn keyframes(&self) -> &[(String, Vec<f64>)] {
+        &self.source.keyframes
+    }
+
     /// The description this chain was built from: links and joints as given (before fixed joints
     /// were folded), and the root's placement.
     #[must_use]

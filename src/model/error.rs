@@ -146,6 +146,16 @@ pub enum ModelError {
         /// What is wrong with where it is.
         problem: String,
     },
+    /// A named configuration has not `nq` entries.
+    #[error("keyframe '{name}' has {len} entries; the chain takes {nq}")]
+    KeyframeLength {
+        /// The configuration's name.
+        name: String,
+        /// Its entries.
+        len: usize,
+        /// What the chain takes.
+        nq: usize,
+    },
     /// A mimic joint is not revolute, continuous or prismatic.
     #[error("joint '{joint}' is {kind} and cannot mimic another joint")]
     BadMimicKind {

@@ -25,6 +25,7 @@ mod interop;
 mod k_crosscheck;
 mod layering;
 mod loading_errors;
+mod mjcf;
 #[cfg(feature = "cli")]
 mod outputs;
 mod rates;

@@ -3,7 +3,7 @@
 use crate::io::error::LoadErrorKind;
 
 /// The parser's error in the file author's terms, with its line and column.
-pub(super) fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind {
+pub(crate) fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> LoadErrorKind {
     use roxmltree::Error as E;
     let end = line_column(source, source.len());
     let at = |pos: roxmltree::TextPos| (Some(pos.row), Some(pos.col));
@@ -131,7 +131,7 @@ pub(super) fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> Loa
 }
 
 /// The error for a file with more than `limit` XML nodes.
-pub(super) fn too_many_nodes(limit: usize) -> LoadErrorKind {
+pub(crate) fn too_many_nodes(limit: usize) -> LoadErrorKind {
     LoadErrorKind::Urdf {
         line: None,
         column: None,
@@ -194,7 +194,7 @@ pub(super) fn offset_of(source: &str, pos: roxmltree::TextPos) -> usize {
 /// (and the parser reserves room for one per `<` before it starts, so a file may have at most two
 /// `<` per node allowed), which bounds a load's memory to about 15 times the file's size whatever
 /// the file holds; real URDFs spend 30 to 45 bytes on a `<`.
-pub(super) const BYTES_PER_NODE: usize = 12;
+pub(crate) const BYTES_PER_NODE: usize = 12;
 
 /// The 1-based line and column (in characters) of byte `offset`.
 pub(super) fn line_column(source: &str, offset: usize) -> (u32, u32) {

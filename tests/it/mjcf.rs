@@ -1,0 +1,368 @@
+//! MJCF: what the reader makes of each feature, worked out by hand from MuJoCo's documented
+//! semantics, and its errors. (Agreement with MuJoCo itself, on these files and on MuJoCo
+//! Menagerie's robots, is tested from Python, where MuJoCo is installed.)
+
+use crate::common::Scratch;
+use kinechain::io::{Format, LoadOptions};
+use kinechain::nalgebra::{Matrix3, Rotation3, Vector3};
+use kinechain::{Chain, Data, JointKind, LimitPolicy, forward_kinematics};
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/mjcf")
+}
+
+fn mjcf(text: &str) -> Chain {
+    Chain::from_str_with(text, Format::Mjcf, "robot", &LoadOptions::default()).unwrap()
+}
+
+/// Position and rotation of `link` at `q`.
+fn pose(chain: &Chain, q: &[f64], link: &str) -> (Vector3<f64>, Matrix3<f64>) {
+    let mut data = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+    let poses = forward_kinematics(chain, &mut data, q).unwrap();
+    let t = poses.world_from_link(chain.link_id(link).unwrap());
+    (t.translation(), t.rotation())
+}
+
+fn close(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
+    (a - b).abs().max() < 1e-14
+}
+
+fn close_m(a: &Matrix3<f64>, b: &Matrix3<f64>) -> bool {
+    (a - b).abs().max() < 1e-14
+}
+
+#[test]
+fn the_feature_file_reads_as_mujoco_defines_it() {
+    let chain = Chain::from_file(data_dir().join("features.xml")).unwrap();
+    assert_eq!(chain.name(), "features");
+    assert_eq!(
+        kinechain::regression::variable_names(&chain),
+        ["yaw", "shoulder", "shoulder_roll", "elbow", "extend"]
+    );
+    let deg = PI / 180.0;
+    // qpos0: each joint's ref, from the element or its class (`wrist` through a frame's
+    // childclass for shoulder_roll and elbow), hinge refs in degrees.
+    let keys = chain.keyframes();
+    assert_eq!(keys.len(), 2);
+    assert_eq!(keys[0].0, "home");
+    assert_eq!(keys[0].1, [0.1, 0.2, 0.3, 0.4, 0.05]);
+    assert_eq!(keys[1].0, "zero");
+    let want = [0.0, -15.0 * deg, 10.0 * deg, 10.0 * deg, 0.05];
+    for (a, b) in keys[1].1.iter().zip(want) {
+        assert!((a - b).abs() < 1e-15, "{:?}", keys[1].1);
+    }
+    // Limits: the top class's range (autolimits), limited="false", the slide class's range.
+    let kind = |name: &str| chain.joint(chain.joint_id(name).unwrap()).kind();
+    assert_eq!(kind("yaw"), JointKind::Revolute);
+    assert_eq!(kind("elbow"), JointKind::Continuous);
+    assert_eq!(kind("extend"), JointKind::Prismatic);
+    assert!((chain.lower()[0] + 90.0 * deg).abs() < 1e-15);
+    assert!((chain.upper()[4] - 0.2).abs() < 1e-15);
+    for link in [
+        "world",
+        "base",
+        "site:base",
+        "upper",
+        "upper/shoulder",
+        "lower",
+        "welded",
+        "tool",
+        "tip",
+        "world_marker",
+        "stand",
+        "stand_top",
+    ] {
+        assert!(chain.link_id(link).is_ok(), "no link {link}");
+    }
+    assert!(
+        chain
+            .warnings()
+            .iter()
+            .any(|w| w.contains("equality constraints (1 joint)")),
+        "{:?}",
+        chain.warnings()
+    );
+    // The included body: a pose with no joint, `euler="0 0 90"` read in the file's sequence
+    // ZYX: 90° about x.
+    let (p, r) = pose(&chain, &keys[1].1, "stand");
+    assert!(close(&p, &Vector3::new(-1.0, 0.0, 0.5)));
+    assert!(close_m(
+        &r,
+        Rotation3::from_axis_angle(&Vector3::x_axis(), PI / 2.0).matrix()
+    ));
+}
+
+#[test]
+fn a_hinge_turns_about_its_pos_and_moves_by_qpos_minus_ref() {
+    let chain = mjcf(
+        r#"<mujoco><compiler angle="radian"/><worldbody>
+             <body name="b" pos="0 0 1"><joint axis="0 0 1" pos="1 0 0" ref="0.5"/></body>
+           </worldbody></mujoco>"#,
+    );
+    // At q = ref the body is where the file puts it.
+    let (p, r) = pose(&chain, &[0.5], "b");
+    assert!(close(&p, &Vector3::new(0.0, 0.0, 1.0)));
+    assert!(close_m(&r, &Matrix3::identity()));
+    // A quarter turn on from there about the point (1, 0, 0) of the body: the origin moves to
+    // (1, -1).
+    let (p, _) = pose(&chain, &[0.5 + PI / 2.0], "b");
+    assert!(close(&p, &Vector3::new(1.0, -1.0, 1.0)), "{p}");
+}
+
+#[test]
+fn a_slide_moves_along_its_axis_by_qpos_minus_ref() {
+    let chain = mjcf(
+        r#"<mujoco><worldbody><body name="b" euler="0 0 90">
+             <joint type="slide" axis="1 0 0" ref="0.25" range="0 1"/></body>
+           </worldbody></mujoco>"#,
+    );
+    assert_eq!(
+        chain.joint(chain.joint_id("joint1").unwrap()).kind(),
+        JointKind::Prismatic
+    );
+    let (p, _) = pose(&chain, &[0.75], "b");
+    // The axis is the body's x, which the body's 90° (degrees by default) turns to world y.
+    assert!(close(&p, &Vector3::new(0.0, 0.5, 0.0)), "{p}");
+}
+
+#[test]
+fn euler_sequences_are_intrinsic_in_lower_case_and_extrinsic_in_upper_case() {
+    let rot = |axis: Vector3<f64>, a: f64| {
+        *Rotation3::from_axis_angle(&kinechain::nalgebra::Unit::new_normalize(axis), a).matrix()
+    };
+    let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+    let (a, b, c) = (0.3, -0.7, 1.1);
+    for (seq, want) in [
+        ("xyz", rot(x, a) * rot(y, b) * rot(z, c)),
+        ("XYZ", rot(z, c) * rot(y, b) * rot(x, a)),
+        ("zyx", rot(z, a) * rot(y, b) * rot(x, c)),
+        ("xYz", rot(y, b) * rot(x, a) * rot(z, c)),
+    ] {
+        let chain = mjcf(&format!(
+            r#"<mujoco><compiler angle="radian" eulerseq="{seq}"/><worldbody>
+                 <body name="b" euler="{a} {b} {c}"/></worldbody></mujoco>"#
+        ));
+        let (_, r) = pose(&chain, &[], "b");
+        assert!(close_m(&r, &want), "{seq}: {r} vs {want}");
+    }
+}
+
+#[test]
+fn every_orientation_attribute_gives_the_rotation_mujoco_gives() {
+    let s = 0.5f64.sqrt();
+    for (attr, want) in [
+        // Normalised quaternion: 90° about z.
+        (
+            r#"quat="2 0 0 2""#,
+            Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ),
+        // A non-unit axis is normalised; the angle is in degrees.
+        (
+            r#"axisangle="0 0 5 90""#,
+            Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ),
+        // xyaxes: y made orthogonal to x, z = x × y.
+        (
+            r#"xyaxes="0 2 0 -1 3 0""#,
+            Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ),
+        // zaxis: the smallest rotation taking z to the axis (here about -y... about x by -45°).
+        (
+            r#"zaxis="0 1 1""#,
+            Matrix3::new(1.0, 0.0, 0.0, 0.0, s, s, 0.0, -s, s),
+        ),
+        // zaxis = -z: half a turn about x.
+        (
+            r#"zaxis="0 0 -3""#,
+            Matrix3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
+        ),
+    ] {
+        let chain = mjcf(&format!(
+            r#"<mujoco><worldbody><body name="b" {attr}/></worldbody></mujoco>"#
+        ));
+        let (_, r) = pose(&chain, &[], "b");
+        assert!(close_m(&r, &want), "{attr}: {r}");
+    }
+}
+
+#[test]
+fn a_free_joint_places_its_body_by_qpos_alone() {
+    let chain = Chain::from_file(data_dir().join("free.xml")).unwrap();
+    assert_eq!((chain.nq(), chain.nv()), (9, 8));
+    assert_eq!(
+        &kinechain::regression::variable_names(&chain)[..4],
+        ["root.x", "root.y", "root.z", "root.qw"]
+    );
+    let mut q = vec![0.0; 9];
+    q[..7].copy_from_slice(&[1.0, 2.0, 3.0, s(), 0.0, 0.0, s()]);
+    let (p, r) = pose(&chain, &q, "torso");
+    assert!(close(&p, &Vector3::new(1.0, 2.0, 3.0)));
+    assert!(close_m(
+        &r,
+        &Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    ));
+    // The keyframe, and qpos0 from the body's pose: the file's position and orientation.
+    assert_eq!(chain.keyframes()[0].1[2], 0.8);
+    let (p, _) = pose(&chain, &chain.keyframes()[0].1, "foot");
+    assert!(p.z < 0.8);
+}
+
+fn s() -> f64 {
+    0.5f64.sqrt()
+}
+
+#[test]
+fn a_site_sharing_a_body_name_is_qualified_and_unnamed_elements_get_names() {
+    let chain = mjcf(
+        r#"<mujoco><worldbody><body name="hand"><joint/><site name="hand" pos="0 0 1"/>
+             <body><joint/><joint type="slide"/></body></body></worldbody></mujoco>"#,
+    );
+    assert!(chain.link_id("site:hand").is_ok());
+    assert_eq!(
+        kinechain::regression::variable_names(&chain),
+        ["joint1", "joint2", "joint3"]
+    );
+    assert!(chain.link_id("body2").is_ok());
+    assert!(chain.link_id("body2/joint2").is_ok());
+}
+
+#[test]
+fn errors_name_the_line_and_what_is_wrong() {
+    for (text, line, says) in [
+        (
+            "<mujoco><worldbody>\n<body><joint type=\"ball\"/></body></worldbody></mujoco>",
+            2,
+            "ball joint",
+        ),
+        (
+            "<mujoco><worldbody>\n<body><joint type=\"screw\"/></body></worldbody></mujoco>",
+            2,
+            "type 'screw'",
+        ),
+        (
+            "<mujoco><worldbody><body>\n<joint range=\"1 -1\"/></body></worldbody></mujoco>",
+            2,
+            "lower bound",
+        ),
+        (
+            "<mujoco><worldbody><body><joint/>\n<body><freejoint/></body></body></worldbody></mujoco>",
+            2,
+            "not in a top-level body",
+        ),
+        (
+            "<mujoco><worldbody>\n<body quat=\"1 0 0 0\" euler=\"0 0 1\"/></worldbody></mujoco>",
+            2,
+            "one orientation",
+        ),
+        (
+            "<mujoco><worldbody>\n<body childclass=\"nope\"/></worldbody></mujoco>",
+            2,
+            "'nope' is not defined",
+        ),
+        (
+            "<mujoco><worldbody><body><joint/></body></worldbody>\n<keyframe><key qpos=\"1 2\"/></keyframe></mujoco>",
+            2,
+            "nq = 1",
+        ),
+        (
+            "<mujoco><worldbody>\n<body pos=\"0 0\"/></worldbody></mujoco>",
+            2,
+            "it takes 3",
+        ),
+        (
+            "<mujoco><worldbody>\n<body pos=\"0 nan 0\"/></worldbody></mujoco>",
+            2,
+            "not a finite number",
+        ),
+        (
+            "<mujoco><worldbody>\n<replicate count=\"2\"/></worldbody></mujoco>",
+            2,
+            "<replicate> is not supported",
+        ),
+        ("<mujoco>\n<worldbody></mujoco>", 2, "not well-formed"),
+        ("<robot name=\"r\">\n</robot><x/>", 2, ""),
+    ] {
+        let e = mjcf_error_or_any(text);
+        assert!(e.contains(says), "{text}: {e}");
+        if !says.is_empty() {
+            assert!(e.contains(&format!("line {line}")), "{text}: {e}");
+        }
+    }
+}
+
+fn mjcf_error_or_any(text: &str) -> String {
+    match Chain::from_str_with(text, Format::Mjcf, "robot", &LoadOptions::default()) {
+        Ok(_) => panic!("{text} loaded"),
+        Err(e) => e.kind().to_string(),
+    }
+}
+
+#[test]
+fn includes_are_read_once_and_their_errors_name_the_included_file() {
+    let dir = Scratch::new("mjcf-include");
+    dir.write("main.xml", r#"<mujoco><include file="a.xml"/></mujoco>"#);
+    dir.write("a.xml", "<mujoco>\n<include file=\"main.xml\"/></mujoco>");
+    let e = Chain::from_file(dir.path("main.xml")).unwrap_err();
+    let message = e.kind().to_string();
+    assert!(
+        message.contains("includes itself") && message.contains("a.xml"),
+        "{message}"
+    );
+    assert!(message.contains("line 2"), "{message}");
+
+    dir.write(
+        "twice.xml",
+        r#"<mujoco><include file="b.xml"/><include file="b.xml"/></mujoco>"#,
+    );
+    dir.write("b.xml", "<mujoco/>");
+    let message = Chain::from_file(dir.path("twice.xml"))
+        .unwrap_err()
+        .kind()
+        .to_string();
+    assert!(message.contains("a second time"), "{message}");
+
+    dir.write(
+        "missing.xml",
+        r#"<mujoco><include file="nowhere.xml"/></mujoco>"#,
+    );
+    let message = Chain::from_file(dir.path("missing.xml"))
+        .unwrap_err()
+        .kind()
+        .to_string();
+    assert!(message.contains("'nowhere.xml' is not found"), "{message}");
+
+    dir.write("broken.xml", r#"<mujoco><include file="c.xml"/></mujoco>"#);
+    dir.write(
+        "c.xml",
+        "<mujoco>\n<worldbody>\n<body pos=\"1\"/></worldbody></mujoco>",
+    );
+    let e = Chain::from_file(dir.path("broken.xml")).unwrap_err();
+    let message = e.kind().to_string();
+    assert!(
+        message.contains("c.xml") && message.contains("line 3"),
+        "{message}"
+    );
+
+    // A string's includes are looked up in the directory given.
+    let text = r#"<mujoco><include file="b.xml"/><worldbody><body name="x"/></worldbody></mujoco>"#;
+    let options = LoadOptions::default().with_base_dir(dir.path(""));
+    assert!(Chain::from_str_with(text, Format::Mjcf, "r", &options).is_ok());
+}
+
+#[test]
+fn an_xml_file_whose_root_is_robot_is_read_as_urdf() {
+    let dir = Scratch::new("mjcf-urdf");
+    let text = std::fs::read_to_string(crate::common::robots_dir().join("panda.urdf")).unwrap();
+    dir.write("panda.xml", &text);
+    let chain = Chain::from_file(dir.path("panda.xml")).unwrap();
+    assert_eq!(chain.name(), "panda");
+}
+
+#[test]
+fn an_error_has_the_line_and_column_of_the_attribute_at_fault() {
+    let text = "<mujoco><worldbody>\n<body><joint type=\"ball\"/></body></worldbody></mujoco>";
+    let e = Chain::from_str_with(text, Format::Mjcf, "robot", &LoadOptions::default()).unwrap_err();
+    assert_eq!(e.position(), Some((2, Some(14))));
+}
