@@ -185,3 +185,28 @@ def test_tables_read_a_floating_base_by_its_column_names():
     # A base column missing is named.
     with pytest.raises(kc.StateError, match="root_joint.qw"):
         kc.table.poses(frame.drop(columns=["root_joint.qw"]), chain, links=["pelvis"])
+
+
+def test_a_planar_joint_agrees_with_pinocchios():
+    # URDF's planar joint with the usual axis z: Pinocchio's planar joint (x, y, cos θ, sin θ),
+    # kinechain's three entries drive.x, drive.y, drive.theta.
+    path = os.path.join(ROOT, "tests", "data", "planar", "mobile_arm.urdf")
+    chain = kc.load(path)
+    assert chain.q_names == ["drive.x", "drive.y", "drive.theta", "shoulder", "elbow"]
+    model = pin.buildModelFromUrdf(path)
+    data = model.createData()
+    assert model.joints[1].shortname() == "JointModelPlanar"
+    frames = {model.frames[i].name: i for i in range(model.nframes) if model.frames[i].type == pin.FrameType.BODY}
+    links = [n for n in chain.link_names if n in frames]
+    assert {"base", "upper", "tool"} <= set(links)
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for _ in range(20):
+        q = np.concatenate([rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi, 1), rng.uniform(-2, 2, 2)])
+        pq = chain.to_layout(q, layout="pinocchio")[0]
+        np.testing.assert_allclose(pq[:4], [q[0], q[1], np.cos(q[2]), np.sin(q[2])], atol=0, rtol=0)
+        pin.framesForwardKinematics(model, data, pq)
+        poses = chain.fk(q, links=links).poses
+        for k, name in enumerate(links):
+            worst = max(worst, np.abs(data.oMf[frames[name]].homogeneous - poses[k]).max())
+    assert worst < 1e-14, worst

@@ -15,6 +15,7 @@ use roxmltree::{Document, Node, ParsingOptions};
 use xml_errors::{BYTES_PER_NODE, line_column, too_many_nodes, xml_error};
 
 mod links;
+mod planar;
 pub(crate) mod xml_errors;
 
 /// Deepest element nesting accepted (real URDFs nest about 6 deep).
@@ -170,9 +171,21 @@ pub(crate) fn parse(source: &str) -> Result<(ChainBuilder, Places), LoadErrorKin
                 places.links.push(node.range().start);
             }
             "joint" => {
-                let spec = reader.joint(node)?;
-                b.joint(spec);
-                places.joints.push(node.range().start);
+                let (spec, planar) = reader.joint(node)?;
+                if planar {
+                    let (links, joints) = planar::decompose(spec);
+                    for link in links {
+                        b.link(link);
+                        places.links.push(node.range().start);
+                    }
+                    for joint in joints {
+                        b.joint(joint);
+                        places.joints.push(node.range().start);
+                    }
+                } else {
+                    b.joint(spec);
+                    places.joints.push(node.range().start);
+                }
             }
             "material" | "transmission" | "gazebo" | "ros2_control" | "sensor" => {}
             other if other.contains(':') => {}
@@ -369,8 +382,9 @@ impl<'d, 'i> Reader<'d, 'i> {
         }
     }
 
-    /// The joint element `node` as a [`JointSpec`].
-    fn joint(&mut self, node: Node<'d, 'i>) -> Result<JointSpec, LoadErrorKind> {
+    /// The joint element `node` as a [`JointSpec`], and whether it is a planar joint (then the
+    /// spec is its rotation's, for [`planar::decompose`] to split).
+    fn joint(&mut self, node: Node<'d, 'i>) -> Result<(JointSpec, bool), LoadErrorKind> {
         let start = node.range().start;
         let name = self.required(node, "name", "<joint>")?;
         let label = format!("joint '{name}'");
@@ -396,6 +410,8 @@ impl<'d, 'i> Reader<'d, 'i> {
             "prismatic" => JointKind::Prismatic,
             "fixed" => JointKind::Fixed,
             "floating" => JointKind::Floating,
+            // Split by `planar::decompose`; read here as its rotation about the axis.
+            "planar" => JointKind::Continuous,
             other => {
                 return Err(self.field(
                     type_offset,
@@ -453,7 +469,16 @@ impl<'d, 'i> Reader<'d, 'i> {
                 }
             }
         }
+        let planar = type_name == "planar";
         if let Some(mimic) = parts.mimic {
+            if planar {
+                return Err(self.error(
+                    mimic.range().start,
+                    format!(
+                        "{label}: a planar joint has three coordinates and cannot follow another"
+                    ),
+                ));
+            }
             if kind == JointKind::Fixed {
                 self.notes.add(mimic.range().start, || {
                     format!("{label}: a fixed joint cannot follow another; its <mimic> is ignored")
@@ -465,7 +490,7 @@ impl<'d, 'i> Reader<'d, 'i> {
                 spec = spec.with_mimic(target, multiplier, offset);
             }
         }
-        Ok(spec)
+        Ok((spec, planar))
     }
 
     /// The kinematic children of joint `node`, with warnings for what URDF does not define in a

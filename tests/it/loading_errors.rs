@@ -497,7 +497,7 @@ fn yaml_empty_syntax_and_garbage() {
 #[test]
 fn urdf_unsupported_joint_types_are_refused_not_made_fixed() {
     {
-        let (file, kind) = ("urdf/planar.urdf", "planar");
+        let (file, kind) = ("urdf/screw.urdf", "screw");
         let e = load(file);
         let (joint, f, problem) = field(&e);
         assert_eq!(f, "type", "{file}");

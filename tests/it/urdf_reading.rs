@@ -136,3 +136,26 @@ fn valid_robots_with_oddities_load_with_warnings_and_the_same_poses() {
         }
     }
 }
+
+#[test]
+fn a_planar_joint_is_two_translations_in_the_plane_then_a_rotation_about_its_axis() {
+    use kinechain::nalgebra::{Rotation3, Vector3};
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/planar/mobile_arm.urdf");
+    let chain = kinechain::Chain::from_file(&path).unwrap();
+    assert_eq!(
+        kinechain::regression::variable_names(&chain),
+        ["drive.x", "drive.y", "drive.theta", "shoulder", "elbow"]
+    );
+    assert_eq!((chain.nq(), chain.nv()), (5, 5));
+    let (x, y, theta) = (0.7, -1.3, 2.1);
+    let mut data = kinechain::Data::new(&chain);
+    let poses = kinechain::forward_kinematics(&chain, &mut data, &[x, y, theta, 0.0, 0.0]).unwrap();
+    let base = poses.world_from_link(chain.link_id("base").unwrap());
+    // origin (0.1, -0.2, 0.15) turned 0.3 about z, then (x, y) in that frame, then θ about z.
+    let turn = Rotation3::from_axis_angle(&Vector3::z_axis(), 0.3);
+    let want_p = Vector3::new(0.1, -0.2, 0.15) + turn * Vector3::new(x, y, 0.0);
+    let want_r = turn * Rotation3::from_axis_angle(&Vector3::z_axis(), theta);
+    assert!((base.translation() - want_p).abs().max() < 1e-15);
+    assert!((base.rotation() - want_r.matrix()).abs().max() < 1e-15);
+}
