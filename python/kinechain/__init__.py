@@ -24,7 +24,9 @@ from ._kinechain import Chain, Error, FkResult, LoadError, StateError, __version
 __all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "load", "orientation", "table", "testing", "__version__"]
 
 
-def load(path: Union[str, "os.PathLike[str]"], *, floating_base: bool = False) -> Chain:
+def load(
+    path: Union[str, "os.PathLike[str]"], *, floating_base: bool = False, couplings: bool = False
+) -> Chain:
     """Loads a robot file: a DH table (``.yaml``/``.yml``), a URDF file (``.urdf``) or a
     MuJoCo MJCF file (``.xml``; ``q`` is then MuJoCo's ``qpos``, entry for entry, and
     ``chain.keyframes`` holds its ``<key>`` configurations).
@@ -34,8 +36,11 @@ def load(path: Union[str, "os.PathLike[str]"], *, floating_base: bool = False) -
     ``JointModelFreeFlyer``): ``q`` then starts with its position and quaternion (w, x, y, z),
     ``qd`` with its velocity and angular velocity in world axes.
 
+    With ``couplings`` (MJCF), each linear ``<equality><joint>`` coupling makes its first joint
+    follow the second (a mimic joint, with no entry of ``q``), so that ``q`` holds the leaders.
+
     Raises ``LoadError`` (naming the file, line, column and joint) if it cannot be read."""
-    return Chain.from_file(os.fspath(path), floating_base=floating_base)
+    return Chain.from_file(os.fspath(path), floating_base=floating_base, couplings=couplings)
 
 
 def _float_array(x: Any, name: str) -> np.ndarray:

@@ -40,7 +40,7 @@ class Chain:
     """A robot: links, joints and limits; immutable and shared between threads."""
 
     @staticmethod
-    def from_file(path: str, floating_base: bool = False) -> "Chain":
+    def from_file(path: str, floating_base: bool = False, couplings: bool = False) -> "Chain":
         """Loads a DH table (.yaml, .yml), a URDF file (.urdf) or an MJCF file (.xml); with floating_base, a
         floating joint root_joint between the world and the root link."""
     @staticmethod
@@ -48,7 +48,7 @@ class Chain:
         """A robot from URDF text."""
     @staticmethod
     def from_mjcf_string(
-        text: str, base_dir: Optional[str] = None, floating_base: bool = False
+        text: str, base_dir: Optional[str] = None, floating_base: bool = False, couplings: bool = False
     ) -> "Chain":
         """A robot from MJCF text, its includes looked up in base_dir (default: the current
         directory)."""

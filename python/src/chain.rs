@@ -78,15 +78,22 @@ impl Chain {
     /// (`.xml`, its includes looked up beside it); with
     /// `floating_base`, a floating joint `root_joint` between the world and its root link.
     #[staticmethod]
-    #[pyo3(signature = (path, floating_base=false))]
-    fn from_file(py: Python<'_>, path: PathBuf, floating_base: bool) -> PyResult<Self> {
+    #[pyo3(signature = (path, floating_base=false, couplings=false))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        floating_base: bool,
+        couplings: bool,
+    ) -> PyResult<Self> {
         // Read once (a FIFO can be read only once), bounded, off the GIL and open to Ctrl-C.
         let read = path.clone();
         let source = files::read_interruptibly(py, move || {
             kinechain::io::read_robot_file(&read).map_err(|e| error_chain(&e))
         })?
         .map_err(LoadError::new_err)?;
-        let mut options = LoadOptions::default().with_floating_base(floating_base);
+        let mut options = LoadOptions::default()
+            .with_floating_base(floating_base)
+            .with_couplings(couplings);
         let inner =
             Inner::from_file_text_with(&path, &source, &options).map_err(|e| load_error(&e))?;
         let origin = std::fs::canonicalize(&path).ok().or(Some(path.clone()));
@@ -115,14 +122,17 @@ impl Chain {
     /// A robot from MJCF text, its includes looked up in `base_dir` (by default the current
     /// directory); with `floating_base`, a floating joint above its root link.
     #[staticmethod]
-    #[pyo3(signature = (text, base_dir=None, floating_base=false))]
+    #[pyo3(signature = (text, base_dir=None, floating_base=false, couplings=false))]
     fn from_mjcf_string(
         py: Python<'_>,
         text: String,
         base_dir: Option<PathBuf>,
         floating_base: bool,
+        couplings: bool,
     ) -> PyResult<Self> {
-        let mut options = LoadOptions::default().with_floating_base(floating_base);
+        let mut options = LoadOptions::default()
+            .with_floating_base(floating_base)
+            .with_couplings(couplings);
         if let Some(dir) = base_dir {
             options = options.with_base_dir(dir);
         }
@@ -141,7 +151,7 @@ impl Chain {
     /// none), whether a floating base was added and where an MJCF file's includes are; what
     /// unpickling calls.
     #[staticmethod]
-    #[pyo3(signature = (text, format, name="robot", floating_base=false, base_dir=None))]
+    #[pyo3(signature = (text, format, name="robot", floating_base=false, base_dir=None, couplings=false))]
     fn _from_source(
         py: Python<'_>,
         text: String,
@@ -149,8 +159,11 @@ impl Chain {
         name: &str,
         floating_base: bool,
         base_dir: Option<PathBuf>,
+        couplings: bool,
     ) -> PyResult<Self> {
-        let mut options = LoadOptions::default().with_floating_base(floating_base);
+        let mut options = LoadOptions::default()
+            .with_floating_base(floating_base)
+            .with_couplings(couplings);
         if let Some(dir) = base_dir {
             options = options.with_base_dir(dir);
         }
@@ -166,6 +179,7 @@ impl Chain {
             me.robot.inner.name(),
             me.options.floating_base,
             me.options.base_dir.clone(),
+            me.options.couplings,
         );
         (make, state).into_pyobject(slf.py())
     }

@@ -116,3 +116,31 @@ def test_the_menagerie_corpus():
     for f in failed:
         print("  " + f)
     assert agree == len(rows), failed
+
+
+@pytest.mark.parametrize("path", [DATA / "menagerie" / "aloha" / "aloha.xml", DATA / "menagerie" / "iit_softfoot" / "softfoot.xml", DATA / "features.xml"], ids=lambda p: p.stem)
+def test_couplings_make_followers_that_land_where_mujoco_puts_them(path):
+    # With couplings=True, q holds the leaders; MuJoCo gets the followers from the coupling's
+    # polynomial, y − y0 = a0 + a1 (x − x0).
+    model = mjcf_oracle.compile_without_assets(path)
+    data = mujoco.MjData(model)
+    chain = kc.load(path, couplings=True)
+    couplings = [e for e in range(model.neq) if model.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT and model.eq_active0[e]]
+    assert couplings and chain.nq == model.nq - len(couplings)
+    followers = [model.jnt_qposadr[model.eq_obj1id[e]] for e in couplings]
+    leaders = [a for a in range(model.nq) if a not in followers]
+    bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(1, model.nbody)]
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        q = mjcf_oracle.random_qpos(model, rng)
+        for e in couplings * len(couplings):  # until a follower of a follower is settled too
+            y, x = model.jnt_qposadr[model.eq_obj1id[e]], model.jnt_qposadr[model.eq_obj2id[e]]
+            a0, a1 = model.eq_data[e][:2]
+            q[y] = model.qpos0[y] + a0 + a1 * (q[x] - model.qpos0[x])
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        named = [(n, b) for b, n in enumerate(bodies, start=1) if n]
+        poses = chain.fk(q[leaders], links=[n for n, _ in named], check_limits=False).poses
+        for k, (_, b) in enumerate(named):
+            assert np.abs(poses[k, :3, 3] - data.xpos[b]).max() < 1e-12
+            assert np.abs(poses[k, :3, :3] - data.xmat[b].reshape(3, 3)).max() < 1e-12

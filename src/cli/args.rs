@@ -21,12 +21,18 @@ pub(super) struct Cli {
     /// quaternion w, x, y, z, and q̇ with its velocity and angular velocity (world axes).
     #[arg(long, global = true)]
     pub(super) floating_base: bool,
+    /// MJCF: make each linear `<equality><joint>` coupling a joint that follows its leader (a
+    /// mimic joint, with no entry of q), so that q holds the leaders only.
+    #[arg(long, global = true)]
+    pub(super) couplings: bool,
 }
 
 impl Cli {
     /// How the robot files of the command are loaded.
     pub(super) fn load_options(&self) -> crate::io::LoadOptions {
-        crate::io::LoadOptions::default().with_floating_base(self.floating_base)
+        crate::io::LoadOptions::default()
+            .with_floating_base(self.floating_base)
+            .with_couplings(self.couplings)
     }
 }
 

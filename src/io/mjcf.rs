@@ -49,18 +49,22 @@ impl Pose {
 
 /// Reads MJCF text: `main` is its file (for includes and messages), `base` the directory
 /// includes are looked up in first (the main file's by default); an included file may have at
-/// most `max_bytes`.
+/// most `max_bytes`. With `couplings`, linear joint couplings become mimic joints.
 pub(crate) fn parse(
     text: &str,
     (main, base): (Option<&Path>, Option<&Path>),
     default_name: &str,
-    max_bytes: u64,
+    (max_bytes, couplings): (u64, bool),
 ) -> Result<ChainBuilder, LoadErrorKind> {
     let tree = tree::read(text, main, base, max_bytes)?;
-    read_model(&tree.root, default_name).map_err(|p| p.into_kind(&tree.files))
+    read_model(&tree.root, default_name, couplings).map_err(|p| p.into_kind(&tree.files))
 }
 
-fn read_model(root: &Element, default_name: &str) -> Result<ChainBuilder, Problem> {
+fn read_model(
+    root: &Element,
+    default_name: &str,
+    couplings: bool,
+) -> Result<ChainBuilder, Problem> {
     let mut compiler = Compiler::default();
     for c in root.children_named("compiler") {
         compiler.read(c)?;
@@ -76,6 +80,7 @@ fn read_model(root: &Element, default_name: &str) -> Result<ChainBuilder, Proble
         link_names: HashSet::new(),
         counts: Counts::default(),
         qpos0: Vec::new(),
+        refs: Vec::new(),
         floating_at: None,
     };
     let worlds: Vec<&Element> = root.children_named("worldbody").collect();
@@ -87,7 +92,10 @@ fn read_model(root: &Element, default_name: &str) -> Result<ChainBuilder, Proble
         reader.contents(w, "world", &Pose::IDENTITY, "main", true)?;
     }
     reader.keyframes(root)?;
-    reader.equalities(root);
+    if couplings {
+        reader.couplings(root)?;
+    }
+    reader.equalities(root, couplings);
     Ok(reader.b)
 }
 
@@ -112,6 +120,8 @@ struct Reader {
     counts: Counts,
     /// MuJoCo's `qpos0`: what a keyframe without `qpos` holds.
     qpos0: Vec<f64>,
+    /// Each hinge or slide joint's name and reference position (`qpos0`).
+    refs: Vec<(String, f64)>,
     floating_at: Option<At>,
 }
 
@@ -407,6 +417,7 @@ impl Reader {
                     spec = spec.with_limits(lo, hi);
                 }
                 self.qpos0.push(reference);
+                self.refs.push((name.to_string(), reference));
                 Ok(spec)
             }
             "ball" => Err(Problem::at(
@@ -526,12 +537,93 @@ impl Reader {
         Ok(())
     }
 
-    /// One warning for the equality constraints, which `mj_kinematics` does not apply.
-    fn equalities(&mut self, root: &Element) {
+    /// Each active `<equality><joint>` as a mimic joint: `y − y0 = a0 + a1 (x − x0)` (`y0`, `x0`
+    /// the joints' reference positions) is `y = a1 x + (a0 + y0 − a1 x0)`. A coupling with a
+    /// non-zero `polycoef` beyond the second, or without `joint2`, is an error naming it.
+    fn couplings(&mut self, root: &Element) -> Result<(), Problem> {
+        for e in root
+            .children_named("equality")
+            .flat_map(|e| e.children_named("joint"))
+        {
+            if let Some((v, at)) = e.attribute("active")
+                && !attrs::boolean(v, at, "active")?
+            {
+                continue;
+            }
+            let label = e
+                .attribute("name")
+                .map_or_else(String::new, |(n, _)| format!(" '{n}'"));
+            let joint = |key: &str| -> Result<(String, f64), Problem> {
+                let Some((name, at)) = e.attribute(key) else {
+                    return Err(Problem::at(
+                        e.at,
+                        format!("joint coupling{label} has no {key}: kinechain couples two joints"),
+                    ));
+                };
+                self.refs
+                    .iter()
+                    .find(|(n, _)| n == name)
+                    .cloned()
+                    .ok_or_else(|| {
+                        Problem::at(
+                            at,
+                            format!(
+                                "joint coupling{label}: '{name}' is not a hinge or slide joint"
+                            ),
+                        )
+                    })
+            };
+            let (y, y0) = joint("joint1")?;
+            let (x, x0) = joint("joint2")?;
+            let c = match e.attribute("polycoef") {
+                Some((v, at)) => reals::<5>(v, at, "polycoef")?,
+                None => [0.0, 1.0, 0.0, 0.0, 0.0],
+            };
+            if c[2..].iter().any(|&k| k != 0.0) {
+                let at = e.attribute("polycoef").map_or(e.at, |(_, at)| at);
+                return Err(Problem::at(
+                    at,
+                    format!(
+                        "joint coupling{label} of '{y}' to '{x}' is not linear (polycoef {c:?}); \
+                         only linear couplings become mimic joints"
+                    ),
+                ));
+            }
+            let offset = c[0] + y0 - c[1] * x0;
+            let Some(spec) = self.b.joints.iter_mut().find(|j| j.name == y) else {
+                return Err(Problem::at(
+                    e.at,
+                    format!("joint coupling{label}: no joint '{y}'"),
+                ));
+            };
+            *spec = spec.clone().with_mimic(x, c[1], offset);
+        }
+        // The followers take no entry of q: their entries leave the keyframes.
+        let mut followers = Vec::new();
+        let mut index = 0;
+        for j in self.b.joints.iter().filter(|j| j.kind != JointKind::Fixed) {
+            if j.mimic.is_some() {
+                followers.push(index);
+            }
+            index += j.kind.nq();
+        }
+        for (_, q) in &mut self.b.keyframes {
+            let mut k = 0;
+            q.retain(|_| {
+                k += 1;
+                !followers.contains(&(k - 1))
+            });
+        }
+        Ok(())
+    }
+
+    /// One warning for the equality constraints not applied (`mj_kinematics` applies none).
+    fn equalities(&mut self, root: &Element, couplings: bool) {
         let mut kinds: Vec<(String, usize)> = Vec::new();
         for e in root
             .children_named("equality")
             .flat_map(|e| e.children.iter())
+            .filter(|e| !(couplings && e.name == "joint"))
         {
             match kinds.iter_mut().find(|(k, _)| *k == e.name) {
                 Some((_, n)) => *n += 1,

@@ -57,6 +57,10 @@ pub struct LoadOptions {
     /// The directory an MJCF file's `<include>`s are looked up in first (by default the main
     /// file's; for text given as a string, the current directory).
     pub base_dir: Option<std::path::PathBuf>,
+    /// MJCF: make each linear `<equality><joint>` coupling (`y − y0 = a0 + a1 (x − x0)`) a mimic
+    /// joint following its leader, so that `q` holds the leaders only (by default `q` is
+    /// MuJoCo's `qpos` and the couplings are reported, not applied, as `mj_kinematics` does).
+    pub couplings: bool,
 }
 
 impl LoadOptions {
@@ -64,6 +68,13 @@ impl LoadOptions {
     #[must_use]
     pub fn with_floating_base(mut self, floating_base: bool) -> Self {
         self.floating_base = floating_base;
+        self
+    }
+
+    /// With MJCF joint couplings applied (see [`LoadOptions::couplings`]).
+    #[must_use]
+    pub fn with_couplings(mut self, couplings: bool) -> Self {
+        self.couplings = couplings;
         self
     }
 
@@ -263,7 +274,12 @@ fn parse(
             .map_err(|failed| failed.0.into()),
         Format::Mjcf if !xml_root_is(text, "robot") => {
             let files = (path, options.base_dir.as_deref());
-            let builder = mjcf::parse(text, files, default_name, MAX_FILE_BYTES)?;
+            let builder = mjcf::parse(
+                text,
+                files,
+                default_name,
+                (MAX_FILE_BYTES, options.couplings),
+            )?;
             with_options(builder)
                 .into_chain()
                 .map_err(|failed| LoadErrorKind::Model {

@@ -366,3 +366,41 @@ fn an_error_has_the_line_and_column_of_the_attribute_at_fault() {
     let e = Chain::from_str_with(text, Format::Mjcf, "robot", &LoadOptions::default()).unwrap_err();
     assert_eq!(e.position(), Some((2, Some(14))));
 }
+
+#[test]
+fn couplings_on_request_make_followers_of_linear_joint_equalities() {
+    let text = r#"<mujoco><compiler angle="radian"/><worldbody>
+        <body name="a"><joint name="x" ref="0.2"/>
+          <body name="b" pos="1 0 0"><joint name="y" ref="-0.1" axis="0 1 0"/></body></body>
+      </worldbody>
+      <equality><joint joint1="y" joint2="x" polycoef="0.3 2 0 0 0"/></equality>
+      <keyframe><key name="k" qpos="0.5 0.9"/></keyframe></mujoco>"#;
+    let plain = mjcf(text);
+    let coupled = Chain::from_str_with(
+        text,
+        Format::Mjcf,
+        "r",
+        &LoadOptions::default().with_couplings(true),
+    )
+    .unwrap();
+    assert_eq!((plain.nq(), coupled.nq()), (2, 1));
+    assert_eq!(coupled.keyframes()[0].1, [0.5]);
+    assert!(coupled.warnings().is_empty(), "{:?}", coupled.warnings());
+    // y − y0 = a0 + a1 (x − x0)
+    for x in [-1.0, 0.2, 0.7] {
+        let y = -0.1 + 0.3 + 2.0 * (x - 0.2);
+        let (p, r) = pose(&coupled, &[x], "b");
+        let (p2, r2) = pose(&plain, &[x, y], "b");
+        assert!(close(&p, &p2) && close_m(&r, &r2));
+    }
+    let bent = text.replace("0.3 2 0 0 0", "0 1 0.5 0 0");
+    let options = LoadOptions::default().with_couplings(true);
+    let e = Chain::from_str_with(&bent, Format::Mjcf, "r", &options).unwrap_err();
+    let message = e.kind().to_string();
+    assert!(
+        message.contains("not linear") && message.contains("line 5"),
+        "{message}"
+    );
+    // Without the option the same file loads, the coupling reported.
+    assert!(mjcf(&bent).warnings()[0].contains("1 joint"));
+}
