@@ -2130,3 +2130,27 @@ fn a_floating_base_on_the_command_line() {
     // And the converted robot verifies against the golden file of the original.
     ok_text(&["verify", &urdf, &golden]);
 }
+
+#[test]
+fn mjcf_files_load_with_their_keyframes_and_couplings_on_request() {
+    let file = "tests/data/mjcf/features.xml";
+    let info = &ok_json(&["info", file])[0];
+    assert_eq!(info["nq"], 5);
+    assert_eq!(info["keyframes"]["home"][4], 0.05);
+    let coupled = &ok_json(&["info", file, "--couplings"])[0];
+    assert_eq!(coupled["nq"], 4);
+    assert_eq!(coupled["keyframes"]["home"].as_array().unwrap().len(), 4);
+    // fk at a keyframe's q, a site by name.
+    let lines = ok_json(&[
+        "fk",
+        file,
+        "--q",
+        "[0.1, 0.2, 0.3, 0.4, 0.05]",
+        "--link",
+        "tip",
+    ]);
+    assert!(lines[0]["links"]["tip"]["pose"].is_array());
+    let out = kinechain(&["info", "tests/data/mjcf/menagerie/aloha/aloha.xml"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("equality constraints (2 joint)"));
+}
