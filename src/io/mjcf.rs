@@ -334,12 +334,13 @@ impl Reader {
                     Some((v, at)) => reals::<3>(v, at, "axis")?,
                     None => [0.0, 0.0, 1.0],
                 };
-                if Vector3::from(axis).norm() < 1e-10 {
+                let Some(unit_axis) = attrs::unit(Vector3::from(axis)) else {
                     return Err(Problem::at(
                         get("axis").map_or(el.at, |(_, at)| at),
                         format!("joint '{name}': the axis is zero or too small"),
                     ));
-                }
+                };
+                let axis = [unit_axis.x, unit_axis.y, unit_axis.z];
                 let pos = match get("pos") {
                     Some((v, at)) => Vector3::from(reals::<3>(v, at, "pos")?),
                     None => Vector3::zeros(),
@@ -448,9 +449,12 @@ impl Reader {
                 let [a, b, c, d, e, f] = reals::<6>(v, at, "fromto")?;
                 let (from, to) = (Vector3::new(a, b, c), Vector3::new(d, e, f));
                 // MuJoCo turns the site's z axis to point from `to` to `from`.
-                let axis = (from - to)
-                    .try_normalize(1e-10)
-                    .ok_or_else(|| Problem::at(at, "fromto: the two points coincide"))?;
+                let axis = attrs::unit(from - to).ok_or_else(|| {
+                    Problem::at(
+                        at,
+                        "fromto: the two points coincide (or their distance overflows)",
+                    )
+                })?;
                 Pose {
                     p: (from + to) * 0.5,
                     q: attrs::z_to(&axis),

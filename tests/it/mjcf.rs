@@ -158,6 +158,15 @@ fn every_orientation_attribute_gives_the_rotation_mujoco_gives() {
             r#"quat="2 0 0 2""#,
             Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
         ),
+        // Normalised without overflowing.
+        (
+            r#"quat="1e300 0 0 1e300""#,
+            Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ),
+        (
+            r#"axisangle="0 0 1e308 90""#,
+            Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+        ),
         // A non-unit axis is normalised; the angle is in degrees.
         (
             r#"axisangle="0 0 5 90""#,

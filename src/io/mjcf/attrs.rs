@@ -273,13 +273,17 @@ fn orientation(
     match name {
         "quat" => {
             let [w, x, y, z] = reals::<4>(value, at, name)?;
-            let q = Quaternion::new(w, x, y, z);
-            UnitQuaternion::try_new(q, 1e-300).ok_or_else(|| small("the quaternion"))
+            let scale = [w, x, y, z].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if scale < 1e-300 {
+                return Err(small("the quaternion"));
+            }
+            let q = Quaternion::new(w / scale, x / scale, y / scale, z / scale);
+            Ok(UnitQuaternion::from_quaternion(q))
         }
         "axisangle" => {
             let [x, y, z, a] = reals::<4>(value, at, name)?;
-            let axis =
-                Unit::try_new(Vector3::new(x, y, z), 1e-300).ok_or_else(|| small("the axis"))?;
+            let axis = unit(Vector3::new(x, y, z)).ok_or_else(|| small("the axis"))?;
+            let axis = Unit::new_unchecked(axis);
             Ok(UnitQuaternion::from_axis_angle(&axis, compiler.angle(a)))
         }
         "euler" => {
@@ -305,10 +309,10 @@ fn orientation(
         "xyaxes" => {
             let v = reals::<6>(value, at, name)?;
             let x = Vector3::new(v[0], v[1], v[2]);
-            let x = x.try_normalize(1e-300).ok_or_else(|| small("the x axis"))?;
+            let x = unit(x).ok_or_else(|| small("the x axis"))?;
             let y = Vector3::new(v[3], v[4], v[5]);
-            let y = (y - x * x.dot(&y))
-                .try_normalize(1e-300)
+            let y = unit(y).ok_or_else(|| small("the y axis"))?;
+            let y = unit(y - x * x.dot(&y))
                 .ok_or_else(|| small("the y axis (once made orthogonal to x)"))?;
             let z = x.cross(&y);
             let m = Matrix3::from_columns(&[x, y, z]);
@@ -318,10 +322,22 @@ fn orientation(
         }
         _ => {
             let z = Vector3::from(reals::<3>(value, at, name)?);
-            let z = z.try_normalize(1e-300).ok_or_else(|| small("the axis"))?;
+            let z = unit(z).ok_or_else(|| small("the axis"))?;
             Ok(z_to(&z))
         }
     }
+}
+
+/// `v` scaled to unit length (through its largest component first, so that no square
+/// overflows or underflows); `None` when it is (nearly) zero.
+pub(crate) fn unit(v: Vector3<f64>) -> Option<Vector3<f64>> {
+    let scale = v.amax();
+    if scale < 1e-300 {
+        return None;
+    }
+    let v = v / scale;
+    let norm = v.norm();
+    (norm > 1e-10).then(|| v / norm)
 }
 
 /// The smallest rotation that turns the z axis to `z` (unit), as MuJoCo computes it: about
