@@ -72,6 +72,17 @@ impl Chain {
     }
 }
 
+/// The load options the Python keywords give.
+fn load_options(floating_base: bool, couplings: bool, base_dir: Option<PathBuf>) -> LoadOptions {
+    let options = LoadOptions::default()
+        .with_floating_base(floating_base)
+        .with_couplings(couplings);
+    match base_dir {
+        Some(dir) => options.with_base_dir(dir),
+        None => options,
+    }
+}
+
 #[pymethods]
 impl Chain {
     /// Loads a robot file: a DH table (`.yaml`, `.yml`), a URDF file (`.urdf`) or an MJCF file
@@ -130,12 +141,7 @@ impl Chain {
         floating_base: bool,
         couplings: bool,
     ) -> PyResult<Self> {
-        let mut options = LoadOptions::default()
-            .with_floating_base(floating_base)
-            .with_couplings(couplings);
-        if let Some(dir) = base_dir {
-            options = options.with_base_dir(dir);
-        }
+        let options = load_options(floating_base, couplings, base_dir);
         Chain::from_text(py, text, "mjcf", "robot", options)
     }
 
@@ -161,12 +167,7 @@ impl Chain {
         base_dir: Option<PathBuf>,
         couplings: bool,
     ) -> PyResult<Self> {
-        let mut options = LoadOptions::default()
-            .with_floating_base(floating_base)
-            .with_couplings(couplings);
-        if let Some(dir) = base_dir {
-            options = options.with_base_dir(dir);
-        }
+        let options = load_options(floating_base, couplings, base_dir);
         Chain::from_text(py, text, format, name, options)
     }
 
