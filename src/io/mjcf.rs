@@ -19,7 +19,7 @@ use attrs::{Compiler, Defaults, Kind, placement, real_list, reals, transform};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::HashSet;
 use std::path::Path;
-use tree::{At, Element, Problem};
+use tree::{Element, Problem};
 
 /// A position and an orientation: where a frame is in its parent's.
 #[derive(Clone, Copy, Debug)]
@@ -81,7 +81,6 @@ fn read_model(
         counts: Counts::default(),
         qpos0: Vec::new(),
         refs: Vec::new(),
-        floating_at: None,
     };
     let worlds: Vec<&Element> = root.children_named("worldbody").collect();
     for w in &worlds {
@@ -122,7 +121,6 @@ struct Reader {
     qpos0: Vec<f64>,
     /// Each hinge or slide joint's name and reference position (`qpos0`).
     refs: Vec<(String, f64)>,
-    floating_at: Option<At>,
 }
 
 impl Reader {
@@ -320,7 +318,6 @@ impl Reader {
                         ),
                     ));
                 }
-                self.floating_at = Some(el.at);
                 self.qpos0
                     .extend_from_slice(&[pose.p.x, pose.p.y, pose.p.z]);
                 let c = pose.q.quaternion();
