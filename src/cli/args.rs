@@ -25,14 +25,33 @@ pub(super) struct Cli {
     /// mimic joint, with no entry of q), so that q holds the leaders only.
     #[arg(long, global = true)]
     pub(super) couplings: bool,
+    /// xacro: an argument of the description (`--arg ur_type:=ur5e`), overriding its
+    /// `<xacro:arg>` default; repeatable.
+    #[arg(long = "arg", global = true, value_name = "NAME:=VALUE", value_parser = xacro_arg)]
+    pub(super) xacro_args: Vec<(String, String)>,
+    /// xacro: a directory holding ROS packages, searched first by `$(find PKG)` (a few levels
+    /// deep, for a package.xml naming PKG or a directory named PKG); repeatable.
+    #[arg(long = "package-path", global = true, value_name = "DIR")]
+    pub(super) package_paths: Vec<PathBuf>,
 }
 
 impl Cli {
     /// How the robot files of the command are loaded.
     pub(super) fn load_options(&self) -> crate::io::LoadOptions {
-        crate::io::LoadOptions::default()
+        let mut options = crate::io::LoadOptions::default()
             .with_floating_base(self.floating_base)
-            .with_couplings(self.couplings)
+            .with_couplings(self.couplings);
+        options.xacro.args.clone_from(&self.xacro_args);
+        options.xacro.package_paths.clone_from(&self.package_paths);
+        options
+    }
+}
+
+/// `NAME:=VALUE`, as xacro takes its arguments.
+fn xacro_arg(text: &str) -> Result<(String, String), String> {
+    match text.split_once(":=") {
+        Some((name, value)) if !name.is_empty() => Ok((name.to_string(), value.to_string())),
+        _ => Err(format!("'{text}' is not NAME:=VALUE")),
     }
 }
 
@@ -53,6 +72,15 @@ pub(super) enum Command {
     Convert {
         /// Robot file (.yaml/.yml DH table or .urdf).
         robot: PathBuf,
+        /// Output file (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Expand a xacro file into URDF, as ROS's `xacro` does, without ROS (with --arg and
+    /// --package-path).
+    Expand {
+        /// The xacro file (.xacro, .urdf.xacro).
+        file: PathBuf,
         /// Output file (default: standard output).
         #[arg(short, long)]
         output: Option<PathBuf>,

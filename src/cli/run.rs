@@ -62,6 +62,9 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
         } | Command::Record {
             output: Some(_),
             ..
+        } | Command::Expand {
+            output: Some(_),
+            ..
         }
     );
     if writes_stdout && stdout_closed {
@@ -122,6 +125,15 @@ pub(super) fn run(
                 warn_dropped(&robot);
             }
             write_output(output.as_ref(), &robot, &text, out)
+        }
+        Command::Expand { file, output } => {
+            refuse_overwrite(output.as_ref(), &file)?;
+            let expansion = crate::io::xacro::expand_file(&file, &options.xacro)
+                .map_err(|e| CliError::Load(crate::io::error::LoadError::new(&file, crate::io::error::LoadErrorKind::Xacro(e))))?;
+            for w in &expansion.warnings {
+                eprintln!("warning: {w}");
+            }
+            write_output(output.as_ref(), &file, &expansion.urdf, out)
         }
         Command::Render {
             robot,

@@ -51,10 +51,10 @@ impl LoadErrorKind {
         match self {
             LoadErrorKind::Yaml { line, column, .. }
             | LoadErrorKind::Urdf { line, column, .. }
-            | LoadErrorKind::Xacro { line, column, .. }
             | LoadErrorKind::Mjcf { line, column, .. }
             | LoadErrorKind::Field { line, column, .. }
             | LoadErrorKind::Model { line, column, .. } => line.map(|l| (l, *column)),
+            LoadErrorKind::Xacro(e) => e.line.map(|l| (l, e.column)),
             _ => None,
         }
     }
@@ -77,7 +77,7 @@ pub enum LoadErrorKind {
         limit: u64,
     },
     /// The file name has no extension kinechain knows.
-    #[error("unknown robot file type (expected .yaml, .yml, .urdf or .xml)")]
+    #[error("unknown robot file type (expected .yaml, .yml, .urdf, .xacro or .xml)")]
     UnknownFormat,
     /// The file holds nothing but whitespace or comments.
     #[error("file is empty")]
@@ -136,20 +136,13 @@ pub enum LoadErrorKind {
         /// What is wrong, in the terms of the file.
         message: String,
     },
-    /// The file holds xacro macros (or its name says it is a xacro file): it must be expanded
-    /// into URDF first.
-    #[error(
-        "{}{found}: this is a xacro file, not URDF; expand it first (`xacro in.urdf.xacro > out.urdf`) and load the result",
-        location_prefix(*line, *column)
-    )]
-    Xacro {
-        /// 1-based line of the first xacro element or attribute, when it is in the file.
-        line: Option<u32>,
-        /// 1-based column of the first xacro element or attribute, when it is in the file.
-        column: Option<u32>,
-        /// What shows it: the element, the attribute or the file name.
-        found: String,
-    },
+    /// The xacro file (or a `.urdf` file's leftover xacro elements) could not be expanded.
+    #[error("xacro: {0}")]
+    Xacro(crate::io::xacro::XacroError),
+    /// The URDF a xacro file expands to could not be read (lines and columns are those of the
+    /// expanded text, which `kinechain expand` writes).
+    #[error("in the URDF the xacro expands to: {0}")]
+    Expanded(Box<LoadErrorKind>),
     /// The file is UTF-16 text (it starts with a UTF-16 byte order mark); robot files are read
     /// as UTF-8.
     #[error(

@@ -1,4 +1,5 @@
-//! Loading robot files: DH YAML (`.yaml`, `.yml`), URDF (`.urdf`) and MJCF (`.xml`).
+//! Loading robot files: DH YAML (`.yaml`, `.yml`), URDF (`.urdf`), xacro (`.xacro`) and MJCF
+//! (`.xml`).
 
 pub mod convert;
 mod dh;
@@ -8,6 +9,7 @@ mod mjcf;
 pub mod output;
 pub mod render;
 mod urdf;
+pub mod xacro;
 pub(crate) mod xml;
 
 use crate::eval::Chain;
@@ -29,11 +31,13 @@ pub enum Format {
     /// MJCF, MuJoCo's XML (an `.xml` file whose root element is `<mujoco>`; one whose root is
     /// `<robot>` is read as URDF).
     Mjcf,
+    /// xacro (`.xacro`, `.urdf.xacro`): expanded into URDF ([`xacro`]), then read as URDF.
+    Xacro,
 }
 
 impl Format {
     /// The format a file name's extension says (`.yaml`/`.yml`: DH YAML, `.urdf`: URDF,
-    /// `.xml`/`.mjcf`: MJCF).
+    /// `.xml`/`.mjcf`: MJCF, `.xacro`: xacro).
     #[must_use]
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -41,6 +45,7 @@ impl Format {
             "yaml" | "yml" => Some(Format::DhYaml),
             "urdf" => Some(Format::Urdf),
             "xml" | "mjcf" => Some(Format::Mjcf),
+            "xacro" => Some(Format::Xacro),
             _ => None,
         }
     }
@@ -61,6 +66,9 @@ pub struct LoadOptions {
     /// joint following its leader, so that `q` holds the leaders only (by default `q` is
     /// MuJoCo's `qpos` and the couplings are reported, not applied, as `mj_kinematics` does).
     pub couplings: bool,
+    /// xacro: the arguments and package directories a `.xacro` file is expanded with (also
+    /// used for leftover xacro elements in a `.urdf` file).
+    pub xacro: xacro::XacroOptions,
 }
 
 impl LoadOptions {
@@ -75,6 +83,28 @@ impl LoadOptions {
     #[must_use]
     pub fn with_couplings(mut self, couplings: bool) -> Self {
         self.couplings = couplings;
+        self
+    }
+
+    /// With the xacro arguments and package directories `xacro`.
+    #[must_use]
+    pub fn with_xacro(mut self, xacro: xacro::XacroOptions) -> Self {
+        self.xacro = xacro;
+        self
+    }
+
+    /// With xacro argument `name` set to `value` (`--arg NAME:=VALUE`).
+    #[must_use]
+    pub fn with_xacro_arg(mut self, name: impl Into<String>, value: impl Into<String>) -> Self {
+        self.xacro.args.push((name.into(), value.into()));
+        self
+    }
+
+    /// With `dir` searched first for the ROS packages a xacro file's `$(find PKG)` names
+    /// (`--package-path DIR`).
+    #[must_use]
+    pub fn with_package_path(mut self, dir: impl Into<std::path::PathBuf>) -> Self {
+        self.xacro.package_paths.push(dir.into());
         self
     }
 
@@ -194,24 +224,9 @@ impl Chain {
     }
 }
 
-/// The format of the robot file `path` by its extension; a `.xacro` file is refused with the
-/// hint to expand it.
+/// The format of the robot file `path` by its extension.
 fn format_of(path: &Path) -> Result<Format, LoadError> {
-    let fail = |kind| LoadError::new(path, kind);
-    Format::from_path(path).ok_or_else(|| {
-        let xacro = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("xacro"));
-        fail(if xacro {
-            LoadErrorKind::Xacro {
-                line: None,
-                column: None,
-                found: "the file name ends in .xacro".into(),
-            }
-        } else {
-            LoadErrorKind::UnknownFormat
-        })
-    })
+    Format::from_path(path).ok_or_else(|| LoadError::new(path, LoadErrorKind::UnknownFormat))
 }
 
 /// Reads the robot file `path` once, as text: at most [`MAX_FILE_BYTES`] (a pipe or a device is
@@ -221,8 +236,13 @@ fn format_of(path: &Path) -> Result<Format, LoadError> {
 /// [`LoadError`] naming the file: an unknown extension, a failed read, a file over the limit,
 /// UTF-16 or other text that is not UTF-8.
 pub fn read_robot_file(path: &Path) -> Result<String, LoadError> {
-    let fail = |kind| LoadError::new(path, kind);
     format_of(path)?;
+    read_text(path)
+}
+
+/// Reads file `path` as text: at most [`MAX_FILE_BYTES`], UTF-8.
+pub(crate) fn read_text(path: &Path) -> Result<String, LoadError> {
+    let fail = |kind| LoadError::new(path, kind);
     let file = std::fs::File::open(path).map_err(|e| fail(LoadErrorKind::Io(e)))?;
     let mut bytes = Vec::new();
     // Read one byte past the limit to tell "at the limit" from "over it" without trusting
@@ -269,6 +289,21 @@ fn parse(
         b
     };
     match format {
+        Format::Xacro => {
+            let file = xacro_path(path, options, default_name);
+            let expansion = xacro::expand_text(text, &file, &options.xacro, false)
+                .map_err(LoadErrorKind::Xacro)?;
+            load_urdf(&expansion.urdf, &expansion.warnings, with_options)
+                .map_err(|e| LoadErrorKind::Expanded(Box::new(e)))
+        }
+        Format::Urdf if xacro::has_xacro(text) => {
+            // Leftover xacro elements of a file saved as URDF.
+            let file = xacro_path(path, options, default_name);
+            let expansion = xacro::expand_text(text, &file, &options.xacro, true)
+                .map_err(LoadErrorKind::Xacro)?;
+            load_urdf(&expansion.urdf, &expansion.warnings, with_options)
+                .map_err(|e| LoadErrorKind::Expanded(Box::new(e)))
+        }
         Format::DhYaml => with_options(dh::parse(text, default_name)?)
             .into_chain()
             .map_err(|failed| failed.0.into()),
@@ -288,14 +323,39 @@ fn parse(
                     error: failed.0,
                 })
         }
-        Format::Urdf | Format::Mjcf => {
-            let (builder, places) = urdf::parse(text)?;
-            with_options(builder).into_chain().map_err(|failed| {
-                let (e, builder) = *failed;
-                places.locate(text, &builder, e.into())
-            })
-        }
+        Format::Urdf | Format::Mjcf => load_urdf(text, &[], with_options),
     }
+}
+
+/// The chain of URDF text `text`, with `warnings` from before it was read (a xacro expansion's).
+fn load_urdf(
+    text: &str,
+    warnings: &[String],
+    with_options: impl Fn(crate::model::builder::ChainBuilder) -> crate::model::builder::ChainBuilder,
+) -> Result<Chain, LoadErrorKind> {
+    let (mut builder, places) = urdf::parse(text)?;
+    for w in warnings {
+        builder.warn(w.clone());
+    }
+    with_options(builder).into_chain().map_err(|failed| {
+        let (e, builder) = *failed;
+        places.locate(text, &builder, e.into())
+    })
+}
+
+/// The path a xacro text is expanded as: its file, or for text given as a string a file in
+/// the base directory (or the current one).
+fn xacro_path(path: Option<&Path>, options: &LoadOptions, default_name: &str) -> std::path::PathBuf {
+    path.map_or_else(
+        || {
+            options
+                .base_dir
+                .clone()
+                .unwrap_or_else(|| std::path::PathBuf::from("."))
+                .join(format!("{default_name}.urdf.xacro"))
+        },
+        Path::to_path_buf,
+    )
 }
 
 /// Nothing but whitespace (and, for YAML, comments).
@@ -305,7 +365,7 @@ fn is_blank(text: &str, format: Format) -> bool {
             .lines()
             .map(str::trim)
             .all(|l| l.is_empty() || l.starts_with('#') || l == "---" || l == "..."),
-        Format::Urdf | Format::Mjcf => text.trim().is_empty(),
+        Format::Urdf | Format::Mjcf | Format::Xacro => text.trim().is_empty(),
     }
 }
 

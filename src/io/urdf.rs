@@ -259,10 +259,10 @@ fn check_xacro(doc: &Document<'_>) -> Result<(), LoadErrorKind> {
         };
         if let Some((offset, what)) = found {
             let (line, column) = place(doc, offset);
-            return Err(LoadErrorKind::Xacro {
+            return Err(LoadErrorKind::Urdf {
                 line: Some(line),
                 column: Some(column),
-                found: what,
+                message: format!("{what}: a xacro element or attribute that was not expanded"),
             });
         }
     }

@@ -36,13 +36,10 @@ pub(crate) fn xml_error(source: &str, e: &roxmltree::Error, nodes: usize) -> Loa
             )
         }
         E::NodesLimitReached => return too_many_nodes(nodes),
-        E::UnknownNamespace(prefix, pos) if prefix == "xacro" => {
-            return LoadErrorKind::Xacro {
-                line: Some(pos.row),
-                column: Some(pos.col),
-                found: "a <xacro:...> element or attribute".into(),
-            };
-        }
+        E::UnknownNamespace(prefix, pos) if prefix == "xacro" => (
+            at(*pos),
+            "the namespace prefix 'xacro:' is not declared (add xmlns:xacro=\"http://www.ros.org/wiki/xacro\" to the root element)".to_string(),
+        ),
         E::UnknownNamespace(prefix, pos) => (
             at(*pos),
             format!("not well-formed XML: the namespace prefix '{prefix}:' is not declared"),
