@@ -40,7 +40,13 @@ class Chain:
     """A robot: links, joints and limits; immutable and shared between threads."""
 
     @staticmethod
-    def from_file(path: str, floating_base: bool = False, couplings: bool = False) -> "Chain":
+    def from_file(
+        path: str,
+        floating_base: bool = False,
+        couplings: bool = False,
+        args: Optional[list[Tuple[str, str]]] = None,
+        package_paths: Optional[list[str]] = None,
+    ) -> "Chain":
         """Loads a DH table (.yaml, .yml), a URDF file (.urdf) or an MJCF file (.xml); with floating_base, a
         floating joint root_joint between the world and the root link."""
     @staticmethod
@@ -166,3 +172,7 @@ class Chain:
     def __reduce__(self) -> Tuple[Any, Tuple[str, str]]: ...
     def __eq__(self, other: object) -> bool: ...
     def __hash__(self) -> int: ...
+
+def _expand_xacro(
+    path: str, args: Optional[list[Tuple[str, str]]] = None, package_paths: Optional[list[str]] = None
+) -> str: ...

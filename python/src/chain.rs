@@ -83,18 +83,64 @@ fn load_options(floating_base: bool, couplings: bool, base_dir: Option<PathBuf>)
     }
 }
 
+/// The xacro options of the Python keywords.
+pub(crate) fn xacro_options(
+    args: Option<Vec<(String, String)>>,
+    package_paths: Option<Vec<PathBuf>>,
+) -> kinechain::io::xacro::XacroOptions {
+    let mut options = kinechain::io::xacro::XacroOptions::default();
+    for (k, v) in args.unwrap_or_default() {
+        options = options.with_arg(k, v);
+    }
+    for p in package_paths.unwrap_or_default() {
+        options = options.with_package_path(p);
+    }
+    options
+}
+
+/// Expands xacro `text` of file `path` without the GIL.
+pub(crate) fn expand(
+    py: Python<'_>,
+    path: &std::path::Path,
+    text: &str,
+    options: kinechain::io::xacro::XacroOptions,
+) -> PyResult<kinechain::io::xacro::Expansion> {
+    py.detach(|| kinechain::io::xacro::expand_str(text, path, &options)).map_err(|e| {
+        load_error(&kinechain::io::error::LoadError::new_xacro(path, e))
+    })
+}
+
+/// The URDF that the xacro file `path` expands to (what `kinechain.expand_xacro` returns).
+#[pyfunction]
+#[pyo3(signature = (path, args=None, package_paths=None))]
+pub(crate) fn _expand_xacro(
+    py: Python<'_>,
+    path: PathBuf,
+    args: Option<Vec<(String, String)>>,
+    package_paths: Option<Vec<PathBuf>>,
+) -> PyResult<String> {
+    let read = path.clone();
+    let source = files::read_interruptibly(py, move || {
+        kinechain::io::read_robot_file(&read).map_err(|e| error_chain(&e))
+    })?
+    .map_err(LoadError::new_err)?;
+    Ok(expand(py, &path, &source, xacro_options(args, package_paths))?.urdf)
+}
+
 #[pymethods]
 impl Chain {
     /// Loads a robot file: a DH table (`.yaml`, `.yml`), a URDF file (`.urdf`) or an MJCF file
     /// (`.xml`, its includes looked up beside it); with
     /// `floating_base`, a floating joint `root_joint` between the world and its root link.
     #[staticmethod]
-    #[pyo3(signature = (path, floating_base=false, couplings=false))]
+    #[pyo3(signature = (path, floating_base=false, couplings=false, args=None, package_paths=None))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
         floating_base: bool,
         couplings: bool,
+        args: Option<Vec<(String, String)>>,
+        package_paths: Option<Vec<PathBuf>>,
     ) -> PyResult<Self> {
         // Read once (a FIFO can be read only once), bounded, off the GIL and open to Ctrl-C.
         let read = path.clone();
@@ -104,7 +150,17 @@ impl Chain {
         .map_err(LoadError::new_err)?;
         let mut options = LoadOptions::default()
             .with_floating_base(floating_base)
-            .with_couplings(couplings);
+            .with_couplings(couplings)
+            .with_xacro(xacro_options(args, package_paths));
+        if kinechain::io::Format::from_path(&path) == Some(kinechain::io::Format::Xacro) {
+            // The expanded URDF is the chain's source: what a pickled copy is rebuilt from.
+            let expansion = expand(py, &path, &source, options.xacro.clone())?;
+            let inner = Inner::from_xacro_expansion(&path, &expansion, &options)
+                .map_err(|e| load_error(&e))?;
+            let origin = std::fs::canonicalize(&path).ok().or(Some(path.clone()));
+            let options = LoadOptions::default().with_floating_base(floating_base);
+            return Chain::new(py, inner, (expansion.urdf, "urdf", options), origin);
+        }
         let inner =
             Inner::from_file_text_with(&path, &source, &options).map_err(|e| load_error(&e))?;
         let origin = std::fs::canonicalize(&path).ok().or(Some(path.clone()));

@@ -47,6 +47,7 @@ fn _kinechain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LoadError", m.py().get_type::<LoadError>())?;
     m.add("StateError", m.py().get_type::<StateError>())?;
     m.add_function(wrap_pyfunction!(_orientation, m)?)?;
+    m.add_function(wrap_pyfunction!(chain::_expand_xacro, m)?)?;
     m.add_function(wrap_pyfunction!(_record_golden, m)?)?;
     m.add_function(wrap_pyfunction!(_verify_golden, m)?)?;
     m.add_function(wrap_pyfunction!(_compare, m)?)?;

@@ -24,6 +24,12 @@ impl LoadError {
         }
     }
 
+    /// The error of a xacro file that could not be expanded.
+    #[must_use]
+    pub fn new_xacro(path: &Path, error: crate::io::xacro::XacroError) -> Self {
+        LoadError::new(path, LoadErrorKind::Xacro(error))
+    }
+
     /// The file that failed to load.
     #[must_use]
     pub fn path(&self) -> &Path {

@@ -138,6 +138,27 @@ impl Chain {
         Chain::from_file_text_with(path, &text, options)
     }
 
+    /// The chain of a xacro [`Expansion`](xacro::Expansion) of file `path` (read as URDF, with
+    /// the expansion's warnings): what [`Chain::from_file_with`] gives for a `.xacro` file, for
+    /// a caller that keeps the URDF text too.
+    ///
+    /// # Errors
+    /// [`LoadError`] naming `path`: the URDF could not be read.
+    pub fn from_xacro_expansion(
+        path: &Path,
+        expansion: &xacro::Expansion,
+        options: &LoadOptions,
+    ) -> Result<Chain, LoadError> {
+        let with_options = |mut b: crate::model::builder::ChainBuilder| {
+            if options.floating_base {
+                b.floating_base();
+            }
+            b
+        };
+        load_urdf(&expansion.urdf, &expansion.warnings, with_options)
+            .map_err(|e| LoadError::new(path, LoadErrorKind::Expanded(Box::new(e))))
+    }
+
     /// [`Chain::from_file_text`] with `options`.
     ///
     /// # Errors

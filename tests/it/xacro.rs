@@ -88,7 +88,7 @@ fn the_feature_file_expands_as_xacro_defines_it() {
     // xacro:attribute, the $(eval) condition, builtins, the escapes.
     assert!(urdf.contains(r#"<link name="left_tip">"#));
     assert!(urdf.contains(r#"<origin xyz="0.7 0.1 2.25" rpy="0 0 0.7853981633974483"/>"#));
-    assert!(urdf.contains("<note>${not evaluated} $(neither)</note>"), "{urdf}");
+    assert!(urdf.contains("<note>plain text</note>"), "{urdf}");
     // The multi-block `**extra` puts its content, the `*origin` block itself.
     assert!(urdf.contains(r#"<dynamics damping="0.1"/>"#));
     assert!(!urdf.contains("xacro:"));
@@ -214,6 +214,23 @@ fn expand_error(text: &str) -> XacroError {
 
 fn robot(body: &str) -> String {
     format!("<?xml version=\"1.0\"?>\n<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n{body}\n</robot>\n")
+}
+
+/// What xacro keeps as text: `$${` and `$$(` escapes (one `$` dropped), a `$` before other
+/// text; `$(dirname)` and `$(env)`.
+#[test]
+fn escapes_and_substitutions() {
+    let dir = Scratch::new("xacro-escapes");
+    let path = dir.write(
+        "r.urdf.xacro",
+        robot("  <note a=\"$${not evaluated} $$(neither) 5$ and $x\" d=\"$(dirname)\" e=\"$(env PATH)\"/>"),
+    );
+    let out = expand_file(Path::new(&path), &XacroOptions::default()).unwrap();
+    assert!(out.urdf.contains("a=\"${not evaluated} $(neither) 5$ and $x\""), "{}", out.urdf);
+    let dir_shown = Path::new(&path).parent().unwrap().canonicalize().unwrap();
+    assert!(out.urdf.contains(&format!("d=\"{}\"", dir_shown.display())), "{}", out.urdf);
+    let path_var = std::env::var("PATH").unwrap();
+    assert!(out.urdf.contains(&format!("e=\"{path_var}\"")), "{}", out.urdf);
 }
 
 #[test]
