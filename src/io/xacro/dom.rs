@@ -96,25 +96,42 @@ pub(crate) fn parse(text: &str, file: usize) -> Result<Element, (Place, String)>
             message,
         )
     })?;
-    convert(&doc, doc.root_element(), file, 0)
+    let lines = Lines {
+        starts: std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect(),
+        file,
+    };
+    convert(&doc, doc.root_element(), &lines, 0)
 }
 
-fn place(doc: &Document<'_>, offset: usize, file: usize) -> Place {
-    let pos = doc.text_pos_at(offset);
-    Place {
-        file,
-        line: pos.row,
-        column: pos.col,
+/// Where each line of a file starts, to place byte offsets (roxmltree's own lookup scans the
+/// text from its start each time).
+struct Lines {
+    starts: Vec<usize>,
+    file: usize,
+}
+
+impl Lines {
+    fn place(&self, text: &str, offset: usize) -> Place {
+        let line = self.starts.partition_point(|&s| s <= offset).max(1);
+        let start = self.starts[line - 1];
+        let column = text.get(start..offset).map_or(1, |t| t.chars().count() + 1);
+        Place {
+            file: self.file,
+            line: u32::try_from(line).unwrap_or(u32::MAX),
+            column: u32::try_from(column).unwrap_or(u32::MAX),
+        }
     }
 }
 
 fn convert(
     doc: &Document<'_>,
     node: roxmltree::Node<'_, '_>,
-    file: usize,
+    lines: &Lines,
     depth: usize,
 ) -> Result<Element, (Place, String)> {
-    let at = place(doc, node.range().start, file);
+    let at = lines.place(doc.input_text(), node.range().start);
     if depth > MAX_DEPTH {
         return Err((at, format!("elements nest deeper than {MAX_DEPTH} levels")));
     }
@@ -127,12 +144,13 @@ fn convert(
     let name = rest[..len].to_string();
     let mut attrs = Vec::new();
     // Namespace declarations made on this element (those in scope that its parent lacks).
-    let parent_namespaces: Vec<(Option<&str>, &str)> = node
-        .parent_element()
-        .map(|p| p.namespaces().map(|n| (n.name(), n.uri())).collect())
-        .unwrap_or_default();
-    for ns in node.namespaces() {
-        if ns.name() == Some("xml") || parent_namespaces.contains(&(ns.name(), ns.uri())) {
+    let parent = node.parent_element();
+    let inherited = parent.map_or(0, |p| p.namespaces().len());
+    let declares = parent.is_none() || node.namespaces().len() != inherited;
+    for ns in node.namespaces().filter(|_| declares) {
+        if ns.name() == Some("xml")
+            || parent.is_some_and(|p| p.namespaces().any(|n| n.name() == ns.name() && n.uri() == ns.uri()))
+        {
             continue;
         }
         let key = ns
@@ -146,9 +164,13 @@ fn convert(
     let mut children = Vec::new();
     for child in node.children() {
         if child.is_element() {
-            children.push(Node::Element(convert(doc, child, file, depth + 1)?));
+            children.push(Node::Element(convert(doc, child, lines, depth + 1)?));
         } else if child.is_text() {
-            children.push(Node::Text(child.text().unwrap_or_default().to_string()));
+            // White space between elements means nothing to URDF (and is not written).
+            let t = child.text().unwrap_or_default();
+            if !t.trim().is_empty() {
+                children.push(Node::Text(t.to_string()));
+            }
         } else if child.is_comment() {
             children.push(Node::Comment(child.text().unwrap_or_default().to_string()));
         }

@@ -110,7 +110,14 @@ pub(crate) struct Expander {
     allowed: Vec<PathBuf>,
     here: Place,
     max_bytes: u64,
+    /// Expressions parsed so far, by their text (macro bodies repeat theirs).
+    parsed: HashMap<String, Rc<expr::Parsed>>,
+    /// The directory of the last file asked for ([`Expander::current_dir`]).
+    dir_cache: Option<(usize, PathBuf)>,
 }
+
+/// Most parsed expressions kept.
+const MAX_PARSED: usize = 100_000;
 
 type Result<T> = std::result::Result<T, XacroError>;
 
@@ -162,6 +169,8 @@ impl Expander {
             allowed,
             here: Place::default(),
             max_bytes,
+            parsed: HashMap::new(),
+            dir_cache: None,
         }
     }
 
@@ -399,7 +408,19 @@ impl Expander {
 
     fn eval_expr(&mut self, body: &str, table: usize) -> std::result::Result<Value, String> {
         let inner = self.eval_text(body, table)?.to_text();
-        expr::evaluate(&inner, &mut At { x: self, table })
+        let parsed = match self.parsed.get(&inner) {
+            Some(p) => p.clone(),
+            None => {
+                let p = Rc::new(
+                    expr::parse(&inner).map_err(|e| format!("{e} (in the expression '{}')", body.trim()))?,
+                );
+                if self.parsed.len() < MAX_PARSED {
+                    self.parsed.insert(inner, p.clone());
+                }
+                p
+            }
+        };
+        expr::run(&parsed, &mut At { x: self, table })
             .map_err(|e| format!("{e} (in the expression '{}')", body.trim()))
     }
 
@@ -468,15 +489,23 @@ impl Expander {
     }
 
     /// The directory of the file being processed.
-    fn current_dir(&self) -> PathBuf {
-        let file = &self.files[self.file_stack.last().map_or(0, |f| f.0)];
+    fn current_dir(&mut self) -> PathBuf {
+        let index = self.file_stack.last().map_or(0, |f| f.0);
+        if let Some((i, dir)) = &self.dir_cache
+            && *i == index
+        {
+            return dir.clone();
+        }
+        let file = &self.files[index];
         let dir = file.parent().unwrap_or(Path::new("."));
         let dir = if dir.as_os_str().is_empty() {
             Path::new(".")
         } else {
             dir
         };
-        dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf())
+        let dir = dir.canonicalize().unwrap_or_else(|_| dir.to_path_buf());
+        self.dir_cache = Some((index, dir.clone()));
+        dir
     }
 
     /// The text of file `path` (relative to the file being processed), which must be a regular
@@ -531,6 +560,10 @@ impl Expander {
             if k.starts_with("xacro:") || k == "xmlns:xacro" {
                 continue;
             }
+            if !v.contains('$') {
+                e.attrs.push((k, v));
+                continue;
+            }
             let value = self.eval_text(&v, env.table);
             let value = self.check(value)?.to_text();
             e.attrs.push((k, value));
@@ -559,6 +592,7 @@ impl Expander {
         let mut out = Vec::with_capacity(children.len());
         for child in children {
             match child {
+                Node::Text(t) if !t.contains('$') => out.push(Node::Text(t)),
                 Node::Text(t) => {
                     self.here = parent_at;
                     let v = self.eval_text(&t, env.table);

@@ -631,6 +631,15 @@ fn check_name(name: &str) -> Result<(), String> {
 
 /// Evaluates the expression `text` in `scope`.
 pub(crate) fn evaluate(text: &str, scope: &mut dyn Scope) -> Result<Value, String> {
+    run(&parse(text)?, scope)
+}
+
+/// A parsed expression, to be evaluated any number of times.
+#[derive(Debug)]
+pub(crate) struct Parsed(Expr);
+
+/// The expression `text`, parsed.
+pub(crate) fn parse(text: &str) -> Result<Parsed, String> {
     let tokens = tokenize(text)?;
     if tokens.is_empty() {
         return Err("empty expression".into());
@@ -653,12 +662,17 @@ pub(crate) fn evaluate(text: &str, scope: &mut dyn Scope) -> Result<Value, Strin
         if parser.peek().is_some() {
             return Err(format!("unexpected text {}", parser.found()));
         }
-        return eval(&Expr::Tuple(items), scope);
+        return Ok(Parsed(Expr::Tuple(items)));
     }
     if parser.peek().is_some() {
         return Err(format!("unexpected text {}", parser.found()));
     }
-    eval(&expr, scope)
+    Ok(Parsed(expr))
+}
+
+/// The value of the parsed expression `p` in `scope`.
+pub(crate) fn run(p: &Parsed, scope: &mut dyn Scope) -> Result<Value, String> {
+    eval(&p.0, scope)
 }
 
 fn eval(e: &Expr, scope: &mut dyn Scope) -> Result<Value, String> {

@@ -52,11 +52,27 @@ impl Packages {
             return Ok(dir.clone());
         }
         let dir = self.search(name).ok_or_else(|| self.not_found(name))?;
+        // Absolute, as ROS gives it: the text is joined to paths in other files.
+        let dir = dir
+            .canonicalize()
+            .or_else(|_| std::path::absolute(&dir))
+            .unwrap_or(dir);
         self.found.insert(name.to_string(), dir.clone());
         Ok(dir)
     }
 
     fn search(&mut self, name: &str) -> Option<PathBuf> {
+        // The usual layouts first, without reading directories: the root is the package, or
+        // holds it under its name.
+        for root in &self.roots {
+            if package_name(root).as_deref() == Some(name) {
+                return Some(root.clone());
+            }
+            let dir = root.join(name);
+            if package_name(&dir).as_deref() == Some(name) {
+                return Some(dir);
+            }
+        }
         for i in 0..self.roots.len() {
             if self.indexed[i].is_none() {
                 self.indexed[i] = Some(index(&self.roots[i]));
