@@ -105,9 +105,8 @@ pub(crate) fn expand(
     text: &str,
     options: kinechain::io::xacro::XacroOptions,
 ) -> PyResult<kinechain::io::xacro::Expansion> {
-    py.detach(|| kinechain::io::xacro::expand_str(text, path, &options)).map_err(|e| {
-        load_error(&kinechain::io::error::LoadError::new_xacro(path, e))
-    })
+    py.detach(|| kinechain::io::xacro::expand_str(text, path, &options))
+        .map_err(|e| load_error(&kinechain::io::error::LoadError::new_xacro(path, e)))
 }
 
 /// The URDF that the xacro file `path` expands to (what `kinechain.expand_xacro` returns).

@@ -128,8 +128,12 @@ pub(super) fn run(
         }
         Command::Expand { file, output } => {
             refuse_overwrite(output.as_ref(), &file)?;
-            let expansion = crate::io::xacro::expand_file(&file, &options.xacro)
-                .map_err(|e| CliError::Load(crate::io::error::LoadError::new(&file, crate::io::error::LoadErrorKind::Xacro(e))))?;
+            let expansion = crate::io::xacro::expand_file(&file, &options.xacro).map_err(|e| {
+                CliError::Load(crate::io::error::LoadError::new(
+                    &file,
+                    crate::io::error::LoadErrorKind::Xacro(e),
+                ))
+            })?;
             for w in &expansion.warnings {
                 eprintln!("warning: {w}");
             }

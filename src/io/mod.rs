@@ -366,7 +366,11 @@ fn load_urdf(
 
 /// The path a xacro text is expanded as: its file, or for text given as a string a file in
 /// the base directory (or the current one).
-fn xacro_path(path: Option<&Path>, options: &LoadOptions, default_name: &str) -> std::path::PathBuf {
+fn xacro_path(
+    path: Option<&Path>,
+    options: &LoadOptions,
+    default_name: &str,
+) -> std::path::PathBuf {
     path.map_or_else(
         || {
             options

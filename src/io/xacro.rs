@@ -127,7 +127,11 @@ pub fn expand_file(path: &Path, options: &XacroOptions) -> Result<Expansion, Xac
 ///
 /// # Errors
 /// As [`expand_file`].
-pub fn expand_str(text: &str, path: &Path, options: &XacroOptions) -> Result<Expansion, XacroError> {
+pub fn expand_str(
+    text: &str,
+    path: &Path,
+    options: &XacroOptions,
+) -> Result<Expansion, XacroError> {
     expand_text(text, path, options, false)
 }
 
@@ -177,7 +181,12 @@ pub(crate) fn expand_text(
     })
 }
 
-fn run(text: &str, path: &Path, options: &XacroOptions, lenient: bool) -> Result<Expansion, XacroError> {
+fn run(
+    text: &str,
+    path: &Path,
+    options: &XacroOptions,
+    lenient: bool,
+) -> Result<Expansion, XacroError> {
     let root = dom::parse(text, 0).map_err(|(at, message)| XacroError {
         file: path.to_path_buf(),
         line: Some(at.line),
@@ -193,7 +202,9 @@ fn run(text: &str, path: &Path, options: &XacroOptions, lenient: bool) -> Result
         crate::io::MAX_FILE_BYTES,
     );
     let done = x.run(root)?;
-    let name = path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let name = path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     let banner = if lenient {
         String::new()
     } else {

@@ -2164,15 +2164,37 @@ fn xacro_files_expand_and_load_with_args_and_package_paths() {
     assert!(text.contains("<robot name=\"ur\">"), "{text}");
     let dir = Scratch::new("cli-xacro");
     let urdf = dir.path("ur5e.urdf");
-    ok_text(&["expand", ur, args[0], args[1], args[2], args[3], "-o", &urdf]);
+    ok_text(&[
+        "expand", ur, args[0], args[1], args[2], args[3], "-o", &urdf,
+    ]);
     assert_eq!(std::fs::read_to_string(&urdf).unwrap(), text);
     let info = &ok_json(&["info", ur, args[0], args[1], args[2], args[3]])[0];
     assert_eq!(info["nq"], 6);
-    ok_text(&["compare", &urdf, ur, args[0], args[1], args[2], args[3], "--samples", "5"]);
+    ok_text(&[
+        "compare",
+        &urdf,
+        ur,
+        args[0],
+        args[1],
+        args[2],
+        args[3],
+        "--samples",
+        "5",
+    ]);
     // --package-path, and fk on a xacro file.
     let lines = ok_json(&[
-        "fk", ur, args[0], args[1], args[2], args[3], "--package-path", "tests/data/xacro/packages",
-        "--q", "[0, -1, 1, 0, 0.5, 0]", "--link", "tool0",
+        "fk",
+        ur,
+        args[0],
+        args[1],
+        args[2],
+        args[3],
+        "--package-path",
+        "tests/data/xacro/packages",
+        "--q",
+        "[0, -1, 1, 0, 0.5, 0]",
+        "--link",
+        "tool0",
     ]);
     assert!(lines[0]["links"]["tool0"]["pose"].is_array());
     // The robot's name comes from an argument that is read before its default is declared
@@ -2180,7 +2202,10 @@ fn xacro_files_expand_and_load_with_args_and_package_paths() {
     let out = kinechain(&["info", ur]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("ur.urdf.xacro:2:1: argument `name` is not defined"), "{err}");
+    assert!(
+        err.contains("ur.urdf.xacro:2:1: argument `name` is not defined"),
+        "{err}"
+    );
     // Without ur_type, its default names a type that has no configuration: the error names the
     // file it could not read and the macro call.
     let out = kinechain(&["info", ur, "--arg", "name:=ur"]);

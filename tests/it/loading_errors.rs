@@ -1044,7 +1044,8 @@ fn urdf_hostile_files() {
     );
     assert_eq!(e.position(), Some((4, Some(3))));
     // Leftover xacro in a file saved as URDF is expanded (its macros are in the file).
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/urdf/unexpanded_xacro.urdf");
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/urdf/unexpanded_xacro.urdf");
     let chain = Chain::from_file(&path).unwrap();
     assert!(chain.link_id("upper").is_ok());
     // An undeclared xacro prefix is named with the fix.
@@ -1059,7 +1060,11 @@ fn urdf_hostile_files() {
     // A macro that is not defined, at the robot level (it could add links), is an error.
     let text = "<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n  <link name=\"a\"/>\n  <xacro:arm/>\n</robot>";
     let e = Chain::from_urdf_str(text).unwrap_err();
-    assert!(message(&e).contains("unknown macro name: xacro:arm"), "{}", message(&e));
+    assert!(
+        message(&e).contains("unknown macro name: xacro:arm"),
+        "{}",
+        message(&e)
+    );
     assert_eq!(e.position(), Some((3, Some(3))));
     let e = load("urdf/utf16.urdf");
     assert!(matches!(e.kind(), LoadErrorKind::Utf16), "{}", message(&e));

@@ -36,7 +36,7 @@ mod render;
 mod robots;
 mod rotation;
 mod state_errors;
-mod xacro;
 #[cfg(feature = "reference")]
 mod stress;
 mod urdf_reading;
+mod xacro;

@@ -24,11 +24,20 @@ fn assert_same(a: &Chain, b: &Chain, what: &str) {
     let joints = |c: &Chain| -> Vec<String> {
         c.joints()
             .iter()
-            .map(|j| format!("{} {:?} {:?} {:?}", j.name(), j.kind(), j.limits(), j.mimic()))
+            .map(|j| {
+                format!(
+                    "{} {:?} {:?} {:?}",
+                    j.name(),
+                    j.kind(),
+                    j.limits(),
+                    j.mimic()
+                )
+            })
             .collect()
     };
     assert_eq!(joints(a), joints(b), "{what}: joints");
-    let links = |c: &Chain| -> Vec<String> { c.links().iter().map(|l| l.name().to_string()).collect() };
+    let links =
+        |c: &Chain| -> Vec<String> { c.links().iter().map(|l| l.name().to_string()).collect() };
     assert_eq!(links(a), links(b), "{what}: links");
     let mut qs = vec![vec![0.0; a.nq()]];
     let random = a.random_configurations(8, 7, (-1.0, 1.0));
@@ -75,16 +84,24 @@ fn the_feature_file_expands_as_xacro_defines_it() {
     );
     // The property block, a YAML value, lazy properties used before definition, eager ones,
     // dicts by key and by dot, `!degrees` and `!millimeters`, `:=^` and `:=^|` defaults.
-    assert!(urdf.contains(r#"<origin xyz="0 0 0.15" rpy="0 0 0"/>"#), "{urdf}");
+    assert!(
+        urdf.contains(r#"<origin xyz="0 0 0.15" rpy="0 0 0"/>"#),
+        "{urdf}"
+    );
     let tilt = 5.0 * (std::f64::consts::PI / 180.0);
     assert!(
-        urdf.contains(&format!(r#"<origin xyz="0.1 -0.2 0.8" rpy="{tilt} 0 0.7853981633974483"/>"#)),
+        urdf.contains(&format!(
+            r#"<origin xyz="0.1 -0.2 0.8" rpy="{tilt} 0 0.7853981633974483"/>"#
+        )),
         "{urdf}"
     );
     assert!(urdf.contains(r#"<limit lower="-0.4" upper="0.7" effort="10" velocity="1"/>"#));
     assert!(urdf.contains(r#"<limit lower="-0.0" upper="0.12" effort="10" velocity="1"/>"#));
     // `scope="parent"` from a macro; `'0.5'` is text 0.5 that reads back as a number.
-    assert!(urdf.contains(r#"<origin xyz="0 0 0.35" rpy="0 0 0"/>"#), "{urdf}");
+    assert!(
+        urdf.contains(r#"<origin xyz="0 0 0.35" rpy="0 0 0"/>"#),
+        "{urdf}"
+    );
     // xacro:attribute, the $(eval) condition, builtins, the escapes.
     assert!(urdf.contains(r#"<link name="left_tip">"#));
     assert!(urdf.contains(r#"<origin xyz="0.7 0.1 2.25" rpy="0 0 0.7853981633974483"/>"#));
@@ -99,7 +116,11 @@ fn the_feature_file_expands_as_xacro_defines_it() {
     let out = expand_file(&features(), &options).unwrap();
     assert!(!out.urdf.contains("finger"));
     assert!(!out.urdf.contains("marker"));
-    assert!(out.urdf.contains(r#"<limit lower="-0.2" upper="0.5""#), "{}", out.urdf);
+    assert!(
+        out.urdf.contains(r#"<limit lower="-0.2" upper="0.5""#),
+        "{}",
+        out.urdf
+    );
     // Every file read is listed: the main file, the includes and the YAML file.
     assert_eq!(out.files.len(), 4, "{:?}", out.files);
 }
@@ -115,7 +136,8 @@ fn a_xacro_file_loads_like_its_expansion() {
     // The same text given as a string, with the directory its includes are in.
     let text = std::fs::read_to_string(features()).unwrap();
     let options = options.with_base_dir(data().join("features"));
-    let from_text = Chain::from_str_with(&text, kinechain::io::Format::Xacro, "robot", &options).unwrap();
+    let from_text =
+        Chain::from_str_with(&text, kinechain::io::Format::Xacro, "robot", &options).unwrap();
     assert_same(&chain, &from_text, "features from a string");
 }
 
@@ -134,7 +156,13 @@ fn cases(root: &Path) -> Vec<Case> {
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
         .map(|line| {
             let fields: Vec<&str> = line.split('\t').collect();
-            let folder = root.join(fields.get(4).copied().filter(|f| !f.is_empty()).unwrap_or("packages"));
+            let folder = root.join(
+                fields
+                    .get(4)
+                    .copied()
+                    .filter(|f| !f.is_empty())
+                    .unwrap_or("packages"),
+            );
             let mut options = XacroOptions::default().with_package_path(&folder);
             if fields[2] != "-" {
                 for arg in fields[2].split_whitespace() {
@@ -201,7 +229,8 @@ fn bundled_vendor_descriptions_match_the_reference_expansions() {
 #[test]
 #[ignore = "needs the corpus: KINECHAIN_XACRO_CORPUS=DIR"]
 fn xacro_corpus() {
-    let root = PathBuf::from(std::env::var("KINECHAIN_XACRO_CORPUS").expect("KINECHAIN_XACRO_CORPUS"));
+    let root =
+        PathBuf::from(std::env::var("KINECHAIN_XACRO_CORPUS").expect("KINECHAIN_XACRO_CORPUS"));
     let checked = check_cases(&root);
     eprintln!("{checked} cases agree with their reference expansions");
 }
@@ -213,7 +242,9 @@ fn expand_error(text: &str) -> XacroError {
 }
 
 fn robot(body: &str) -> String {
-    format!("<?xml version=\"1.0\"?>\n<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n{body}\n</robot>\n")
+    format!(
+        "<?xml version=\"1.0\"?>\n<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n{body}\n</robot>\n"
+    )
 }
 
 /// What xacro keeps as text: `$${` and `$$(` escapes (one `$` dropped), a `$` before other
@@ -226,11 +257,24 @@ fn escapes_and_substitutions() {
         robot("  <note a=\"$${not evaluated} $$(neither) 5$ and $x\" d=\"$(dirname)\" e=\"$(env PATH)\"/>"),
     );
     let out = expand_file(Path::new(&path), &XacroOptions::default()).unwrap();
-    assert!(out.urdf.contains("a=\"${not evaluated} $(neither) 5$ and $x\""), "{}", out.urdf);
+    assert!(
+        out.urdf
+            .contains("a=\"${not evaluated} $(neither) 5$ and $x\""),
+        "{}",
+        out.urdf
+    );
     let dir_shown = Path::new(&path).parent().unwrap().canonicalize().unwrap();
-    assert!(out.urdf.contains(&format!("d=\"{}\"", dir_shown.display())), "{}", out.urdf);
+    assert!(
+        out.urdf.contains(&format!("d=\"{}\"", dir_shown.display())),
+        "{}",
+        out.urdf
+    );
     let path_var = std::env::var("PATH").unwrap();
-    assert!(out.urdf.contains(&format!("e=\"{path_var}\"")), "{}", out.urdf);
+    assert!(
+        out.urdf.contains(&format!("e=\"{path_var}\"")),
+        "{}",
+        out.urdf
+    );
 }
 
 #[test]
@@ -245,19 +289,43 @@ fn errors_name_the_file_line_and_macro_calls() {
         "{shown}"
     );
     for (body, says) in [
-        ("  <link name=\"$(arg side)\"/>", "argument `side` is not defined"),
+        (
+            "  <link name=\"$(arg side)\"/>",
+            "argument `side` is not defined",
+        ),
         ("  <xacro:arm/>", "unknown macro name: xacro:arm"),
         (
             "  <xacro:property name=\"a\" value=\"${b}\"/>\n  <xacro:property name=\"b\" value=\"${a}\"/>\n  <link name=\"${a}\"/>",
             "circular property definition: a -> b -> a",
         ),
-        ("  <link name=\"$(find no_such_pkg)\"/>", "package 'no_such_pkg' is not found; looked in:"),
-        ("  <link name=\"${1 +}\"/>", "unexpected end of the expression"),
-        ("  <link name=\"${__import__('os')}\"/>", "use of invalid name '__import__'"),
-        ("  <link name=\"${().__class__}\"/>", "use of invalid name '__class__'"),
-        ("  <link name=\"${open('/etc/passwd')}\"/>", "property `open` is not defined"),
-        ("  <xacro:if value=\"maybe\"><link name=\"a\"/></xacro:if>", "which is not a boolean"),
-        ("  <xacro:insert_block name=\"nothing\"/>", "undefined block `nothing`"),
+        (
+            "  <link name=\"$(find no_such_pkg)\"/>",
+            "package 'no_such_pkg' is not found; looked in:",
+        ),
+        (
+            "  <link name=\"${1 +}\"/>",
+            "unexpected end of the expression",
+        ),
+        (
+            "  <link name=\"${__import__('os')}\"/>",
+            "use of invalid name '__import__'",
+        ),
+        (
+            "  <link name=\"${().__class__}\"/>",
+            "use of invalid name '__class__'",
+        ),
+        (
+            "  <link name=\"${open('/etc/passwd')}\"/>",
+            "property `open` is not defined",
+        ),
+        (
+            "  <xacro:if value=\"maybe\"><link name=\"a\"/></xacro:if>",
+            "which is not a boolean",
+        ),
+        (
+            "  <xacro:insert_block name=\"nothing\"/>",
+            "undefined block `nothing`",
+        ),
         (
             "  <xacro:macro name=\"m\" params=\"*b\"><xacro:insert_block name=\"b\"/></xacro:macro>\n  <xacro:m/>",
             "not enough blocks",
@@ -270,11 +338,23 @@ fn errors_name_the_file_line_and_macro_calls() {
             "  <xacro:macro name=\"m\" params=\"a\"/>\n  <xacro:m a=\"1\" b=\"2\"/>",
             "macro `m` has no parameter `b`",
         ),
-        ("  <link name=\"${xacro.fatal('stop here')}\"/>", "xacro.fatal: stop here"),
+        (
+            "  <link name=\"${xacro.fatal('stop here')}\"/>",
+            "xacro.fatal: stop here",
+        ),
         ("  <link name=\"${1/0}\"/>", "division by zero"),
-        ("  <xacro:property name=\"1a\" value=\"1\"/>", "property names must be Python identifiers"),
-        ("  <xacro:include filename=\"missing.xacro\"/>", "cannot read"),
-        ("  <link name=\"${xacro.load_yaml('/etc/passwd')}\"/>", "is outside the directories"),
+        (
+            "  <xacro:property name=\"1a\" value=\"1\"/>",
+            "property names must be Python identifiers",
+        ),
+        (
+            "  <xacro:include filename=\"missing.xacro\"/>",
+            "cannot read",
+        ),
+        (
+            "  <link name=\"${xacro.load_yaml('/etc/passwd')}\"/>",
+            "is outside the directories",
+        ),
     ] {
         let e = expand_error(&robot(body));
         assert!(e.to_string().contains(says), "{body}: {e}");
@@ -285,21 +365,33 @@ fn errors_name_the_file_line_and_macro_calls() {
 #[test]
 fn errors_in_included_files_name_them() {
     let dir = Scratch::new("xacro-include-errors");
-    dir.write("bad.xacro", "<robot xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n  <link name=\"a\">\n</robot>\n");
+    dir.write(
+        "bad.xacro",
+        "<robot xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n  <link name=\"a\">\n</robot>\n",
+    );
     dir.write(
         "undefined.xacro",
         "<robot xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n\n  <link name=\"${nope}\"/>\n</robot>\n",
     );
-    let main = dir.write("main.urdf.xacro", &robot("  <xacro:include filename=\"bad.xacro\"/>"));
+    let main = dir.write(
+        "main.urdf.xacro",
+        robot("  <xacro:include filename=\"bad.xacro\"/>"),
+    );
     let e = expand_file(Path::new(&main), &XacroOptions::default()).unwrap_err();
     assert!(e.file.ends_with("bad.xacro"), "{e}");
     assert!(e.to_string().contains("not well-formed XML"), "{e}");
     assert!(e.to_string().contains("in file"), "{e}");
-    let main = dir.write("main2.urdf.xacro", &robot("\n  <xacro:include filename=\"undefined.xacro\"/>"));
+    let main = dir.write(
+        "main2.urdf.xacro",
+        robot("\n  <xacro:include filename=\"undefined.xacro\"/>"),
+    );
     let e = expand_file(Path::new(&main), &XacroOptions::default()).unwrap_err();
     assert!(e.file.ends_with("undefined.xacro"), "{e}");
     assert_eq!(e.line, Some(3), "{e}");
-    assert!(e.to_string().contains("included at main2.urdf.xacro:4:3"), "{e}");
+    assert!(
+        e.to_string().contains("included at main2.urdf.xacro:4:3"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -308,9 +400,13 @@ fn runaway_expansions_stop_at_their_bounds() {
     let e = expand_error(&robot(
         "  <xacro:macro name=\"loop\" params=\"\"><xacro:loop/></xacro:macro>\n  <xacro:loop/>",
     ));
-    assert!(e.to_string().contains("macro calls nest deeper than 100"), "{e}");
+    assert!(
+        e.to_string().contains("macro calls nest deeper than 100"),
+        "{e}"
+    );
     // A macro that doubles its output 40 times: an error, not 2^40 links.
-    let mut body = String::from("  <xacro:macro name=\"m0\" params=\"\"><link name=\"x\"/></xacro:macro>\n");
+    let mut body =
+        String::from("  <xacro:macro name=\"m0\" params=\"\"><link name=\"x\"/></xacro:macro>\n");
     for i in 1..=40 {
         body.push_str(&format!(
             "  <xacro:macro name=\"m{i}\" params=\"\"><xacro:m{j}/><xacro:m{j}/></xacro:macro>\n",
@@ -335,7 +431,10 @@ fn runaway_expansions_stop_at_their_bounds() {
     assert!(e.to_string().contains("longer than"), "{e}");
     // A file that includes itself.
     let dir = Scratch::new("xacro-cycle");
-    let path = dir.write("self.urdf.xacro", &robot("  <xacro:include filename=\"self.urdf.xacro\"/>"));
+    let path = dir.write(
+        "self.urdf.xacro",
+        robot("  <xacro:include filename=\"self.urdf.xacro\"/>"),
+    );
     let e = expand_file(Path::new(&path), &XacroOptions::default()).unwrap_err();
     assert!(e.to_string().contains("includes nest deeper than"), "{e}");
 }
@@ -349,10 +448,14 @@ fn packages_resolve_from_paths_and_by_walking_up() {
     let dir = Scratch::new("xacro-packages");
     let main = dir.write(
         "main.urdf.xacro",
-        &robot("  <xacro:include filename=\"$(find my_arm_description)/urdf/links.xacro\"/>\n  <xacro:plain_link name=\"a\"/>"),
+        robot("  <xacro:include filename=\"$(find my_arm_description)/urdf/links.xacro\"/>\n  <xacro:plain_link name=\"a\"/>"),
     );
     let e = expand_file(Path::new(&main), &XacroOptions::default()).unwrap_err();
-    assert!(e.to_string().contains("package 'my_arm_description' is not found"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("package 'my_arm_description' is not found"),
+        "{e}"
+    );
     let options = XacroOptions::default().with_package_path(data().join("features"));
     let out = expand_file(Path::new(&main), &options).unwrap();
     assert!(out.urdf.contains("<link name=\"a\">"), "{}", out.urdf);
@@ -367,7 +470,10 @@ fn leftover_xacro_in_a_urdf_file() {
     let chain = Chain::from_urdf_str(&text).unwrap();
     assert_eq!(chain.links().len(), 2);
     assert!(
-        chain.warnings().iter().any(|w| w.contains("<visual> skipped") && w.contains("xacro:grey")),
+        chain
+            .warnings()
+            .iter()
+            .any(|w| w.contains("<visual> skipped") && w.contains("xacro:grey")),
         "{:?}",
         chain.warnings()
     );
@@ -376,8 +482,14 @@ fn leftover_xacro_in_a_urdf_file() {
 #[test]
 fn the_cobot_pump_case_fails_as_xacro_does() {
     // franka_description at 566ba44 defines a property from itself (xacro fails the same way).
-    let case = cases(&data()).into_iter().find(|c| c.id == "franka_fr3_pump").unwrap();
+    let case = cases(&data())
+        .into_iter()
+        .find(|c| c.id == "franka_fr3_pump")
+        .unwrap();
     let e = expand_file(&case.file, &case.options).unwrap_err();
-    assert!(e.to_string().contains("circular property definition"), "{e}");
+    assert!(
+        e.to_string().contains("circular property definition"),
+        "{e}"
+    );
     assert!(e.to_string().contains("in macro `franka_robot`"), "{e}");
 }

@@ -149,7 +149,10 @@ fn convert(
     let declares = parent.is_none() || node.namespaces().len() != inherited;
     for ns in node.namespaces().filter(|_| declares) {
         if ns.name() == Some("xml")
-            || parent.is_some_and(|p| p.namespaces().any(|n| n.name() == ns.name() && n.uri() == ns.uri()))
+            || parent.is_some_and(|p| {
+                p.namespaces()
+                    .any(|n| n.name() == ns.name() && n.uri() == ns.uri())
+            })
         {
             continue;
         }

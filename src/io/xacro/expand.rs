@@ -121,6 +121,9 @@ const MAX_PARSED: usize = 100_000;
 
 type Result<T> = std::result::Result<T, XacroError>;
 
+/// Attributes as (name, value) pairs.
+type Attributes = Vec<(String, String)>;
+
 impl Expander {
     pub(crate) fn new(
         main: PathBuf,
@@ -181,7 +184,13 @@ impl Expander {
             root.remove_attr("xacro:targetNamespace");
             root.set_attr("xmlns".into(), target);
         }
-        self.eval_all(root, Env { table: 0, macros: 0 })
+        self.eval_all(
+            root,
+            Env {
+                table: 0,
+                macros: 0,
+            },
+        )
     }
 
     // -----------------------------------------------------------------------------------------
@@ -412,7 +421,8 @@ impl Expander {
             Some(p) => p.clone(),
             None => {
                 let p = Rc::new(
-                    expr::parse(&inner).map_err(|e| format!("{e} (in the expression '{}')", body.trim()))?,
+                    expr::parse(&inner)
+                        .map_err(|e| format!("{e} (in the expression '{}')", body.trim()))?,
                 );
                 if self.parsed.len() < MAX_PARSED {
                     self.parsed.insert(inner, p.clone());
@@ -525,7 +535,8 @@ impl Expander {
                 full.display()
             ));
         }
-        let meta = std::fs::metadata(&canonical).map_err(|e| format!("cannot read {}: {e}", full.display()))?;
+        let meta = std::fs::metadata(&canonical)
+            .map_err(|e| format!("cannot read {}: {e}", full.display()))?;
         if !meta.is_file() {
             return Err(format!("{} is not a regular file", full.display()));
         }
@@ -876,7 +887,11 @@ impl Expander {
     /// The macro `name` seen from `env`, with the scope its body is evaluated below (the
     /// caller's, or the namespace's for `ns.name`).
     fn resolve_macro(&self, name: &str, env: Env) -> Option<(Rc<Macro>, Env)> {
-        fn find<'t>(tables: &'t [MacroTable], mut t: Option<usize>, name: &str) -> Option<&'t MacroEntry> {
+        fn find<'t>(
+            tables: &'t [MacroTable],
+            mut t: Option<usize>,
+            name: &str,
+        ) -> Option<&'t MacroEntry> {
             while let Some(i) = t {
                 if let Some(m) = tables[i].macros.get(name) {
                     return Some(m);
@@ -895,7 +910,8 @@ impl Expander {
         }
         let mut scope = env;
         for ns in parts {
-            let MacroEntry::Namespace(mt) = find(&self.macro_tables, Some(scope.macros), ns)? else {
+            let MacroEntry::Namespace(mt) = find(&self.macro_tables, Some(scope.macros), ns)?
+            else {
                 return None;
             };
             let t = self.holder(scope.table, ns)?;
@@ -924,7 +940,11 @@ impl Expander {
                 "macro calls nest deeper than {MAX_CALL_DEPTH} (a macro that calls itself without end?)"
             )));
         }
-        let marks = (self.tables.len(), self.macro_tables.len(), self.namespaces());
+        let marks = (
+            self.tables.len(),
+            self.macro_tables.len(),
+            self.namespaces(),
+        );
         self.calls.push((m.name.clone(), call.at));
         let result = self.expand_call(&m, call, env, scope);
         self.calls.pop();
@@ -967,10 +987,9 @@ impl Expander {
         for p in params.clone() {
             if p.starts_with('*') {
                 let Some(block) = blocks.next() else {
-                    return Err(self.fail(format!(
-                        "macro `{}`: not enough blocks for `{p}`",
-                        m.name
-                    )));
+                    return Err(
+                        self.fail(format!("macro `{}`: not enough blocks for `{p}`", m.name))
+                    );
                 };
                 params.retain(|q| *q != p);
                 self.blocks.push(block);
@@ -981,10 +1000,7 @@ impl Expander {
             }
         }
         if let Some(extra) = blocks.next() {
-            return Err(self.fail(format!(
-                "macro `{}`: unused block <{}>",
-                m.name, extra.name
-            )));
+            return Err(self.fail(format!("macro `{}`: unused block <{}>", m.name, extra.name)));
         }
         for p in params.clone() {
             let Some((forward, default)) = m.defaults.get(&p) else {
@@ -1028,7 +1044,7 @@ impl Expander {
     }
 
     /// The nodes an include stands for and the namespace declarations it brings to its parent.
-    fn include(&mut self, e: &Element, env: Env) -> Result<(Vec<Node>, Vec<(String, String)>)> {
+    fn include(&mut self, e: &Element, env: Env) -> Result<(Vec<Node>, Attributes)> {
         let raw = self.required(e, "filename")?.to_string();
         let filename = self.text_of(&raw, env.table)?;
         let optional = e
@@ -1042,10 +1058,9 @@ impl Expander {
                     .macros
                     .insert(ns.clone(), MacroEntry::Namespace(macros));
                 let table = self.new_table(Some(env.table), true);
-                self.tables[env.table].vars.insert(
-                    ns,
-                    Entry::Value(Value::Namespace(Namespace::Table(table))),
-                );
+                self.tables[env.table]
+                    .vars
+                    .insert(ns, Entry::Value(Value::Namespace(Namespace::Table(table))));
                 Env { table, macros }
             }
             _ => env,
@@ -1103,7 +1118,10 @@ impl Expander {
         if !filename.contains(['*', '?', '[']) {
             return Ok(vec![path]);
         }
-        if path.parent().is_some_and(|p| p.to_string_lossy().contains(['*', '?', '['])) {
+        if path
+            .parent()
+            .is_some_and(|p| p.to_string_lossy().contains(['*', '?', '[']))
+        {
             return Err(self.fail(format!(
                 "wildcards are read in the last part of an include's file name only: {filename}"
             )));
@@ -1187,17 +1205,15 @@ fn boolean(value: &Value, condition: &str) -> std::result::Result<bool, String> 
 }
 
 const KEYWORDS: [&str; 35] = [
-    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class",
-    "continue", "def", "del", "elif", "else", "except", "finally", "for", "from", "global", "if",
-    "import", "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try",
-    "while", "with", "yield",
+    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue",
+    "def", "del", "elif", "else", "except", "finally", "for", "from", "global", "if", "import",
+    "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while",
+    "with", "yield",
 ];
 
 fn is_identifier(name: &str) -> bool {
     let mut chars = name.chars();
-    chars
-        .next()
-        .is_some_and(|c| c.is_alphabetic() || c == '_')
+    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
         && chars.all(|c| c.is_alphanumeric() || c == '_')
         && !KEYWORDS.contains(&name)
 }
@@ -1212,9 +1228,7 @@ fn parse_param(text: &str) -> (String, Option<(Option<String>, Option<String>)>,
         .unwrap_or(s.len());
     let name = &s[..name_end];
     let after = s[name_end..].trim_start();
-    let assign = after
-        .strip_prefix(":=")
-        .or_else(|| after.strip_prefix('='));
+    let assign = after.strip_prefix(":=").or_else(|| after.strip_prefix('='));
     let (Some(value), false) = (assign, name.is_empty()) else {
         let (first, rest) = s.split_once(char::is_whitespace).unwrap_or((s, ""));
         return (first.to_string(), None, rest.to_string());
@@ -1355,7 +1369,12 @@ impl Scope for At<'_> {
         match name {
             "load_yaml" => self.x.load_yaml(&text_arg(0)?),
             "abs_filename" => Ok(Value::str(
-                &self.x.current_dir().join(text_arg(0)?).display().to_string(),
+                &self
+                    .x
+                    .current_dir()
+                    .join(text_arg(0)?)
+                    .display()
+                    .to_string(),
             )),
             "dotify" => args
                 .into_iter()
@@ -1488,13 +1507,29 @@ mod tests {
     #[test]
     fn macro_parameters_parse_as_xacro_reads_them() {
         let (p, d, rest) = parse_param("prefix:='' *origin joint:=^|${pi} x");
-        assert_eq!((p.as_str(), d, rest.as_str()), ("prefix", Some((None, Some("''".into()))), " *origin joint:=^|${pi} x"));
+        assert_eq!(
+            (p.as_str(), d, rest.as_str()),
+            (
+                "prefix",
+                Some((None, Some("''".into()))),
+                " *origin joint:=^|${pi} x"
+            )
+        );
         let (p, d, rest) = parse_param(rest.as_str());
-        assert_eq!((p.as_str(), d, rest.trim()), ("*origin", None, "joint:=^|${pi} x"));
+        assert_eq!(
+            (p.as_str(), d, rest.trim()),
+            ("*origin", None, "joint:=^|${pi} x")
+        );
         let (p, d, _) = parse_param("joint:=^|${pi} x");
-        assert_eq!((p.as_str(), d), ("joint", Some((Some("joint".into()), Some("${pi}".into())))));
+        assert_eq!(
+            (p.as_str(), d),
+            ("joint", Some((Some("joint".into()), Some("${pi}".into()))))
+        );
         let (p, d, _) = parse_param("a:=${b + c}_x y");
-        assert_eq!((p.as_str(), d), ("a", Some((None, Some("${b + c}_x".into())))));
+        assert_eq!(
+            (p.as_str(), d),
+            ("a", Some((None, Some("${b + c}_x".into()))))
+        );
         let (p, d, _) = parse_param("a:=^ y");
         assert_eq!((p.as_str(), d), ("a", Some((Some("a".into()), None))));
     }

@@ -55,7 +55,9 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
         let c = chars[i];
         if c.is_whitespace() {
             i += 1;
-        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit)) {
+        } else if c.is_ascii_digit()
+            || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
+        {
             let start = i;
             let mut float = false;
             while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '_') {
@@ -91,7 +93,8 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
                 ));
             }
             if float {
-                let v = parse_float(&literal).ok_or_else(|| format!("invalid number '{literal}'"))?;
+                let v =
+                    parse_float(&literal).ok_or_else(|| format!("invalid number '{literal}'"))?;
                 tokens.push(Token::Float(v));
             } else {
                 let v = literal
@@ -208,6 +211,9 @@ enum Expr {
     Slice(Box<Expr>, [Option<Box<Expr>>; 3]),
     Call(Box<Expr>, Vec<Expr>, Vec<(Rc<str>, Expr)>),
 }
+
+/// Keyword arguments of a call.
+type Keywords = Vec<(Rc<str>, Expr)>;
 
 struct Parser {
     tokens: Vec<Token>,
@@ -458,7 +464,7 @@ impl Parser {
         Ok(e)
     }
 
-    fn call_args(&mut self) -> Result<(Vec<Expr>, Vec<(Rc<str>, Expr)>), String> {
+    fn call_args(&mut self) -> Result<(Vec<Expr>, Keywords), String> {
         let mut args = Vec::new();
         let mut kwargs = Vec::new();
         while !self.eat_op(")") {
@@ -542,9 +548,10 @@ impl Parser {
                 "None" => Ok(Expr::Const(Value::None)),
                 "lambda" | "for" | "import" | "yield" | "await" | "def" | "class" | "del"
                 | "global" | "with" | "async" | "return" | "while" | "from" | "as" | "try"
-                | "except" | "raise" | "pass" | "break" | "continue" | "assert" | "if"
-                | "else" | "elif" | "and" | "or" | "in" | "is" | "not" | "nonlocal"
-                | "finally" => Err(format!("'{n}' is not allowed here")),
+                | "except" | "raise" | "pass" | "break" | "continue" | "assert" | "if" | "else"
+                | "elif" | "and" | "or" | "in" | "is" | "not" | "nonlocal" | "finally" => {
+                    Err(format!("'{n}' is not allowed here"))
+                }
                 _ => {
                     check_name(&n)?;
                     Ok(Expr::Name(n))
@@ -599,7 +606,9 @@ impl Parser {
                 while !self.eat_op("}") {
                     let k = self.test()?;
                     if !self.eat_op(":") {
-                        return Err("sets are not supported (a '{…}' literal must be a dict)".into());
+                        return Err(
+                            "sets are not supported (a '{…}' literal must be a dict)".into()
+                        );
                     }
                     let v = self.test()?;
                     pairs.push((k, v));
@@ -783,7 +792,10 @@ fn int_of(v: &Value, what: &str) -> Result<i64, String> {
     match v {
         Value::Int(i) => Ok(*i),
         Value::Bool(b) => Ok(i64::from(*b)),
-        other => Err(format!("{what} must be integers, not {}", other.type_name())),
+        other => Err(format!(
+            "{what} must be integers, not {}",
+            other.type_name()
+        )),
     }
 }
 
@@ -816,12 +828,16 @@ fn binary(op: BinOp, a: &Value, b: &Value, scope: &mut dyn Scope) -> Result<Valu
         (BinOp::Add, Value::List(x), Value::List(y)) => {
             check_len(x.len() + y.len())?;
             scope.spend(x.len() + y.len())?;
-            Ok(Value::List(Rc::new(x.iter().chain(y.iter()).cloned().collect())))
+            Ok(Value::List(Rc::new(
+                x.iter().chain(y.iter()).cloned().collect(),
+            )))
         }
         (BinOp::Add, Value::Tuple(x), Value::Tuple(y)) => {
             check_len(x.len() + y.len())?;
             scope.spend(x.len() + y.len())?;
-            Ok(Value::Tuple(Rc::new(x.iter().chain(y.iter()).cloned().collect())))
+            Ok(Value::Tuple(Rc::new(
+                x.iter().chain(y.iter()).cloned().collect(),
+            )))
         }
         (BinOp::Mul, Value::Str(s), n) | (BinOp::Mul, n, Value::Str(s)) if n.number().is_some() => {
             let n = usize::try_from(int_of(n, "repeat counts")?.max(0)).unwrap_or(0);
@@ -829,7 +845,9 @@ fn binary(op: BinOp, a: &Value, b: &Value, scope: &mut dyn Scope) -> Result<Valu
             scope.spend(s.len().saturating_mul(n) / 64)?;
             Ok(Value::str(&s.repeat(n)))
         }
-        (BinOp::Mul, Value::List(l), n) | (BinOp::Mul, n, Value::List(l)) if n.number().is_some() => {
+        (BinOp::Mul, Value::List(l), n) | (BinOp::Mul, n, Value::List(l))
+            if n.number().is_some() =>
+        {
             let n = usize::try_from(int_of(n, "repeat counts")?.max(0)).unwrap_or(0);
             check_len(l.len().saturating_mul(n))?;
             scope.spend(l.len().saturating_mul(n))?;
@@ -864,9 +882,18 @@ fn arithmetic(op: BinOp, x: Number, y: Number) -> Result<Value, String> {
     const OVERFLOW: &str = "integer overflow (kinechain's integers are 64-bit)";
     if let (Number::Int(a), Number::Int(b)) = (x, y) {
         return match op {
-            BinOp::Add => a.checked_add(b).map(Value::Int).ok_or_else(|| OVERFLOW.into()),
-            BinOp::Sub => a.checked_sub(b).map(Value::Int).ok_or_else(|| OVERFLOW.into()),
-            BinOp::Mul => a.checked_mul(b).map(Value::Int).ok_or_else(|| OVERFLOW.into()),
+            BinOp::Add => a
+                .checked_add(b)
+                .map(Value::Int)
+                .ok_or_else(|| OVERFLOW.into()),
+            BinOp::Sub => a
+                .checked_sub(b)
+                .map(Value::Int)
+                .ok_or_else(|| OVERFLOW.into()),
+            BinOp::Mul => a
+                .checked_mul(b)
+                .map(Value::Int)
+                .ok_or_else(|| OVERFLOW.into()),
             BinOp::Div => {
                 if b == 0 {
                     Err("division by zero".into())
@@ -881,13 +908,19 @@ fn arithmetic(op: BinOp, x: Number, y: Number) -> Result<Value, String> {
                 let q = a.checked_div_euclid(b).ok_or(OVERFLOW)?;
                 let r = a - q * b;
                 // Euclidean division keeps r ≥ 0; Python's floor division gives r the sign of b.
-                let (q, r) = if r != 0 && (b < 0) { (q + 1, r + b) } else { (q, r) };
+                let (q, r) = if r != 0 && (b < 0) {
+                    (q + 1, r + b)
+                } else {
+                    (q, r)
+                };
                 Ok(Value::Int(if op == BinOp::FloorDiv { q } else { r }))
             }
             BinOp::Pow => {
                 if b >= 0 {
                     let e = u32::try_from(b).map_err(|_| OVERFLOW.to_string())?;
-                    a.checked_pow(e).map(Value::Int).ok_or_else(|| OVERFLOW.into())
+                    a.checked_pow(e)
+                        .map(Value::Int)
+                        .ok_or_else(|| OVERFLOW.into())
                 } else if a == 0 {
                     Err("0 cannot be raised to a negative power".into())
                 } else {
@@ -1048,7 +1081,10 @@ fn subscript(target: &Value, index: &Value) -> Result<Value, String> {
         Value::Dict(pairs) => Value::dict_get(pairs, index)
             .cloned()
             .ok_or_else(|| format!("key {} is not in the dict", index.repr())),
-        other => Err(format!("'{}' object is not subscriptable", other.type_name())),
+        other => Err(format!(
+            "'{}' object is not subscriptable",
+            other.type_name()
+        )),
     }
 }
 
@@ -1081,25 +1117,54 @@ fn slice(target: &Value, [start, stop, step]: [Option<i64>; 3]) -> Result<Value,
     };
     match target {
         Value::List(items) => Ok(Value::List(Rc::new(
-            pick(items.len()).into_iter().map(|i| items[i].clone()).collect(),
+            pick(items.len())
+                .into_iter()
+                .map(|i| items[i].clone())
+                .collect(),
         ))),
         Value::Tuple(items) => Ok(Value::Tuple(Rc::new(
-            pick(items.len()).into_iter().map(|i| items[i].clone()).collect(),
+            pick(items.len())
+                .into_iter()
+                .map(|i| items[i].clone())
+                .collect(),
         ))),
         Value::Str(s) => {
             let chars: Vec<char> = s.chars().collect();
             Ok(Value::str(
-                &pick(chars.len()).into_iter().map(|i| chars[i]).collect::<String>(),
+                &pick(chars.len())
+                    .into_iter()
+                    .map(|i| chars[i])
+                    .collect::<String>(),
             ))
         }
-        other => Err(format!("'{}' object is not subscriptable", other.type_name())),
+        other => Err(format!(
+            "'{}' object is not subscriptable",
+            other.type_name()
+        )),
     }
 }
 
 const STR_METHODS: [&str; 20] = [
-    "split", "rsplit", "startswith", "endswith", "find", "rfind", "replace", "lower", "upper",
-    "strip", "lstrip", "rstrip", "join", "count", "isdigit", "isalpha", "capitalize", "title",
-    "index", "splitlines",
+    "split",
+    "rsplit",
+    "startswith",
+    "endswith",
+    "find",
+    "rfind",
+    "replace",
+    "lower",
+    "upper",
+    "strip",
+    "lstrip",
+    "rstrip",
+    "join",
+    "count",
+    "isdigit",
+    "isalpha",
+    "capitalize",
+    "title",
+    "index",
+    "splitlines",
 ];
 const DICT_METHODS: [&str; 4] = ["get", "keys", "values", "items"];
 const LIST_METHODS: [&str; 2] = ["index", "count"];
@@ -1111,16 +1176,17 @@ fn attribute(target: Value, name: &Rc<str>, scope: &mut dyn Scope) -> Result<Val
             .then(|| Value::Method(Rc::new((target, name.clone()))))
     };
     match target {
-        Value::Namespace(Namespace::Math) => math_member(name)
-            .ok_or_else(|| format!("module 'math' has no attribute '{name}'")),
+        Value::Namespace(Namespace::Math) => {
+            math_member(name).ok_or_else(|| format!("module 'math' has no attribute '{name}'"))
+        }
         Value::Namespace(Namespace::Python) => python_member(name)
             .ok_or_else(|| format!("namespace 'python' has no function '{name}'")),
-        Value::Namespace(Namespace::Xacro) => xacro_member(name)
-            .ok_or_else(|| format!("namespace 'xacro' has no function '{name}'")),
-        Value::Namespace(Namespace::Table(t)) => scope.namespace_get(t, name),
-        Value::Str(_) => {
-            method(&STR_METHODS, target).ok_or_else(|| format!("'str' object has no attribute '{name}'"))
+        Value::Namespace(Namespace::Xacro) => {
+            xacro_member(name).ok_or_else(|| format!("namespace 'xacro' has no function '{name}'"))
         }
+        Value::Namespace(Namespace::Table(t)) => scope.namespace_get(t, name),
+        Value::Str(_) => method(&STR_METHODS, target)
+            .ok_or_else(|| format!("'str' object has no attribute '{name}'")),
         Value::List(_) | Value::Tuple(_) => method(&LIST_METHODS, target.clone())
             .ok_or_else(|| format!("'{}' object has no attribute '{name}'", target.type_name())),
         Value::Dict(ref pairs) => {
@@ -1162,14 +1228,56 @@ const BUILTINS: [&str; 20] = [
     "range", "sum", "any", "all", "tuple", "repr", "reversed", "map",
 ];
 const MATH_FUNCTIONS: [&str; 38] = [
-    "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "asinh",
-    "acosh", "atanh", "exp", "exp2", "expm1", "log", "log10", "log2", "log1p", "sqrt", "cbrt",
-    "pow", "fabs", "floor", "ceil", "trunc", "degrees", "radians", "hypot", "copysign", "fmod",
-    "isclose", "isfinite", "isinf", "isnan", "factorial", "gcd",
+    "sin",
+    "cos",
+    "tan",
+    "asin",
+    "acos",
+    "atan",
+    "atan2",
+    "sinh",
+    "cosh",
+    "tanh",
+    "asinh",
+    "acosh",
+    "atanh",
+    "exp",
+    "exp2",
+    "expm1",
+    "log",
+    "log10",
+    "log2",
+    "log1p",
+    "sqrt",
+    "cbrt",
+    "pow",
+    "fabs",
+    "floor",
+    "ceil",
+    "trunc",
+    "degrees",
+    "radians",
+    "hypot",
+    "copysign",
+    "fmod",
+    "isclose",
+    "isfinite",
+    "isinf",
+    "isnan",
+    "factorial",
+    "gcd",
 ];
 const XACRO_FUNCTIONS: [&str; 10] = [
-    "load_yaml", "abs_filename", "dotify", "arg", "message", "warning", "error",
-    "print_location", "fatal", "tokenize",
+    "load_yaml",
+    "abs_filename",
+    "dotify",
+    "arg",
+    "message",
+    "warning",
+    "error",
+    "print_location",
+    "fatal",
+    "tokenize",
 ];
 
 fn python_member(name: &str) -> Option<Value> {
@@ -1234,7 +1342,11 @@ fn arity(name: &str, args: &[Value], range: std::ops::RangeInclusive<usize>) -> 
     if range.contains(&args.len()) {
         Ok(())
     } else if range.start() == range.end() {
-        Err(format!("{name}() takes {} arguments ({} given)", range.start(), args.len()))
+        Err(format!(
+            "{name}() takes {} arguments ({} given)",
+            range.start(),
+            args.len()
+        ))
     } else {
         Err(format!(
             "{name}() takes {} to {} arguments ({} given)",
@@ -1263,7 +1375,10 @@ fn items_of(v: &Value) -> Result<Vec<Value>, String> {
 
 fn float_to_int(f: f64) -> Result<i64, String> {
     if !f.is_finite() {
-        return Err(format!("cannot convert float {} to integer", super::value::float_repr(f)));
+        return Err(format!(
+            "cannot convert float {} to integer",
+            super::value::float_repr(f)
+        ));
     }
     let t = f.trunc();
     #[allow(clippy::cast_precision_loss)]
@@ -1290,13 +1405,20 @@ fn call_builtin(
                 Value::Str(s) => s.chars().count(),
                 Value::List(l) | Value::Tuple(l) => l.len(),
                 Value::Dict(d) => d.len(),
-                other => return Err(format!("object of type '{}' has no len()", other.type_name())),
+                other => {
+                    return Err(format!(
+                        "object of type '{}' has no len()",
+                        other.type_name()
+                    ));
+                }
             };
             Ok(Value::Int(i64::try_from(n).unwrap_or(i64::MAX)))
         }
         "str" => {
             arity(name, &args, 0..=1)?;
-            Ok(Value::str(&args.first().map(Value::to_text).unwrap_or_default()))
+            Ok(Value::str(
+                &args.first().map(Value::to_text).unwrap_or_default(),
+            ))
         }
         "repr" => {
             arity(name, &args, 1..=1)?;
@@ -1310,9 +1432,16 @@ fn call_builtin(
             arity(name, &args, 0..=1)?;
             match args.first() {
                 None => Ok(Value::Int(0)),
-                Some(Value::Str(s)) => parse_int(&s.replace('_', ""))
-                    .map(Value::Int)
-                    .ok_or_else(|| format!("invalid literal for int(): {}", Value::Str(s.clone()).repr())),
+                Some(Value::Str(s)) => {
+                    parse_int(&s.replace('_', ""))
+                        .map(Value::Int)
+                        .ok_or_else(|| {
+                            format!(
+                                "invalid literal for int(): {}",
+                                Value::Str(s.clone()).repr()
+                            )
+                        })
+                }
                 Some(v) => match v.number() {
                     Some(Number::Int(i)) => Ok(Value::Int(i)),
                     Some(Number::Float(f)) => float_to_int(f).map(Value::Int),
@@ -1327,7 +1456,10 @@ fn call_builtin(
                 Some(Value::Str(s)) => parse_float(&s.replace('_', ""))
                     .map(Value::Float)
                     .ok_or_else(|| {
-                        format!("could not convert string to float: {}", Value::Str(s.clone()).repr())
+                        format!(
+                            "could not convert string to float: {}",
+                            Value::Str(s.clone()).repr()
+                        )
                     }),
                 Some(v) => v
                     .number()
@@ -1338,16 +1470,22 @@ fn call_builtin(
         "abs" => {
             arity(name, &args, 1..=1)?;
             match args[0].number() {
-                Some(Number::Int(i)) => i.checked_abs().map(Value::Int).ok_or_else(|| "integer overflow".into()),
+                Some(Number::Int(i)) => i
+                    .checked_abs()
+                    .map(Value::Int)
+                    .ok_or_else(|| "integer overflow".into()),
                 Some(Number::Float(f)) => Ok(Value::Float(f.abs())),
-                None => Err(format!("bad operand type for abs(): '{}'", args[0].type_name())),
+                None => Err(format!(
+                    "bad operand type for abs(): '{}'",
+                    args[0].type_name()
+                )),
             }
         }
         "round" => {
             arity(name, &args, 1..=2)?;
-            let x = args[0].number().ok_or_else(|| {
-                format!("type {} doesn't define __round__", args[0].type_name())
-            })?;
+            let x = args[0]
+                .number()
+                .ok_or_else(|| format!("type {} doesn't define __round__", args[0].type_name()))?;
             match (x, args.get(1)) {
                 (Number::Int(i), _) => Ok(Value::Int(i)),
                 (Number::Float(f), None | Some(Value::None)) => {
@@ -1369,7 +1507,11 @@ fn call_builtin(
             }
         }
         "min" | "max" => {
-            let items = if args.len() == 1 { items_of(&args[0])? } else { args };
+            let items = if args.len() == 1 {
+                items_of(&args[0])?
+            } else {
+                args
+            };
             let mut best: Option<Value> = None;
             for item in items {
                 best = Some(match best {
@@ -1382,7 +1524,11 @@ fn call_builtin(
                                 b.type_name()
                             )
                         })?;
-                        let better = if name == "min" { ord.is_lt() } else { ord.is_gt() };
+                        let better = if name == "min" {
+                            ord.is_lt()
+                        } else {
+                            ord.is_gt()
+                        };
                         if better { item } else { b }
                     }
                 });
@@ -1508,7 +1654,9 @@ fn call_builtin(
             Ok(Value::Dict(Rc::new(pairs)))
         }
         "map" => Err("map() needs a function, and lambdas are not supported".into()),
-        _ => Err(format!("'{name}' is not a function kinechain's xacro offers")),
+        _ => Err(format!(
+            "'{name}' is not a function kinechain's xacro offers"
+        )),
     }
 }
 
@@ -1536,7 +1684,10 @@ fn call_math(name: &str, args: &[Value]) -> Result<Value, String> {
         match args[0].number() {
             Some(Number::Int(i)) => Ok(Value::Int(i)),
             Some(Number::Float(x)) => float_to_int(f(x)).map(Value::Int),
-            None => Err(format!("{name}() needs a number, not {}", args[0].type_name())),
+            None => Err(format!(
+                "{name}() needs a number, not {}",
+                args[0].type_name()
+            )),
         }
     };
     match name {
@@ -1569,7 +1720,15 @@ fn call_math(name: &str, args: &[Value]) -> Result<Value, String> {
         }
         "log10" | "log2" | "log1p" | "sqrt" => {
             let x = args.first().map(|a| float_arg(name, a)).transpose()?;
-            if x.is_some_and(|x| if name == "log1p" { x <= -1.0 } else if name == "sqrt" { x < 0.0 } else { x <= 0.0 }) {
+            if x.is_some_and(|x| {
+                if name == "log1p" {
+                    x <= -1.0
+                } else if name == "sqrt" {
+                    x < 0.0
+                } else {
+                    x <= 0.0
+                }
+            }) {
                 return Err(format!("math domain error in {name}"));
             }
             unary(match name {
@@ -1594,7 +1753,9 @@ fn call_math(name: &str, args: &[Value]) -> Result<Value, String> {
         "isclose" => {
             arity(name, args, 2..=2)?;
             let (a, b) = (float_arg(name, &args[0])?, float_arg(name, &args[1])?);
-            Ok(Value::Bool(a == b || (a - b).abs() <= 1e-9 * a.abs().max(b.abs())))
+            Ok(Value::Bool(
+                a == b || (a - b).abs() <= 1e-9 * a.abs().max(b.abs()),
+            ))
         }
         "isfinite" | "isinf" | "isnan" => {
             arity(name, args, 1..=1)?;
@@ -1619,7 +1780,9 @@ fn call_math(name: &str, args: &[Value]) -> Result<Value, String> {
         "gcd" => {
             let mut g = 0i64;
             for a in args {
-                let mut b = int_of(a, "gcd() arguments")?.checked_abs().ok_or("integer overflow")?;
+                let mut b = int_of(a, "gcd() arguments")?
+                    .checked_abs()
+                    .ok_or("integer overflow")?;
                 let mut x = g;
                 while b != 0 {
                     (x, b) = (b, x % b);
@@ -1635,7 +1798,10 @@ fn call_math(name: &str, args: &[Value]) -> Result<Value, String> {
 fn str_arg<'a>(method: &str, v: &'a Value) -> Result<&'a str, String> {
     match v {
         Value::Str(s) => Ok(s),
-        other => Err(format!("{method}() needs a string, not {}", other.type_name())),
+        other => Err(format!(
+            "{method}() needs a string, not {}",
+            other.type_name()
+        )),
     }
 }
 
@@ -1660,9 +1826,18 @@ fn call_method(
             match name {
                 "split" | "rsplit" => {
                     arity(name, args, 0..=2)?;
-                    let sep = args.first().or(kw("sep")).filter(|v| !matches!(v, Value::None));
-                    let max = args.get(1).or(kw("maxsplit")).map(|m| int_of(m, "maxsplit")).transpose()?;
-                    let max = max.filter(|m| *m >= 0).map(|m| usize::try_from(m).unwrap_or(usize::MAX));
+                    let sep = args
+                        .first()
+                        .or(kw("sep"))
+                        .filter(|v| !matches!(v, Value::None));
+                    let max = args
+                        .get(1)
+                        .or(kw("maxsplit"))
+                        .map(|m| int_of(m, "maxsplit"))
+                        .transpose()?;
+                    let max = max
+                        .filter(|m| *m >= 0)
+                        .map(|m| usize::try_from(m).unwrap_or(usize::MAX));
                     let parts: Vec<&str> = match sep {
                         Some(sep) => {
                             let sep = str_arg(name, sep)?;
@@ -1687,7 +1862,8 @@ fn call_method(
                                     let mut out = Vec::new();
                                     let mut rest = s.trim_start();
                                     for _ in 0..m {
-                                        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+                                        let end =
+                                            rest.find(char::is_whitespace).unwrap_or(rest.len());
                                         out.push(&rest[..end]);
                                         rest = rest[end..].trim_start();
                                     }
@@ -1710,7 +1886,11 @@ fn call_method(
                     let mut hit = false;
                     for c in &candidates {
                         let c = str_arg(name, c)?;
-                        hit |= if name == "startswith" { s.starts_with(c) } else { s.ends_with(c) };
+                        hit |= if name == "startswith" {
+                            s.starts_with(c)
+                        } else {
+                            s.ends_with(c)
+                        };
                     }
                     Ok(Value::Bool(hit))
                 }
@@ -1718,10 +1898,18 @@ fn call_method(
                     arity(name, args, 1..=1)?;
                     let sub = str_arg(name, &args[0])?;
                     if name == "count" {
-                        let n = if sub.is_empty() { s.chars().count() + 1 } else { s.matches(sub).count() };
+                        let n = if sub.is_empty() {
+                            s.chars().count() + 1
+                        } else {
+                            s.matches(sub).count()
+                        };
                         return Ok(Value::Int(i64::try_from(n).unwrap_or(i64::MAX)));
                     }
-                    let at = if name == "rfind" { s.rfind(sub) } else { s.find(sub) };
+                    let at = if name == "rfind" {
+                        s.rfind(sub)
+                    } else {
+                        s.find(sub)
+                    };
                     match at {
                         Some(byte) => Ok(Value::Int(
                             i64::try_from(s[..byte].chars().count()).unwrap_or(i64::MAX),
@@ -1733,7 +1921,11 @@ fn call_method(
                 "replace" => {
                     arity(name, args, 2..=2)?;
                     let (from, to) = (str_arg(name, &args[0])?, str_arg(name, &args[1])?);
-                    let n = if from.is_empty() { s.len() + 1 } else { s.matches(from).count() };
+                    let n = if from.is_empty() {
+                        s.len() + 1
+                    } else {
+                        s.matches(from).count()
+                    };
                     check_len(s.len() + n.saturating_mul(to.len()))?;
                     Ok(Value::str(&s.replace(from, to)))
                 }
@@ -1742,7 +1934,10 @@ fn call_method(
                 "capitalize" => {
                     let mut c = s.chars();
                     Ok(Value::str(&match c.next() {
-                        Some(f) => f.to_uppercase().chain(c.flat_map(char::to_lowercase)).collect(),
+                        Some(f) => f
+                            .to_uppercase()
+                            .chain(c.flat_map(char::to_lowercase))
+                            .collect(),
                         None => String::new(),
                     }))
                 }
@@ -1751,7 +1946,11 @@ fn call_method(
                     let mut start = true;
                     for c in s.chars() {
                         if c.is_alphabetic() {
-                            if start { out.extend(c.to_uppercase()) } else { out.extend(c.to_lowercase()) }
+                            if start {
+                                out.extend(c.to_uppercase())
+                            } else {
+                                out.extend(c.to_lowercase())
+                            }
                             start = false;
                         } else {
                             out.push(c);
@@ -1766,7 +1965,11 @@ fn call_method(
                         None | Some(Value::None) => None,
                         Some(v) => Some(str_arg(name, v)?.chars().collect()),
                     };
-                    let test = |c: char| chars.as_ref().map_or(c.is_whitespace(), |set| set.contains(&c));
+                    let test = |c: char| {
+                        chars
+                            .as_ref()
+                            .map_or(c.is_whitespace(), |set| set.contains(&c))
+                    };
                     Ok(Value::str(match name {
                         "strip" => s.trim_matches(test),
                         "lstrip" => s.trim_start_matches(test),
@@ -1784,8 +1987,12 @@ fn call_method(
                     check_len(joined.len())?;
                     Ok(Value::str(&joined))
                 }
-                "isdigit" => Ok(Value::Bool(!s.is_empty() && s.chars().all(|c| c.is_ascii_digit()))),
-                "isalpha" => Ok(Value::Bool(!s.is_empty() && s.chars().all(char::is_alphabetic))),
+                "isdigit" => Ok(Value::Bool(
+                    !s.is_empty() && s.chars().all(|c| c.is_ascii_digit()),
+                )),
+                "isalpha" => Ok(Value::Bool(
+                    !s.is_empty() && s.chars().all(char::is_alphabetic),
+                )),
                 _ => Err(format!("'str' object has no attribute '{name}'")),
             }
         }
@@ -1810,7 +2017,12 @@ fn call_method(
                 arity(name, args, 1..=2)?;
                 Ok(Value::dict_get(pairs, &args[0])
                     .cloned()
-                    .unwrap_or_else(|| args.get(1).or(kw("default")).cloned().unwrap_or(Value::None)))
+                    .unwrap_or_else(|| {
+                        args.get(1)
+                            .or(kw("default"))
+                            .cloned()
+                            .unwrap_or(Value::None)
+                    }))
             }
             "keys" => Ok(list(pairs.iter().map(|(k, _)| k.clone()).collect())),
             "values" => Ok(list(pairs.iter().map(|(_, v)| v.clone()).collect())),
@@ -1822,7 +2034,10 @@ fn call_method(
             )),
             _ => Err(format!("'dict' object has no attribute '{name}'")),
         },
-        other => Err(format!("'{}' object has no method '{name}'", other.type_name())),
+        other => Err(format!(
+            "'{}' object has no method '{name}'",
+            other.type_name()
+        )),
     }
 }
 
@@ -1842,7 +2057,12 @@ mod tests {
         fn namespace_get(&mut self, _: usize, name: &str) -> Result<Value, String> {
             Err(name.into())
         }
-        fn call_xacro(&mut self, name: &str, _: Vec<Value>, _: Vec<(Rc<str>, Value)>) -> Result<Value, String> {
+        fn call_xacro(
+            &mut self,
+            name: &str,
+            _: Vec<Value>,
+            _: Vec<(Rc<str>, Value)>,
+        ) -> Result<Value, String> {
             Err(name.into())
         }
         fn spend(&mut self, _: usize) -> Result<(), String> {

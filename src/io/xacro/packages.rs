@@ -29,7 +29,11 @@ impl Packages {
         let mut roots: Vec<PathBuf> = user.to_vec();
         let env_paths = |name: &str| -> Vec<PathBuf> {
             std::env::var_os(name)
-                .map(|v| std::env::split_paths(&v).filter(|p| !p.as_os_str().is_empty()).collect())
+                .map(|v| {
+                    std::env::split_paths(&v)
+                        .filter(|p| !p.as_os_str().is_empty())
+                        .collect()
+                })
                 .unwrap_or_default()
         };
         roots.extend(env_paths("ROS_PACKAGE_PATH"));

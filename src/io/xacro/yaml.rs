@@ -181,7 +181,11 @@ fn scalar(text: &str, style: ScalarStyle, tag: Option<&Tag>) -> Result<Value, St
                 "str" => Ok(Value::str(text)),
                 "int" => resolve_int(text).ok_or_else(|| format!("'{text}' is not an int")),
                 "float" => resolve_float(text)
-                    .or_else(|| resolve_int(text).and_then(|v| v.number()).map(|n| Value::Float(n.float())))
+                    .or_else(|| {
+                        resolve_int(text)
+                            .and_then(|v| v.number())
+                            .map(|n| Value::Float(n.float()))
+                    })
                     .ok_or_else(|| format!("'{text}' is not a float")),
                 "bool" => resolve_bool(text).ok_or_else(|| format!("'{text}' is not a bool")),
                 "null" => Ok(Value::None),
@@ -346,7 +350,10 @@ mod tests {
                 super::super::value::float_repr(std::f64::consts::PI / 2.0)
             )
         );
-        assert_eq!(repr("base: &b {x: 1, y: 2}\nd:\n  <<: *b\n  y: 3"), "{'base': {'x': 1, 'y': 2}, 'd': {'x': 1, 'y': 3}}");
+        assert_eq!(
+            repr("base: &b {x: 1, y: 2}\nd:\n  <<: *b\n  y: 3"),
+            "{'base': {'x': 1, 'y': 2}, 'd': {'x': 1, 'y': 3}}"
+        );
         assert!(repr("a: !python/object x").starts_with("error"));
         assert!(repr("a: [1, 2").starts_with("error"));
         assert_eq!(repr(""), "None");
