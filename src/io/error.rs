@@ -5,6 +5,10 @@ use crate::model::error::ModelError;
 use crate::model::transform::NotRigid;
 use std::path::{Path, PathBuf};
 
+/// Largest robot file accepted, in bytes (each file a xacro or MJCF file includes too). URDFs of
+/// real robots are well under 1 MiB.
+pub const MAX_FILE_BYTES: u64 = 16 * 1024 * 1024;
+
 /// A robot file could not be turned into a [`Chain`](crate::Chain).
 ///
 /// Its message names the file; its source ([`LoadError::kind`]) says what went wrong.
@@ -26,7 +30,7 @@ impl LoadError {
 
     /// The error of a xacro file that could not be expanded.
     #[must_use]
-    pub fn new_xacro(path: &Path, error: crate::io::xacro::XacroError) -> Self {
+    pub fn new_xacro(path: &Path, error: XacroError) -> Self {
         LoadError::new(path, LoadErrorKind::Xacro(error))
     }
 
@@ -144,7 +148,7 @@ pub enum LoadErrorKind {
     },
     /// The xacro file (or a `.urdf` file's leftover xacro elements) could not be expanded.
     #[error("xacro: {0}")]
-    Xacro(crate::io::xacro::XacroError),
+    Xacro(XacroError),
     /// The URDF a xacro file expands to could not be read (lines and columns are those of the
     /// expanded text, which `kinechain expand` writes).
     #[error("in the URDF the xacro expands to: {0}")]
@@ -292,4 +296,43 @@ pub enum FieldProblem {
         /// What already has it: `joint` or `link`.
         owner: &'static str,
     },
+}
+
+/// A xacro document could not be expanded.
+///
+/// Shown as `FILE:LINE:COLUMN: in macro `m` called at F:L:C: MESSAGE`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct XacroError {
+    /// The file the problem is in.
+    pub file: PathBuf,
+    /// 1-based line of the element at fault, when known.
+    pub line: Option<u32>,
+    /// 1-based column of the element at fault, when known.
+    pub column: Option<u32>,
+    /// The macro calls and includes that led there, innermost first ("in macro `ur_robot`
+    /// called at ur.urdf.xacro:42:5").
+    pub stack: Vec<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for XacroError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&location(&self.file, self.line, self.column))?;
+        for s in &self.stack {
+            write!(f, "{s}: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for XacroError {}
+
+fn location(file: &Path, line: Option<u32>, column: Option<u32>) -> String {
+    match (line, column) {
+        (Some(l), Some(c)) => format!("{}:{l}:{c}: ", file.display()),
+        (Some(l), None) => format!("{}:{l}: ", file.display()),
+        _ => format!("{}: ", file.display()),
+    }
 }

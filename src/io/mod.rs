@@ -17,8 +17,7 @@ use crate::io::error::{LoadError, LoadErrorKind};
 use std::io::Read;
 use std::path::Path;
 
-/// Largest robot file accepted, in bytes. URDFs of real robots are well under 1 MiB.
-pub const MAX_FILE_BYTES: u64 = 16 * 1024 * 1024;
+pub use error::MAX_FILE_BYTES;
 
 /// The formats kinechain reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

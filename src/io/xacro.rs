@@ -57,44 +57,7 @@ pub struct Expansion {
     pub files: Vec<PathBuf>,
 }
 
-/// A xacro document could not be expanded.
-///
-/// Shown as `FILE:LINE:COLUMN: in macro `m` called at F:L:C: MESSAGE`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub struct XacroError {
-    /// The file the problem is in.
-    pub file: PathBuf,
-    /// 1-based line of the element at fault, when known.
-    pub line: Option<u32>,
-    /// 1-based column of the element at fault, when known.
-    pub column: Option<u32>,
-    /// The macro calls and includes that led there, innermost first ("in macro `ur_robot`
-    /// called at ur.urdf.xacro:42:5").
-    pub stack: Vec<String>,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl std::fmt::Display for XacroError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&location(&self.file, self.line, self.column))?;
-        for s in &self.stack {
-            write!(f, "{s}: ")?;
-        }
-        f.write_str(&self.message)
-    }
-}
-
-impl std::error::Error for XacroError {}
-
-fn location(file: &Path, line: Option<u32>, column: Option<u32>) -> String {
-    match (line, column) {
-        (Some(l), Some(c)) => format!("{}:{l}:{c}: ", file.display()),
-        (Some(l), None) => format!("{}:{l}: ", file.display()),
-        _ => format!("{}: ", file.display()),
-    }
-}
+pub use crate::io::error::XacroError;
 
 /// Whether `path` names a xacro file (`.xacro`, `.urdf.xacro`).
 #[must_use]
@@ -143,8 +106,17 @@ fn read_main(path: &Path) -> Result<String, XacroError> {
         stack: Vec::new(),
         message,
     };
-    let text = crate::io::read_text(path).map_err(|e| fail(e.to_string()))?;
-    Ok(text)
+    let limit = crate::io::error::MAX_FILE_BYTES;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| {
+            std::io::Read::read_to_end(&mut std::io::Read::take(f, limit + 1), &mut bytes)
+        })
+        .map_err(|e| fail(format!("cannot read the file: {e}")))?;
+    if bytes.len() as u64 > limit {
+        return Err(fail(format!("the file is larger than {limit} bytes")));
+    }
+    String::from_utf8(bytes).map_err(|_| fail("the file is not UTF-8 text".into()))
 }
 
 /// Stack size of the thread an expansion runs on: deep macro nesting recurses.
@@ -199,7 +171,7 @@ fn run(
         &options.args,
         &options.package_paths,
         lenient,
-        crate::io::MAX_FILE_BYTES,
+        crate::io::error::MAX_FILE_BYTES,
     );
     let done = x.run(root)?;
     let name = path

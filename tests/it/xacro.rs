@@ -103,7 +103,7 @@ fn the_feature_file_expands_as_xacro_defines_it() {
         "{urdf}"
     );
     // xacro:attribute, the $(eval) condition, builtins, the escapes.
-    assert!(urdf.contains(r#"<link name="left_tip">"#));
+    assert!(urdf.contains(r#"<link name="left_tip"/>"#), "{urdf}");
     assert!(urdf.contains(r#"<origin xyz="0.7 0.1 2.25" rpy="0 0 0.7853981633974483"/>"#));
     assert!(urdf.contains("<note>plain text</note>"), "{urdf}");
     // The multi-block `**extra` puts its content, the `*origin` block itself.

@@ -3,12 +3,17 @@
 //! includes, conditionals, arguments, `xacro:element` and `xacro:attribute`, `${…}` and `$(…)` in
 //! attributes and text — with its scoping rules: a macro's body is evaluated in a scope below
 //! its caller's, an include with `ns=` gets a namespace below the includer's scope.
+//!
+//! Longer than 800 lines: each xacro element's processing depends on the scoping rules and
+//! bounds defined here, and the two views expressions have of the expander (`At`, `EvalAt`)
+//! reach into its tables.
 
 use super::dom::{self, Element, Node, Place};
 use super::expr::{self, Scope};
 use super::packages::Packages;
 use super::value::{Func, Namespace, Value, parse_float, parse_int};
-use super::{XacroError, yaml};
+use super::yaml;
+use crate::io::error::XacroError;
 use std::collections::HashMap;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -1525,10 +1530,16 @@ mod tests {
             (p.as_str(), d),
             ("joint", Some((Some("joint".into()), Some("${pi}".into()))))
         );
-        let (p, d, _) = parse_param("a:=${b + c}_x y");
+        let (p, d, _) = parse_param("a:=${b+c}_x y");
         assert_eq!(
             (p.as_str(), d),
-            ("a", Some((None, Some("${b + c}_x".into()))))
+            ("a", Some((None, Some("${b+c}_x".into()))))
+        );
+        // With spaces, a `${…}` default ends before white space, as xacro's pattern reads it.
+        let (p, d, _) = parse_param("a:=${b + c} y");
+        assert_eq!(
+            (p.as_str(), d),
+            ("a", Some((None, Some("${b + c}".into()))))
         );
         let (p, d, _) = parse_param("a:=^ y");
         assert_eq!((p.as_str(), d), ("a", Some((Some("a".into()), None))));

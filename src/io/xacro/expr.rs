@@ -3,6 +3,9 @@
 //! a fixed set of functions and methods, attribute access on namespaces and dicts). There are no
 //! statements, imports, lambdas, comprehensions or attribute access beyond that set: a robot
 //! file cannot run code through it.
+//!
+//! Longer than 800 lines: tokens, grammar, evaluation and the whole set of callable functions
+//! and methods are kept together, so that everything an expression can do is read in one file.
 
 use super::value::{Func, Namespace, Number, Value, parse_float, parse_int};
 use std::rc::Rc;
