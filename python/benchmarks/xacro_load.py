@@ -13,7 +13,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from panda import cpu  # noqa: E402
+from panda import cpu, per_call  # noqa: E402
 
 import kinechain as kc  # noqa: E402
 
@@ -21,16 +21,6 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 PACKAGES = os.path.join(ROOT, "tests", "data", "xacro", "packages")
 UR = os.path.join(PACKAGES, "ur_description", "urdf", "ur.urdf.xacro")
 ARGS = {"name": "ur", "ur_type": "ur5e"}
-
-
-def once(f, min_time=0.2):
-    n, start = 0, time.perf_counter()
-    while True:
-        f()
-        n += 1
-        elapsed = time.perf_counter() - start
-        if elapsed >= min_time:
-            return elapsed / n
 
 
 def main():
@@ -47,8 +37,8 @@ def main():
 
     rounds = {"kinechain": [], "xacrodoc": []}
     for _ in range(7):
-        rounds["kinechain"].append(once(ours))
-        rounds["xacrodoc"].append(once(theirs))
+        rounds["kinechain"].append(per_call(ours, rounds=1))
+        rounds["xacrodoc"].append(per_call(theirs, rounds=1))
     k = statistics.median(rounds["kinechain"])
     x = statistics.median(rounds["xacrodoc"])
     print(f"CPU: {cpu()}")

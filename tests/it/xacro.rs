@@ -189,8 +189,9 @@ fn check_cases(root: &Path) -> usize {
         let options = LoadOptions::default().with_xacro(case.options.clone());
         match &case.expected {
             Some(expected) => {
-                let chain = Chain::from_file_with(&case.file, &options)
-                    .unwrap_or_else(|e| panic!("{}: {}", case.id, chain_of(&e)));
+                let chain = Chain::from_file_with(&case.file, &options).unwrap_or_else(|e| {
+                    panic!("{}: {}", case.id, kinechain::error::error_chain(&e))
+                });
                 let reference = Chain::from_file(expected).unwrap();
                 assert_same(&reference, &chain, &case.id);
                 assert_eq!(chain.name(), reference.name(), "{}", case.id);
@@ -199,24 +200,13 @@ fn check_cases(root: &Path) -> usize {
             None => {
                 let e = Chain::from_file_with(&case.file, &options).unwrap_err();
                 let LoadErrorKind::Xacro(x) = e.kind() else {
-                    panic!("{}: {}", case.id, chain_of(&e));
+                    panic!("{}: {}", case.id, kinechain::error::error_chain(&e));
                 };
                 assert!(x.line.is_some(), "{}: {x}", case.id);
             }
         }
     }
     checked
-}
-
-fn chain_of(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut source = e.source();
-    while let Some(inner) = source {
-        s.push_str(": ");
-        s.push_str(&inner.to_string());
-        source = inner.source();
-    }
-    s
 }
 
 #[test]
