@@ -181,8 +181,8 @@ pub(super) struct FkArgs {
     #[arg(
         long,
         allow_hyphen_values = true,
-        required_unless_present = "batch",
-        conflicts_with = "batch"
+        required_unless_present_any = ["batch", "bag"],
+        conflicts_with_all = ["batch", "bag"]
     )]
     pub(super) q: Option<String>,
     /// Joint velocities (same forms as --q); adds "omega" and "v" to the output.
@@ -195,8 +195,17 @@ pub(super) struct FkArgs {
     /// alone as a JSON array or numbers separated by commas or spaces (a CSV row, in the order
     /// of a first row of joint names if there is one); `-` reads standard input, writing each
     /// result before waiting for more input.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "bag")]
     pub(super) batch: Option<PathBuf>,
+    /// A ROS bag (MCAP): one result per sensor_msgs/JointState message of --topic, headed by its
+    /// `header.stamp` in ns (`time`). Joints are found by name; a message that does not carry a
+    /// joint keeps its last value; messages before every joint has had one are skipped (and
+    /// counted on standard error).
+    #[arg(long, value_name = "FILE")]
+    pub(super) bag: Option<PathBuf>,
+    /// The topic of --bag.
+    #[arg(long, requires = "bag", default_value = crate::io::bag::DEFAULT_TOPIC)]
+    pub(super) topic: String,
     /// Only these links (repeatable); only the joints they depend on are evaluated.
     #[arg(long = "link", value_name = "NAME")]
     pub(super) links: Vec<String>,
@@ -227,6 +236,8 @@ pub(super) struct FkArgs {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(super) enum OutputFormat {
+    /// JSON; with --batch or --bag, one JSON object per line (also called `jsonl`).
+    #[value(alias = "jsonl")]
     Json,
     Table,
     /// Comma-separated values (`fk` only): a header row, then one row per configuration.

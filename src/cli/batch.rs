@@ -5,8 +5,8 @@ use crate::cli::args::{FkArgs, OutputFormat};
 use crate::cli::common::{output_error, write_line};
 use crate::cli::error::CliError;
 use crate::cli::format::{
-    Configuration, JacobianResult, LinkResult, ResultsJson, check_finite, csv_field, csv_links,
-    csv_row, orientation_columns, results_table, write_buffered_line, write_json_line,
+    Configuration, JacobianResult, LinkResult, ResultsJson, RowLabel, check_finite, csv_field,
+    csv_links, csv_row, orientation_columns, results_table, write_buffered_line, write_json_line,
 };
 use crate::cli::query::{Request, at_line, jacobians_finite, jacobians_table, line_heading};
 use crate::error::error_chain;
@@ -139,7 +139,7 @@ impl PendingPoses {
                 Ok(()) => match args.format {
                     OutputFormat::Json => {
                         let value = ResultsJson {
-                            line: Some(line),
+                            line: Some(RowLabel::Line(line)),
                             chain,
                             results: &results,
                             orientation: args.orientation,
@@ -150,13 +150,13 @@ impl PendingPoses {
                         write_json_line(out, &mut self.text, &value)?;
                     }
                     OutputFormat::Table => write_buffered_line(out, &mut self.text, |buf| {
-                        line_heading(Some(line), buf);
+                        line_heading(Some(RowLabel::Line(line)), buf);
                         results_table(chain, &results, args.orientation, buf);
                         jacobians_table(chain, jacobians, buf);
                         Ok(())
                     })?,
                     OutputFormat::Csv => write_buffered_line(out, &mut self.text, |buf| {
-                        csv_row(Some(line), &results, args.orientation, buf);
+                        csv_row(Some(RowLabel::Line(line)), &results, args.orientation, buf);
                         Ok(())
                     })?,
                 },
@@ -405,7 +405,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
             Ok(Row::BadHeader(e)) => return Err(at_line(path, i + 1, e)),
             Ok(Row::Single(c)) => {
                 failed_lines += pending.flush(chain, args, path, out)?;
-                match request.emit(chain, args, data, &c, Some(i + 1), out) {
+                match request.emit(chain, args, data, &c, Some(RowLabel::Line(i + 1)), out) {
                     Ok(()) => {}
                     Err(e @ CliError::Io { .. }) => return Err(e),
                     Err(e) if args.keep_going => {

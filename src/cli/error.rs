@@ -72,6 +72,39 @@ pub enum CliError {
         #[source]
         source: Box<CliError>,
     },
+    /// A ROS bag could not be read as joint states.
+    #[error(transparent)]
+    Bag(#[from] crate::io::bag::BagError),
+    /// The bag's topic does not name every joint of the chain.
+    #[error(
+        "{}: topic {topic} has no values for joints {} (its joints: {})",
+        path.display(),
+        quoted(missing),
+        quoted(present)
+    )]
+    BagJoints {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The chain's joints (entries of `q`) that no message names.
+        missing: Vec<String>,
+        /// The joints the topic names.
+        present: Vec<String>,
+    },
+    /// A bag's message failed.
+    #[error("{}: message {index} (time {time} ns)", path.display())]
+    BagMessage {
+        /// The bag.
+        path: PathBuf,
+        /// Its index among the topic's messages, from 0.
+        index: usize,
+        /// Its time, ns.
+        time: i64,
+        /// What went wrong.
+        #[source]
+        source: Box<CliError>,
+    },
     /// A batch line is longer than any configuration of the chain could need.
     #[error("the line is longer than {limit} bytes, the most read for one configuration")]
     LineTooLong {
@@ -122,4 +155,16 @@ pub enum CliError {
         #[source]
         source: std::io::Error,
     },
+}
+
+/// Names, each quoted, separated by commas (`none` for none).
+fn quoted(names: &[String]) -> String {
+    if names.is_empty() {
+        return "none".into();
+    }
+    let quoted: Vec<String> = names
+        .iter()
+        .map(|n| format!("'{}'", escape_controls(n)))
+        .collect();
+    quoted.join(", ")
 }

@@ -1,6 +1,7 @@
 //! `kinechain fk`: one configuration's poses, rates, points and Jacobians.
 
 use crate::cli::args::{FkArgs, OutputFormat};
+use crate::cli::bag::fk_bag;
 use crate::cli::batch::fk_batch_file;
 use crate::cli::common::{load, write_line};
 use crate::cli::error::CliError;
@@ -23,6 +24,9 @@ pub(super) fn fk(
     let mut request = Request::new(&chain, args)?;
     if args.format == OutputFormat::Csv {
         write_line(out, &csv_header(&chain, args))?;
+    }
+    if let Some(path) = &args.bag {
+        return fk_bag(&chain, args, &mut data, &mut request, path, out);
     }
     if let Some(path) = &args.batch {
         return fk_batch_file(&chain, args, &mut data, &mut request, path, out);

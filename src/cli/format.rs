@@ -98,13 +98,30 @@ impl Coordinates {
     }
 }
 
+/// What a row of results is headed by: its line of a `--batch` file, or its message's time (ns)
+/// in a `--bag`.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum RowLabel {
+    Line(usize),
+    Time(i64),
+}
+
+impl std::fmt::Display for RowLabel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RowLabel::Line(n) => write!(f, "{n}"),
+            RowLabel::Time(t) => write!(f, "{t}"),
+        }
+    }
+}
+
 /// `{"links": {"NAME": {..}, ..}, ..}` for one configuration's `results`, then `"points"`,
 /// `"jacobians"` and `"jacobian_dots"` where there are any: serialised straight into the
 /// output, since a `Value` tree allocates a node per number (which took most of a batch run's
 /// time).
 pub(super) struct ResultsJson<'a> {
-    /// The batch line the results are for (none for `--q`).
-    pub(super) line: Option<usize>,
+    /// The batch line or bag message the results are for (none for `--q`).
+    pub(super) line: Option<RowLabel>,
     pub(super) chain: &'a Chain,
     pub(super) results: &'a [LinkResult],
     pub(super) orientation: Orientation,
@@ -132,8 +149,10 @@ impl Serialize for ResultsJson<'_> {
             }
         }
         let mut m = s.serialize_map(None)?;
-        if let Some(line) = self.line {
-            m.serialize_entry("line", &line)?;
+        match self.line {
+            Some(RowLabel::Line(line)) => m.serialize_entry("line", &line)?,
+            Some(RowLabel::Time(time)) => m.serialize_entry("time", &time)?,
+            None => {}
         }
         m.serialize_entry("links", &Links(self))?;
         if !self.points.is_empty() {
@@ -548,13 +567,15 @@ pub(super) fn csv_field(text: &str) -> String {
     }
 }
 
-/// The CSV header: `line` (with `--batch`), then `<link>.x`, `<link>.y`, `<link>.z` and the
+/// The CSV header: `line` (with `--batch`) or `time` (with `--bag`), then `<link>.x`, `<link>.y`, `<link>.z` and the
 /// orientation columns of every link printed, then `error` (with `--batch`: the message of a
 /// line that failed under `--keep-going`). The names of `kinechain.table.poses` in Python.
 pub(super) fn csv_header(chain: &Chain, args: &FkArgs) -> String {
     let mut fields: Vec<String> = Vec::new();
     if args.batch.is_some() {
         fields.push("line".into());
+    } else if args.bag.is_some() {
+        fields.push("time".into());
     }
     for link in csv_links(chain, args) {
         for c in ["x", "y", "z"]
@@ -573,7 +594,7 @@ pub(super) fn csv_header(chain: &Chain, args: &FkArgs) -> String {
 /// One configuration's CSV row: numbers that read back to the same `f64`, an empty field where
 /// an orientation is undefined.
 pub(super) fn csv_row(
-    line: Option<usize>,
+    line: Option<RowLabel>,
     results: &[LinkResult],
     kind: Orientation,
     buf: &mut Vec<u8>,
@@ -602,7 +623,8 @@ pub(super) fn csv_row(
             None => (0..width).for_each(|_| push(&mut row, None)),
         }
     }
-    if line.is_some() {
+    // The empty `error` field of a batch line.
+    if let Some(RowLabel::Line(_)) = line {
         row.push(',');
     }
     buf.extend_from_slice(row.as_bytes());

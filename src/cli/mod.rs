@@ -2,6 +2,7 @@
 //! [`main_with`]; each command is a file, and `run` dispatches to them.
 
 mod args;
+mod bag;
 mod batch;
 mod bench;
 mod common;

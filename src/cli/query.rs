@@ -3,8 +3,8 @@
 use crate::cli::args::{FkArgs, OutputFormat, Point, parse_point};
 use crate::cli::error::CliError;
 use crate::cli::format::{
-    Configuration, JacobianResult, LinkResult, PointResult, ResultsJson, check_finite, csv_row,
-    push_cells, results_table, write_buffered_line, write_json_line,
+    Configuration, JacobianResult, LinkResult, PointResult, ResultsJson, RowLabel, check_finite,
+    csv_row, push_cells, results_table, write_buffered_line, write_json_line,
 };
 use crate::eval::Chain;
 use crate::eval::Data;
@@ -288,7 +288,7 @@ impl Request {
         args: &FkArgs,
         data: &mut Data,
         c: &Configuration,
-        line: Option<usize>,
+        line: Option<RowLabel>,
         out: &mut dyn Write,
     ) -> Result<(), CliError> {
         if args.format == OutputFormat::Csv && c.qd.is_some() {
@@ -333,9 +333,11 @@ impl Request {
 }
 
 /// The heading of a batch line's table, `line N:` on a line of its own.
-pub(super) fn line_heading(line: Option<usize>, buf: &mut Vec<u8>) {
-    if let Some(line) = line {
-        buf.extend_from_slice(format!("line {line}:\n").as_bytes());
+pub(super) fn line_heading(line: Option<RowLabel>, buf: &mut Vec<u8>) {
+    match line {
+        Some(RowLabel::Line(line)) => buf.extend_from_slice(format!("line {line}:\n").as_bytes()),
+        Some(RowLabel::Time(time)) => buf.extend_from_slice(format!("time {time}:\n").as_bytes()),
+        None => {}
     }
 }
 

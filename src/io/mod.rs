@@ -1,6 +1,8 @@
 //! Loading robot files: DH YAML (`.yaml`, `.yml`), URDF (`.urdf`), xacro (`.xacro`) and MJCF
 //! (`.xml`).
 
+#[cfg(feature = "logs")]
+pub mod bag;
 pub mod convert;
 mod dh;
 pub mod error;

@@ -5,6 +5,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+#[cfg(feature = "logs")]
+mod bag;
 mod batch;
 mod batch_arrays;
 mod batch_jacobians;

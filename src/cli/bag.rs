@@ -1,0 +1,82 @@
+//! `kinechain fk --bag`: one result per `JointState` message of a ROS bag (MCAP), headed by the
+//! message's time.
+
+use crate::cli::args::FkArgs;
+use crate::cli::error::CliError;
+use crate::cli::format::{Configuration, RowLabel};
+use crate::cli::query::Request;
+use crate::eval::{Chain, Data};
+use crate::io::bag::{JointStateOptions, read_joint_states};
+use crate::regression::variable_names;
+use std::io::Write;
+use std::path::Path;
+
+/// Each message's configuration (the chain's entries of `q`, found by joint name among the
+/// topic's; a joint a message does not carry keeps its last value) through [`Request::emit`].
+/// Messages before every joint of the chain has had a value are skipped, and counted on standard
+/// error.
+pub(super) fn fk_bag(
+    chain: &Chain,
+    args: &FkArgs,
+    data: &mut Data,
+    request: &mut Request,
+    path: &Path,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let log = read_joint_states(path, &JointStateOptions::new(&args.topic))?;
+    let names = variable_names(chain);
+    let mut columns = Vec::with_capacity(names.len());
+    let mut missing = Vec::new();
+    for name in &names {
+        match log.names.iter().position(|n| n == name) {
+            Some(c) => columns.push(c),
+            None => missing.push(name.clone()),
+        }
+    }
+    if !missing.is_empty() {
+        return Err(CliError::BagJoints {
+            path: path.to_path_buf(),
+            topic: args.topic.clone(),
+            missing,
+            present: log.names,
+        });
+    }
+    let mut skipped = 0usize;
+    for (i, &time) in log.time.iter().enumerate() {
+        let row = log.position_row(i);
+        let q: Vec<f64> = columns.iter().map(|&c| row[c]).collect();
+        if q.iter().any(|x| x.is_nan()) {
+            skipped += 1;
+            continue;
+        }
+        let c = Configuration {
+            q,
+            qd: None,
+            qdd: None,
+        };
+        match request.emit(chain, args, data, &c, Some(RowLabel::Time(time)), out) {
+            Ok(()) => {}
+            Err(e @ CliError::Io { .. }) => return Err(e),
+            Err(e) => {
+                return Err(CliError::BagMessage {
+                    path: path.to_path_buf(),
+                    index: i,
+                    time,
+                    source: Box::new(e),
+                });
+            }
+        }
+    }
+    if skipped > 0 {
+        let _ = writeln!(
+            std::io::stderr(),
+            "warning: {skipped} message(s) of {} before every joint of the chain had a value: skipped",
+            args.topic
+        );
+    }
+    out.flush().map_err(|source| CliError::Io {
+        context: "cannot write the output".into(),
+        source,
+    })?;
+    Ok(())
+}
