@@ -19,9 +19,9 @@ from typing import Any, Union
 
 import numpy as np
 
-from ._kinechain import Chain, Error, FkResult, LoadError, StateError, __version__, _expand_xacro
+from ._kinechain import Chain, Error, FkResult, LoadError, LogError, StateError, __version__, _expand_xacro
 
-__all__ = ["Chain", "Error", "FkResult", "LoadError", "StateError", "expand_xacro", "load", "orientation", "table", "testing", "__version__"]
+__all__ = ["Chain", "Error", "FkResult", "LoadError", "LogError", "StateError", "expand_xacro", "load", "logs", "orientation", "table", "testing", "__version__"]
 
 
 def _xacro_keywords(args: Any, package_paths: Any) -> tuple:
@@ -100,4 +100,4 @@ def _float_array(x: Any, name: str) -> np.ndarray:
     return np.ascontiguousarray(a)
 
 
-from . import orientation, table, testing  # noqa: E402  (orientation coordinates; tables; assertions for test suites)
+from . import logs, orientation, table, testing  # noqa: E402  (joint logs; orientation coordinates; tables; assertions for test suites)

@@ -17,6 +17,9 @@ class LoadError(Error):
 class StateError(Error):
     """Joint values that cannot be evaluated (shape, length, not finite, out of limits)."""
 
+class LogError(Error):
+    """A joint log that cannot be read (a ROS bag, a dataset); names the file, topic, message."""
+
 class FkResult:
     """What Chain.fk computed: poses (L, 4, 4) or (N, L, 4, 4); with qd omega and v, with qdd
     alpha and a, (L, 3) or (N, L, 3); None where not computed. r[name] is one link's pose."""
@@ -80,6 +83,9 @@ class Chain:
     def q_names(self) -> list[str]:
         """The name of each entry of q (NAME.theta/NAME.d of a cylindrical joint, NAME.x ...
         NAME.qz of a floating one)."""
+    @property
+    def q_units(self) -> list[str]:
+        """Each entry of q's unit: "rad", "m" or "1" (a quaternion's)."""
     @property
     def v_names(self) -> list[str]:
         """The name of each entry of qd (NAME.vx ... NAME.wz of a floating joint)."""
@@ -176,3 +182,13 @@ class Chain:
 def _expand_xacro(
     path: str, args: Optional[list[Tuple[str, str]]] = None, package_paths: Optional[list[str]] = None
 ) -> str: ...
+def _read_joint_states(
+    path: str, topic: str, stamp: str, missing: str, velocities: bool, efforts: bool, keep_truncated: bool
+) -> Tuple[
+    list[str],
+    npt.NDArray[np.int64],
+    npt.NDArray[np.float64],
+    Optional[npt.NDArray[np.float64]],
+    Optional[npt.NDArray[np.float64]],
+    bool,
+]: ...

@@ -306,6 +306,14 @@ impl Chain {
         variable_names(&self.robot.inner)
     }
 
+    /// The unit of each entry of `q`, in `q_names` order: `"rad"` (a revolute or continuous
+    /// joint, a cylindrical joint's θ), `"m"` (a prismatic joint, a cylindrical joint's d, a
+    /// floating joint's position) or `"1"` (a floating joint's quaternion).
+    #[getter]
+    fn q_units(&self) -> Vec<&'static str> {
+        kinechain::regression::variable_units(&self.robot.inner)
+    }
+
     /// The robot file's named configurations (MJCF `<key>` elements), by name, in file order:
     /// each a `q` of `nq` entries (MuJoCo's `qpos`).
     #[getter]

@@ -23,6 +23,12 @@ pyo3::create_exception!(
     Error,
     "Joint values that cannot be evaluated (wrong shape or length, not finite, out of limits); the message names the joint."
 );
+pyo3::create_exception!(
+    kinechain,
+    LogError,
+    Error,
+    "A joint log that cannot be read (a ROS bag, a dataset); the message names the file, topic and message."
+);
 
 /// A file or text that does not load, with the causes of `e`.
 pub(crate) fn load_error(e: &dyn std::error::Error) -> PyErr {

@@ -12,7 +12,7 @@
 //! (output arrays of single calls, reused once released), `files` (interruptible reads), `run`
 //! (threads and signals), `links` (the links a call asks for), `results` (the result class), `outputs` (the arrays a call writes),
 //! `robot` (what evaluations use of a chain), `fk`, `jacobian`, `chain` (the class),
-//! `regression`, `orientation`, `bench` (the core timed from Rust, for the benchmarks).
+//! `regression`, `orientation`, `logs` (ROS bags), `bench` (the core timed from Rust, for the benchmarks).
 
 mod arrays;
 mod bench;
@@ -23,6 +23,7 @@ mod fk;
 mod jacobian;
 mod layouts;
 mod links;
+mod logs;
 mod methods;
 mod orientation;
 mod outputs;
@@ -33,7 +34,7 @@ mod run;
 mod spare;
 
 use chain::Chain;
-use errors::{Error, LoadError, StateError};
+use errors::{Error, LoadError, LogError, StateError};
 use orientation::_orientation;
 use pyo3::prelude::*;
 use regression::{_compare, _record_golden, _verify_golden};
@@ -46,6 +47,8 @@ fn _kinechain(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("LoadError", m.py().get_type::<LoadError>())?;
     m.add("StateError", m.py().get_type::<StateError>())?;
+    m.add("LogError", m.py().get_type::<LogError>())?;
+    m.add_function(wrap_pyfunction!(logs::_read_joint_states, m)?)?;
     m.add_function(wrap_pyfunction!(_orientation, m)?)?;
     m.add_function(wrap_pyfunction!(chain::_expand_xacro, m)?)?;
     m.add_function(wrap_pyfunction!(_record_golden, m)?)?;

@@ -654,7 +654,10 @@ impl<'a> Wire<'a> {
 
     fn f64s(&mut self, out: &mut Vec<f64>) -> Result<(), String> {
         let n = self.count(8)?;
-        self.align(8);
+        // (No padding before an empty sequence's elements: there are none to align.)
+        if n > 0 {
+            self.align(8);
+        }
         let bytes = self.take(n * 8)?;
         out.extend(bytes.chunks_exact(8).map(|b| {
             let b: [u8; 8] = [b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]];

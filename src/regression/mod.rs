@@ -51,6 +51,23 @@ pub fn velocity_names(chain: &Chain) -> Vec<String> {
     names(chain, chain.velocity_variables())
 }
 
+/// The unit of each entry of `q`, as [`variable_names`] lists them: `rad` (a revolute or
+/// continuous joint, a cylindrical joint's θ), `m` (a prismatic joint, a cylindrical joint's d, a
+/// floating joint's position) or `1` (a floating joint's quaternion).
+#[must_use]
+pub fn variable_units(chain: &Chain) -> Vec<&'static str> {
+    use crate::model::joint::JointKind;
+    chain
+        .variables()
+        .map(|(j, component)| match (chain.joint(j).kind(), component) {
+            (JointKind::Revolute | JointKind::Continuous, _)
+            | (JointKind::Cylindrical, Some("theta")) => "rad",
+            (JointKind::Floating, Some("qw" | "qx" | "qy" | "qz")) => "1",
+            _ => "m",
+        })
+        .collect()
+}
+
 fn names<'c>(
     chain: &Chain,
     entries: impl Iterator<Item = (crate::model::chain::JointId, Option<&'c str>)>,

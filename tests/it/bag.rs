@@ -61,7 +61,10 @@ impl Writer {
     }
     fn f64s(&mut self, xs: &[f64]) {
         self.u32(u32::try_from(xs.len()).unwrap());
-        self.align(8);
+        // (As Fast-CDR writes it: no padding before an empty sequence.)
+        if !xs.is_empty() {
+            self.align(8);
+        }
         for x in xs {
             let b = if self.little {
                 x.to_le_bytes()
