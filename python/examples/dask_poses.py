@@ -10,7 +10,9 @@ data/): then `observation.state` (or --q-column) is read as the joint values, en
 info.json names them (`shoulder_pan.pos` is joint `shoulder_pan`), in --units. Without
 --scheduler a LocalCluster of --workers processes runs on this machine; with --scheduler
 tcp://host:8786 the same code runs on any Dask cluster whose workers have kinechain installed
-(the chain is shipped to them by pickling).
+(the chain is shipped to them by pickling). Columns are read Arrow-backed; read the output
+back with pyarrow or `pd.read_parquet(OUTPUT_DIR, dtype_backend="pyarrow")` (pandas cannot
+rebuild a fixed-size-list column's type from the metadata it writes).
 """
 
 import argparse

@@ -356,3 +356,25 @@ def test_lerobot_errors_name_the_dataset_and_feature(tmp_path):
         kc.logs.lerobot(tmp_path / "ds", chain, column="observation.images")
     with pytest.raises(kc.LogError, match="renames 'elbow'"):
         kc.logs.lerobot(tmp_path / "ds", chain, names={"elbow": "elbow_flex"})
+
+
+def test_the_examples_read_a_lerobot_dataset(tmp_path):
+    import subprocess
+    import sys
+
+    pytest.importorskip("dask.distributed")
+    chain, q = so101_rows(400)
+    write_lerobot(tmp_path / "ds", np.rad2deg(q), SO101_NAMES)
+    script = os.path.join(ROOT, "python", "examples", "dask_poses.py")
+    result = subprocess.run(
+        [sys.executable, script, SO101, str(tmp_path / "ds"), str(tmp_path / "out"), "--links", "gripper_frame_link",
+         "--units", "deg", "--workers", "2"], capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    written = pd.read_parquet(tmp_path / "out", dtype_backend="pyarrow").sort_values("frame_index")
+    local = kc.logs.lerobot(tmp_path / "ds", chain, units="deg", links=["gripper_frame_link"], to="pandas")
+    assert np.array_equal(written["gripper_frame_link.qx"].to_numpy(np.float64), local["gripper_frame_link.qx"].to_numpy())
+    example = os.path.join(ROOT, "python", "examples", "lerobot_poses.py")
+    result = subprocess.run([sys.executable, example, str(tmp_path / "demo"), "--rows", "300"],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("300 rows of ") and "gripper frame: x " in result.stdout
