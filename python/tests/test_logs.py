@@ -14,8 +14,14 @@ import kinechain as kc
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
 pd = pytest.importorskip("pandas")
-mcap_writer = pytest.importorskip("mcap.writer")
-mcap_ros2_dynamic = pytest.importorskip("mcap_ros2._dynamic")
+# The ROS 2 message writer is installed in CI (KINECHAIN_REQUIRE_PEERS=1 there: a missing one
+# fails the run); elsewhere these tests are skipped without it.
+if os.environ.get("KINECHAIN_REQUIRE_PEERS"):
+    import mcap.writer as mcap_writer
+    import mcap_ros2._dynamic as mcap_ros2_dynamic
+else:
+    mcap_writer = pytest.importorskip("mcap.writer")
+    mcap_ros2_dynamic = pytest.importorskip("mcap_ros2._dynamic")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PANDA = os.path.join(ROOT, "robots", "panda.urdf")

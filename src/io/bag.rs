@@ -303,13 +303,21 @@ struct Reader<'a> {
     log: JointStates,
     /// Reused: one message's names, positions, velocities, efforts.
     message: Message,
+    /// The last message's serialised names and their columns: what the next message most
+    /// likely has (compared byte for byte, without hashing).
+    recent: (Vec<u8>, Vec<usize>),
 }
 
 #[derive(Default)]
 struct Message {
     stamp: i64,
+    /// Each name's text, as a byte range of the message (empty when the names are the recent
+    /// ones).
     names: Vec<(usize, usize)>,
+    /// The serialised list of names (its length, then its strings), as a byte range.
     names_bytes: (usize, usize),
+    /// Whether the names are [`Reader::recent`]'s, recognised by their bytes and not parsed.
+    recent: bool,
     values: [Vec<f64>; 3],
 }
 
@@ -328,6 +336,7 @@ impl<'a> Reader<'a> {
                 ..JointStates::default()
             },
             message: Message::default(),
+            recent: (Vec::new(), Vec::new()),
         }
     }
 
@@ -397,13 +406,42 @@ impl<'a> Reader<'a> {
             problem,
         };
         let m = &mut self.message;
-        decode(encoding, data, m, self.options).map_err(&fail)?;
+        decode(encoding, data, m, self.options, &self.recent.0).map_err(&fail)?;
         let time = match self.options.time {
             TimeSource::Header => m.stamp,
             TimeSource::Log => i64::try_from(log_time)
                 .map_err(|_| fail(format!("log time {log_time} ns is past the year 2262")))?,
         };
-        let n = m.names.len();
+        // Each entry's column: the last message's (drivers send the same names in every
+        // message), from the layouts met before, or made now, adding new names as columns.
+        if !m.recent {
+            let key = &data[m.names_bytes.0..m.names_bytes.1];
+            if !self.layouts.contains_key(key) {
+                let mut columns = Vec::with_capacity(m.names.len());
+                for &(from, to) in &m.names {
+                    let name = std::str::from_utf8(&data[from..to])
+                        .map_err(|_| fail("a joint name is not UTF-8".into()))?;
+                    let column = match self.log.names.iter().position(|x| x == name) {
+                        Some(c) => c,
+                        None => {
+                            self.log.names.push(name.to_string());
+                            widen(&mut self.log, &mut self.last, self.options);
+                            self.log.names.len() - 1
+                        }
+                    };
+                    if columns.contains(&column) {
+                        return Err(fail(format!("joint {name:?} is named twice")));
+                    }
+                    columns.push(column);
+                }
+                self.layouts.insert(key.to_vec(), columns);
+            }
+            self.recent.0.clear();
+            self.recent.0.extend_from_slice(key);
+            self.recent.1.clone_from(&self.layouts[key]);
+        }
+        let columns = &self.recent.1;
+        let n = columns.len();
         for (k, v) in m.values.iter().enumerate() {
             if !v.is_empty() && v.len() != n {
                 let what = ["position", "velocity", "effort"][k];
@@ -413,30 +451,6 @@ impl<'a> Reader<'a> {
                 )));
             }
         }
-        // Each entry's column: from the layouts met before (drivers send the same names in
-        // every message), or made now, adding the new names as columns.
-        let key = &data[m.names_bytes.0..m.names_bytes.1];
-        if !self.layouts.contains_key(key) {
-            let mut columns = Vec::with_capacity(n);
-            for &(from, to) in &m.names {
-                let name = std::str::from_utf8(&data[from..to])
-                    .map_err(|_| fail("a joint name is not UTF-8".into()))?;
-                let column = match self.log.names.iter().position(|x| x == name) {
-                    Some(c) => c,
-                    None => {
-                        self.log.names.push(name.to_string());
-                        widen(&mut self.log, &mut self.last, self.options);
-                        self.log.names.len() - 1
-                    }
-                };
-                if columns.contains(&column) {
-                    return Err(fail(format!("joint {name:?} is named twice")));
-                }
-                columns.push(column);
-            }
-            self.layouts.insert(key.to_vec(), columns);
-        }
-        let columns = &self.layouts[key];
         self.log.time.push(time);
         let width = self.log.names.len();
         let hold = self.options.missing == Missing::Hold;
@@ -510,6 +524,7 @@ fn decode(
     data: &[u8],
     m: &mut Message,
     options: &JointStateOptions,
+    recent: &[u8],
 ) -> Result<(), String> {
     let mut r = match encoding {
         Encoding::Cdr => Wire::cdr(data)?,
@@ -535,11 +550,18 @@ fn decode(
     };
     m.stamp = sec * 1_000_000_000 + i64::from(nanosec);
     r.string()?;
-    let count = r.count(4)?;
-    m.names.clear();
+    // The names, from their length on (4-aligned: the bytes alone say what they hold).
+    r.align(4);
     let start = r.pos;
-    for _ in 0..count {
-        m.names.push(r.string()?);
+    m.recent = !recent.is_empty() && data.get(start..).is_some_and(|d| d.starts_with(recent));
+    if m.recent {
+        r.pos += recent.len();
+    } else {
+        let count = r.count(4)?;
+        m.names.clear();
+        for _ in 0..count {
+            m.names.push(r.string()?);
+        }
     }
     m.names_bytes = (start, r.pos);
     let wanted = [true, options.velocities, options.efforts];

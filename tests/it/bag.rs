@@ -39,7 +39,7 @@ struct Writer {
 impl Writer {
     fn align(&mut self, n: usize) {
         let a = n.min(self.max_align);
-        while (self.bytes.len() - self.origin) % a != 0 {
+        while !(self.bytes.len() - self.origin).is_multiple_of(a) {
             self.bytes.push(0);
         }
     }
@@ -216,9 +216,11 @@ fn every_wire_format_reads_back_in_column_order() {
         Wire::Ros1,
     ] {
         let path = bag_of_full_states(&scratch, wire, 7);
-        let mut options = JointStateOptions::default();
-        options.velocities = true;
-        options.efforts = true;
+        let options = JointStateOptions {
+            velocities: true,
+            efforts: true,
+            ..JointStateOptions::default()
+        };
         let log = read_joint_states(Path::new(&path), &options).unwrap();
         assert_eq!(log.names, ["a", "b", "c"]);
         assert_eq!(log.len(), 7);
@@ -303,7 +305,7 @@ fn subsets_from_two_publishers_hold_or_leave_nan() {
         encoding: "cdr",
     };
     let cdr = Wire::Cdr { little: true };
-    let messages = vec![
+    let messages = [
         (0, 10, serialise(&arm, cdr)),
         (2, 11, vec![1, 2, 3]),
         (1, 12, serialise(&gripper, cdr)),
@@ -341,8 +343,10 @@ fn subsets_from_two_publishers_hold_or_leave_nan() {
     }
     w.finish().unwrap();
 
-    let mut options = JointStateOptions::default();
-    options.velocities = true;
+    let mut options = JointStateOptions {
+        velocities: true,
+        ..JointStateOptions::default()
+    };
     let held = read_joint_states(Path::new(&path), &options).unwrap();
     assert_eq!(held.names, ["b", "a", "g"]);
     assert_eq!(held.time, [1_000_000_000, 2_000_000_000, 3_000_000_000]);
@@ -384,8 +388,10 @@ fn a_cut_off_bag_is_an_error_or_its_messages_before_the_cut() {
         text.contains("cut.mcap") && text.contains("/joint_states"),
         "{text}"
     );
-    let mut options = JointStateOptions::default();
-    options.keep_truncated = true;
+    let options = JointStateOptions {
+        keep_truncated: true,
+        ..JointStateOptions::default()
+    };
     let log = read_joint_states(Path::new(&cut), &options).unwrap();
     assert!(log.truncated);
     assert_eq!(log.len(), *messages);

@@ -20,6 +20,7 @@ fn every_robot_loads_with_its_published_dof() {
         ("puma560_modified.yaml", 6),
         ("scara.yaml", 4),
         ("snake50.yaml", 50),
+        ("so101.urdf", 6),
         ("stanford.yaml", 6),
         ("ur5.yaml", 6),
     ];
