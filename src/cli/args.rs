@@ -173,6 +173,7 @@ pub(super) enum Level {
 }
 
 #[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("many").args(["batch", "bag"])))]
 pub(super) struct FkArgs {
     /// Robot file (.yaml/.yml DH table or .urdf).
     pub(super) robot: PathBuf,
@@ -221,9 +222,10 @@ pub(super) struct FkArgs {
     /// Evaluate joint values outside the joints' limits instead of refusing them.
     #[arg(long)]
     pub(super) ignore_limits: bool,
-    /// With --batch: on a bad line, write {"line": N, "error": ".."} (in a table, `line N:
-    /// error: ..`) in its place and go on; exit non-zero at the end if any line failed.
-    #[arg(long, requires = "batch")]
+    /// With --batch or --bag: on a bad line or message, write {"line": N, "error": ".."}
+    /// ({"time": T, ..} for a message; in a table, `line N: error: ..`) in its place and go on;
+    /// exit non-zero at the end if any failed.
+    #[arg(long, requires = "many")]
     pub(super) keep_going: bool,
     /// Output format.
     #[arg(long, value_enum, default_value_t = OutputFormat::Json)]

@@ -2,6 +2,8 @@
 //! message's time.
 
 use crate::cli::args::FkArgs;
+use crate::cli::batch::failed_line;
+use crate::cli::common::write_line;
 use crate::cli::error::CliError;
 use crate::cli::format::{Configuration, RowLabel};
 use crate::cli::query::Request;
@@ -41,7 +43,7 @@ pub(super) fn fk_bag(
             present: log.names,
         });
     }
-    let mut skipped = 0usize;
+    let (mut skipped, mut failed) = (0usize, 0usize);
     for (i, &time) in log.time.iter().enumerate() {
         let row = log.position_row(i);
         let q: Vec<f64> = columns.iter().map(|&c| row[c]).collect();
@@ -57,6 +59,10 @@ pub(super) fn fk_bag(
         match request.emit(chain, args, data, &c, Some(RowLabel::Time(time)), out) {
             Ok(()) => {}
             Err(e @ CliError::Io { .. }) => return Err(e),
+            Err(e) if args.keep_going => {
+                failed += 1;
+                write_line(out, &failed_line(chain, args, RowLabel::Time(time), &e))?;
+            }
             Err(e) => {
                 return Err(CliError::BagMessage {
                     path: path.to_path_buf(),
@@ -78,5 +84,11 @@ pub(super) fn fk_bag(
         context: "cannot write the output".into(),
         source,
     })?;
+    if failed > 0 {
+        return Err(CliError::BagFailures {
+            path: path.to_path_buf(),
+            count: failed,
+        });
+    }
     Ok(())
 }

@@ -162,7 +162,7 @@ impl PendingPoses {
                 },
                 Err(e) if args.keep_going => {
                     failed += 1;
-                    write_line(out, &failed_line(chain, args, line, &e))?;
+                    write_line(out, &failed_line(chain, args, RowLabel::Line(line), &e))?;
                 }
                 Err(e) => return Err(at_line(path, line, e)),
             }
@@ -410,7 +410,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
                     Err(e @ CliError::Io { .. }) => return Err(e),
                     Err(e) if args.keep_going => {
                         failed_lines += 1;
-                        write_line(out, &failed_line(chain, args, i + 1, &e))?;
+                        write_line(out, &failed_line(chain, args, RowLabel::Line(i + 1), &e))?;
                     }
                     Err(e) => return Err(at_line(path, i + 1, e)),
                 }
@@ -421,7 +421,7 @@ pub(super) fn fk_batch<R: std::io::Read>(
                     return Err(at_line(path, i + 1, e));
                 }
                 failed_lines += 1;
-                write_line(out, &failed_line(chain, args, i + 1, &e))?;
+                write_line(out, &failed_line(chain, args, RowLabel::Line(i + 1), &e))?;
             }
         }
     }
@@ -522,15 +522,24 @@ pub(super) fn read_capped_line(
 /// The output line standing in for a failed batch line under `--keep-going`: an object
 /// `{"line": N, "error": ".."}` in JSON output, `line N: error: ..` in a table, and in CSV the
 /// row of line N with its values empty and the message in the `error` column.
-pub(super) fn failed_line(chain: &Chain, args: &FkArgs, line: usize, e: &CliError) -> String {
-    match args.format {
-        OutputFormat::Json => json!({ "line": line, "error": error_chain(e) }).to_string(),
-        OutputFormat::Table => format!("line {line}: error: {}", error_chain(e)),
-        OutputFormat::Csv => {
+pub(super) fn failed_line(chain: &Chain, args: &FkArgs, label: RowLabel, e: &CliError) -> String {
+    let key = match label {
+        RowLabel::Line(_) => "line",
+        RowLabel::Time(_) => "time",
+    };
+    match (args.format, label) {
+        (OutputFormat::Json, RowLabel::Line(n)) => {
+            json!({ "line": n, "error": error_chain(e) }).to_string()
+        }
+        (OutputFormat::Json, RowLabel::Time(t)) => {
+            json!({ "time": t, "error": error_chain(e) }).to_string()
+        }
+        (OutputFormat::Table, _) => format!("{key} {label}: error: {}", error_chain(e)),
+        (OutputFormat::Csv, _) => {
             let fields =
                 csv_links(chain, args).len() * (3 + orientation_columns(args.orientation).len());
             format!(
-                "{line}{},{}",
+                "{label}{},{}",
                 ",".repeat(fields),
                 csv_field(&error_chain(e))
             )

@@ -105,6 +105,14 @@ pub enum CliError {
         #[source]
         source: Box<CliError>,
     },
+    /// Some bag messages failed under `--keep-going`.
+    #[error("{}: {count} message(s) failed (their errors are in the output, each in its message's place)", path.display())]
+    BagFailures {
+        /// The bag.
+        path: PathBuf,
+        /// Messages that failed.
+        count: usize,
+    },
     /// A batch line is longer than any configuration of the chain could need.
     #[error("the line is longer than {limit} bytes, the most read for one configuration")]
     LineTooLong {

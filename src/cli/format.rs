@@ -568,8 +568,8 @@ pub(super) fn csv_field(text: &str) -> String {
 }
 
 /// The CSV header: `line` (with `--batch`) or `time` (with `--bag`), then `<link>.x`, `<link>.y`, `<link>.z` and the
-/// orientation columns of every link printed, then `error` (with `--batch`: the message of a
-/// line that failed under `--keep-going`). The names of `kinechain.table.poses` in Python.
+/// orientation columns of every link printed, then `error` (with `--batch` or `--bag`: the
+/// message of a line or message that failed under `--keep-going`). The names of `kinechain.table.poses` in Python.
 pub(super) fn csv_header(chain: &Chain, args: &FkArgs) -> String {
     let mut fields: Vec<String> = Vec::new();
     if args.batch.is_some() {
@@ -585,7 +585,7 @@ pub(super) fn csv_header(chain: &Chain, args: &FkArgs) -> String {
             fields.push(csv_field(&format!("{link}.{c}")));
         }
     }
-    if args.batch.is_some() {
+    if args.batch.is_some() || args.bag.is_some() {
         fields.push("error".into());
     }
     fields.join(",")
@@ -623,8 +623,8 @@ pub(super) fn csv_row(
             None => (0..width).for_each(|_| push(&mut row, None)),
         }
     }
-    // The empty `error` field of a batch line.
-    if let Some(RowLabel::Line(_)) = line {
+    // The empty `error` field of a batch line or bag message.
+    if line.is_some() {
         row.push(',');
     }
     buf.extend_from_slice(row.as_bytes());
