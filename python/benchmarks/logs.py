@@ -17,13 +17,15 @@ import os
 import struct
 import sys
 import tempfile
-import time
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 import kinechain as kc
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from table import best  # noqa: E402  (the shortest of a few rounds, as the table benchmark times)
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 SO101 = os.path.join(ROOT, "robots", "so101.urdf")
@@ -34,15 +36,6 @@ JOINT_STATE = ("std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat
                "builtin_interfaces/Time stamp\nstring frame_id\n"
                "================================================================================\n"
                "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n")
-
-
-def best(f, rounds=3):
-    times = []
-    for _ in range(rounds):
-        start = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def cpu():

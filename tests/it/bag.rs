@@ -188,7 +188,14 @@ fn bag_of_full_states(scratch: &Scratch, wire: Wire, n: usize) -> String {
         },
         _ => JOINT_STATES,
     };
-    let messages: Vec<_> = (0..n)
+    let path = scratch.path("full.mcap");
+    write_bag(&path, &[channel], &full_messages(n, wire), None);
+    path
+}
+
+/// `n` messages of [`full`] states, stamped `i` s + 5 ns, on channel 0.
+fn full_messages(n: usize, wire: Wire) -> Vec<(usize, u64, Vec<u8>)> {
+    (0..n)
         .map(|i| {
             let (names, p, v, e) = full(i);
             let state = State {
@@ -200,10 +207,7 @@ fn bag_of_full_states(scratch: &Scratch, wire: Wire, n: usize) -> String {
             };
             (0, 1_000 + i as u64, serialise(&state, wire))
         })
-        .collect();
-    let path = scratch.path("full.mcap");
-    write_bag(&path, &[channel], &messages, None);
-    path
+        .collect()
 }
 
 #[test]
@@ -243,23 +247,7 @@ fn compressed_chunks_read_as_plain_ones() {
     let plain = bag_of_full_states(&scratch, Wire::Cdr { little: true }, 500);
     let expected = read_joint_states(Path::new(&plain), &JointStateOptions::default()).unwrap();
     for compression in [mcap::Compression::Zstd, mcap::Compression::Lz4] {
-        let messages: Vec<_> = (0..500)
-            .map(|i| {
-                let (names, p, v, e) = full(i);
-                let state = State {
-                    stamp: (i32::try_from(i).unwrap(), 5),
-                    names: &names,
-                    position: &p,
-                    velocity: &v,
-                    effort: &e,
-                };
-                (
-                    0,
-                    1_000 + i as u64,
-                    serialise(&state, Wire::Cdr { little: true }),
-                )
-            })
-            .collect();
+        let messages = full_messages(500, Wire::Cdr { little: true });
         let path = scratch.path("compressed.mcap");
         write_bag(&path, &[JOINT_STATES], &messages, Some(compression));
         let log = read_joint_states(Path::new(&path), &JointStateOptions::default()).unwrap();
