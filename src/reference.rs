@@ -81,16 +81,15 @@ fn term(t: &Term, q: &[f64]) -> F {
     }
 }
 
-/// The frame of a floating joint's body, `pre · [A(e) p] · post` with `A(e)` the matrix of the
-/// normalised Euler parameters (eq. 2.13), as `eval::kernel::floating` writes it.
-fn floating_local(body: &Body, q: &[f64]) -> BigFrame {
-    let pre = BigFrame::from_transform(&body.pre_frame);
-    let e: [F; 4] = std::array::from_fn(|k| exact(q[3 + k]));
+/// `A(e)` (eq. 2.13) of the normalised Euler parameters `e` (four entries), by columns, as
+/// `eval::kernel::ball::columns` writes it.
+fn euler_columns(e: &[f64]) -> [[F; 3]; 3] {
+    let e: [F; 4] = std::array::from_fn(|k| exact(e[k]));
     let n2 = &e[0] * &e[0] + &e[1] * &e[1] + &e[2] * &e[2] + &e[3] * &e[3];
     let s = exact(2.0) / n2;
     let one = exact(1.0);
     let sq = |i: usize, j: usize| &e[i] * &e[j];
-    let r = [
+    [
         [
             &one - &s * (sq(2, 2) + sq(3, 3)),
             &s * (sq(1, 2) + sq(0, 3)),
@@ -106,10 +105,22 @@ fn floating_local(body: &Body, q: &[f64]) -> BigFrame {
             &s * (sq(2, 3) - sq(0, 1)),
             &one - &s * (sq(1, 1) + sq(2, 2)),
         ],
-    ];
-    let own = BigFrame {
-        r,
-        p: [exact(q[0]), exact(q[1]), exact(q[2])],
+    ]
+}
+
+/// The frame of a floating joint's body, `pre · [A(e) p] · post`, or of a ball joint's,
+/// `pre · [A(e) 0] · post` (`eval::kernel::floating`, `eval::kernel::ball`).
+fn quaternion_local(body: &Body, q: &[f64]) -> BigFrame {
+    let pre = BigFrame::from_transform(&body.pre_frame);
+    let own = match body.ball {
+        Some(ball) => BigFrame {
+            r: euler_columns(&q[ball.q..ball.q + 4]),
+            p: [F::ZERO, F::ZERO, F::ZERO],
+        },
+        None => BigFrame {
+            r: euler_columns(&q[3..7]),
+            p: [exact(q[0]), exact(q[1]), exact(q[2])],
+        },
     };
     let post = BigFrame::from_transform(&body.post.to_transform());
     pre.compose(&own).compose(&post)
@@ -118,8 +129,8 @@ fn floating_local(body: &Body, q: &[f64]) -> BigFrame {
 /// `pre · M(θ, d) · post` of one body, exactly (Rodrigues' formula, eq. 2.112, with the model's
 /// unit axis taken as exact).
 fn local(body: &Body, q: &[f64]) -> BigFrame {
-    if body.floating {
-        return floating_local(body, q);
+    if body.floating || body.ball.is_some() {
+        return quaternion_local(body, q);
     }
     let pre = BigFrame::from_transform(&body.pre_frame);
     let v = body.motion.axis.vector().map(exact);
@@ -262,12 +273,11 @@ fn scale(s: &F, a: &[F; 3]) -> [F; 3] {
     std::array::from_fn(|k| s * &a[k])
 }
 
-/// The rate of a term from `q̇` or `q̈` (whose entries are `shift` before those of `q`: one after
-/// a floating joint).
-fn rate(t: &Term, rates: &[f64], shift: usize) -> F {
-    match *t {
-        Term::Const(_) => F::ZERO,
-        Term::Var { index, scale, .. } => exact(scale) * exact(rates[index - shift]),
+/// The rate of a θ or d term from `q̇` or `q̈`.
+fn rate(t: &crate::eval::layout::body::RateTerm, rates: &[f64]) -> F {
+    match t.scale {
+        0.0 => F::ZERO,
+        scale => exact(scale) * exact(rates[t.index]),
     }
 }
 
@@ -296,7 +306,6 @@ pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> V
         q.len() == chain.nq() && q_dot.len() == chain.nv() && q_ddot.len() == chain.nv(),
         "joint vectors have the wrong length"
     );
-    let shift = chain.nq() - chain.nv();
     let zero = || [F::ZERO, F::ZERO, F::ZERO];
     let mut bodies: Vec<BigMotion> = Vec::with_capacity(chain.bodies.len());
     for body in &chain.bodies {
@@ -338,11 +347,32 @@ pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> V
             ),
             None => (zero(), zero(), zero(), zero(), zero()),
         };
-        let m = &body.motion;
-        let (th_d, d_d) = (rate(&m.theta, q_dot, shift), rate(&m.d, q_dot, shift));
-        let (th_dd, d_dd) = (rate(&m.theta, q_ddot, shift), rate(&m.d, q_ddot, shift));
+        let (th_d, d_d) = (rate(&body.theta_rate, q_dot), rate(&body.d_rate, q_dot));
+        let (th_dd, d_dd) = (rate(&body.theta_rate, q_ddot), rate(&body.d_rate, q_ddot));
         let u = sub(&frame.p, &p_joint);
         let r = sub(&frame.p, &p_parent);
+        if let Some(ball) = body.ball {
+            // The recursion of `eval::kernel::ball`.
+            let three = |x: &[f64]| [exact(x[ball.v]), exact(x[ball.v + 1]), exact(x[ball.v + 2])];
+            let (w, eps) = (three(q_dot), three(q_ddot));
+            let v_rel = cross(&w, &u);
+            let w_r = cross(&w_p, &r);
+            let a = add(
+                &add(&a_p, &add(&cross(&al_p, &r), &cross(&w_p, &w_r))),
+                &add(
+                    &scale(&exact(2.0), &cross(&w_p, &v_rel)),
+                    &add(&cross(&eps, &u), &cross(&w, &v_rel)),
+                ),
+            );
+            bodies.push(BigMotion {
+                frame,
+                omega: add(&w_p, &w),
+                v: add(&add(&v_p, &w_r), &v_rel),
+                alpha: add(&add(&al_p, &eps), &cross(&w_p, &w)),
+                a,
+            });
+            continue;
+        }
         let z_u = cross(&z, &u);
         let v_rel = add(&scale(&d_d, &z), &scale(&th_d, &z_u));
         let w_r = cross(&w_p, &r);

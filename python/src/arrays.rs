@@ -40,14 +40,30 @@ pub(crate) fn wrong_width(chain: &Inner, what: &str, len: usize) -> String {
     } else {
         (chain.nv(), kinechain::regression::velocity_names(chain))
     };
-    let share = match chain.floating_joint() {
-        Some(f) => format!(
-            ": {} for the floating joint '{}', {} for the others",
-            if what == "q" { 7 } else { 6 },
-            chain.joint(f).name(),
-            width - if what == "q" { 7 } else { 6 }
-        ),
-        None => String::new(),
+    // What the joints of several entries for one rotation take, and the others.
+    let own = |j: kinechain::JointId| {
+        let kind = chain.joint(j).kind();
+        if what == "q" { kind.nq() } else { kind.dof() }
+    };
+    let parts = chain.quaternions();
+    let share = match parts {
+        [] => String::new(),
+        _ => {
+            let each: Vec<String> = parts
+                .iter()
+                .map(|&(j, _)| {
+                    let joint = chain.joint(j);
+                    format!(
+                        "{} for the {} joint '{}'",
+                        own(j),
+                        joint.kind(),
+                        joint.name()
+                    )
+                })
+                .collect();
+            let rest = width - parts.iter().map(|&(j, _)| own(j)).sum::<usize>();
+            format!(": {}, {rest} for the others", each.join(", "))
+        }
     };
     format!(
         "{what} has {len} entries per configuration; the chain '{}' takes {width}{share} (in order: {})",

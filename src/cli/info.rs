@@ -102,14 +102,7 @@ pub(super) fn info(
                 chain.name(),
                 chain.dof(),
                 if chain.dof() == 1 { "" } else { "s" },
-                match chain.floating_joint() {
-                    Some(f) => format!(
-                        "; q has {} entries (the floating joint '{}': x y z, then the quaternion qw qx qy qz)",
-                        chain.nq(),
-                        chain.joint(f).name()
-                    ),
-                    None => String::new(),
-                }
+                quaternion_note(&chain)
             );
             text.push_str(&format!(
                 "{:>4}  {:<28} {:<12} {}\n",
@@ -162,5 +155,28 @@ pub(super) fn info(
             }
             write_line(out, &text)
         }
+    }
+}
+
+/// What `q` holds beyond one entry per degree of freedom: the floating joint's position and
+/// quaternion, each ball joint's quaternion (empty for chains without).
+fn quaternion_note(chain: &crate::Chain) -> String {
+    let parts: Vec<String> = chain
+        .quaternions()
+        .iter()
+        .map(|&(j, _)| {
+            let joint = chain.joint(j);
+            match joint.kind() {
+                crate::JointKind::Floating => format!(
+                    "the floating joint '{}': x y z, then the quaternion qw qx qy qz",
+                    joint.name()
+                ),
+                _ => format!("the ball joint '{}': qw qx qy qz", joint.name()),
+            }
+        })
+        .collect();
+    match parts.as_slice() {
+        [] => String::new(),
+        _ => format!("; q has {} entries ({})", chain.nq(), parts.join("; ")),
     }
 }

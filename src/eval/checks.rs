@@ -39,19 +39,31 @@ pub(crate) fn wrong_length(
     expected: usize,
     got: usize,
 ) -> StateError {
-    match chain.floating_joint() {
-        Some(j) => StateError::WrongLengthFloating {
+    if chain.quaternions().is_empty() {
+        return StateError::WrongLength {
             what,
             expected,
             got,
-            joint: chain.joint(j).name().to_string(),
-            own: if what == "q" { 7 } else { 6 },
-        },
-        None => StateError::WrongLength {
-            what,
-            expected,
-            got,
-        },
+        };
+    }
+    let parts = chain
+        .quaternions()
+        .iter()
+        .map(|&(j, _)| {
+            let joint = chain.joint(j);
+            let n = if what == "q" {
+                joint.kind().nq()
+            } else {
+                joint.kind().dof()
+            };
+            (joint.name().to_string(), n, joint.kind().as_str())
+        })
+        .collect();
+    StateError::WrongLengthParts {
+        what,
+        expected,
+        got,
+        parts,
     }
 }
 
@@ -93,19 +105,22 @@ pub(crate) fn check_values(
     Ok(())
 }
 
-/// A floating joint's quaternion (entries 3–6 of `q`, finite) near unit length.
+/// Each floating or ball joint's quaternion (finite) near unit length.
 #[inline]
 pub(crate) fn check_quaternion(chain: &Chain, q: &[f64]) -> Result<(), StateError> {
-    match chain.floating_joint() {
-        Some(j) if !crate::eval::kernel::floating::admits(&q[3..7]) => {
-            Err(StateError::BadQuaternion {
+    for &(j, first) in chain.quaternions() {
+        let e = &q[first..first + 4];
+        if !crate::eval::kernel::floating::admits(e) {
+            return Err(StateError::BadQuaternion {
                 joint: chain.joint(j).name().to_string(),
-                norm: q[3..7].iter().map(|x| x * x).sum::<f64>().sqrt(),
+                kind: chain.joint(j).kind().as_str(),
+                first,
+                norm: e.iter().map(|x| x * x).sum::<f64>().sqrt(),
                 tolerance: crate::eval::kernel::floating::QUATERNION_TOLERANCE,
-            })
+            });
         }
-        _ => Ok(()),
     }
+    Ok(())
 }
 
 /// See [`all_valid`]; `A` only selects the target features it is compiled with.
@@ -122,10 +137,13 @@ fn all_valid_generic<A: Arith>(chain: &Chain, qs: &[f64], policy: LimitPolicy) -
             || qs
                 .chunks_exact(chain.nq())
                 .all(|q| chain.limit_checks.iter().all(|c| c.admits(q))))
-        && (chain.floating_joint().is_none()
-            || qs
-                .chunks_exact(chain.nq())
-                .all(|q| crate::eval::kernel::floating::admits(&q[3..7])))
+        && (chain.quaternions().is_empty()
+            || qs.chunks_exact(chain.nq()).all(|q| {
+                chain
+                    .quaternions()
+                    .iter()
+                    .all(|&(_, i)| crate::eval::kernel::floating::admits(&q[i..i + 4]))
+            }))
 }
 
 /// Checks `q` (length, finiteness, and limits under [`LimitPolicy::Enforce`]).

@@ -2,7 +2,7 @@
 //! fixed joints folded into its placements, the limit checks, and the lookup tables of the
 //! evaluation paths.
 
-use crate::eval::layout::body::{Body, Carrier, Placement, ThetaGather};
+use crate::eval::layout::body::{Ball, Body, Carrier, Placement, ThetaGather};
 use crate::eval::layout::chain::Chain;
 use crate::eval::layout::limits::{DenseLimits, LimitCheck};
 use crate::eval::simd::portable::Separate;
@@ -45,6 +45,17 @@ pub(crate) fn assemble(
     mimic: &[Option<Resolved>],
     new_joint: &[usize],
 ) -> Assembled {
+    // The entry of `q̇` of entry `i` of `q` (a one-coordinate entry): each quaternion joint
+    // before it takes one entry of `q` more than of `q̇`.
+    let quaternion_entries: Vec<usize> = tree
+        .joint_order
+        .iter()
+        .filter_map(|&j| {
+            let kind = spec.joints[j].kind;
+            Some(q_index[j]? + kind.quaternion()?)
+        })
+        .collect();
+    let v_of_q = |i: usize| i - quaternion_entries.iter().filter(|&&e| e < i).count();
     let root = tree.root;
     let mut link_carrier: Vec<(Option<usize>, Placement)> =
         vec![(None, Placement::Identity); spec.links.len()];
@@ -96,6 +107,29 @@ pub(crate) fn assemble(
             continue;
         }
 
+        if js.kind == JointKind::Ball {
+            // Its frame and rates come from its own entries of `q` and `q̇`
+            // ([`Body::ball`]); the zero motion about x keeps it off the kernels' z-axis paths.
+            let body = bodies.len();
+            bodies.push(Body {
+                follows_previous: carrier.is_some() && carrier == body.checked_sub(1),
+                rate_shape: Body::BALL,
+                ball: Some(Ball {
+                    q: first,
+                    v: v_of_q(first),
+                }),
+                ..Body::new(
+                    carrier,
+                    compose(offset, origin),
+                    Motion::new(Axis::X, Term::Const(0.0), Term::Const(0.0)),
+                    post,
+                    new_joint[j],
+                )
+            });
+            link_carrier[child] = (Some(body), Placement::Identity);
+            continue;
+        }
+
         if js.kind == JointKind::Fixed {
             let motion = crate::eval::compile::constant_motion(&Motion::new(
                 Axis::from_unit(axis),
@@ -133,17 +167,15 @@ pub(crate) fn assemble(
             bodies[p].branches = true;
         }
     }
-    // After a floating joint (the first: seven entries of `q`, six of `q̇`), a joint's entry
-    // of `q̇` is one before its entry of `q`.
-    if bodies.first().is_some_and(|b| b.floating) {
-        for b in &mut bodies {
-            for (rate, term) in [
-                (&mut b.theta_rate, b.motion.theta),
-                (&mut b.d_rate, b.motion.d),
-            ] {
-                if let Term::Var { index, .. } = term {
-                    rate.index = index - 1;
-                }
+    // After a floating or ball joint (seven entries of `q` for six of `q̇`, four for three), a
+    // joint's entry of `q̇` is before its entry of `q`.
+    for b in &mut bodies {
+        for (rate, term) in [
+            (&mut b.theta_rate, b.motion.theta),
+            (&mut b.d_rate, b.motion.d),
+        ] {
+            if let Term::Var { index, .. } = term {
+                rate.index = v_of_q(index);
             }
         }
     }
@@ -176,7 +208,9 @@ fn joint_terms(
         }
     };
     match js.kind {
-        JointKind::Fixed | JointKind::Floating => (Term::Const(js.theta), Term::Const(js.d)),
+        JointKind::Fixed | JointKind::Floating | JointKind::Ball => {
+            (Term::Const(js.theta), Term::Const(js.d))
+        }
         JointKind::Revolute | JointKind::Continuous => (var(first, js.theta), Term::Const(js.d)),
         JointKind::Prismatic => (Term::Const(js.theta), var(first, js.d)),
         JointKind::Cylindrical => (var(first, js.theta), var(first + 1, js.d)),
@@ -378,9 +412,13 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             column_terms[t.index] += 1;
         }
     }
-    // A floating joint's body writes the first six columns, once each.
-    if bodies.first().is_some_and(|b| b.floating) {
-        column_terms[..6].fill(1);
+    // A floating joint's body writes the first six columns, a ball joint's its three, once each.
+    for b in &bodies {
+        match (b.floating, b.ball) {
+            (true, _) => column_terms[..6].fill(1),
+            (false, Some(ball)) => column_terms[ball.v..ball.v + 3].fill(1),
+            (false, None) => {}
+        }
     }
     Ok(Chain {
         column_terms,

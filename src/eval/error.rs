@@ -14,31 +14,36 @@ pub enum StateError {
         /// Entries given.
         got: usize,
     },
-    /// A vector of a chain with a floating joint has the wrong number of entries.
+    /// A vector of a chain with a floating or ball joint has the wrong number of entries.
     #[error(
-        "{what} has {got} entries; the chain takes {expected}: {own} for the floating joint '{joint}', {} for the others",
-        expected - own
+        "{what} has {got} entries; the chain takes {expected}: {}{} for the others",
+        shares(parts),
+        expected - parts.iter().map(|p| p.1).sum::<usize>()
     )]
-    WrongLengthFloating {
+    WrongLengthParts {
         /// `q`, `q_dot` or `q_ddot`.
         what: &'static str,
         /// Entries expected ([`Model::nq`](crate::Model::nq) or [`Model::nv`](crate::Model::nv)).
         expected: usize,
         /// Entries given.
         got: usize,
-        /// The floating joint.
-        joint: String,
-        /// Its entries (7 of `q`, 6 of a rate).
-        own: usize,
+        /// The joints that take several entries each for one rotation (the floating joint: 7 of
+        /// `q`, 6 of a rate; a ball joint: 4 and 3), with their kinds and entries.
+        parts: Vec<(String, usize, &'static str)>,
     },
-    /// A floating joint's quaternion is not one the kernels evaluate: zero, or off unit length
+    /// A floating or ball joint's quaternion is not one the kernels evaluate: zero, or off unit length
     /// by more than [`QUATERNION_TOLERANCE`](crate::QUATERNION_TOLERANCE).
     #[error(
-        "the quaternion of floating joint '{joint}' (q[3..7], w x y z) has norm {norm}: it must be within {tolerance} of 1 (it is then normalised)"
+        "the quaternion of {kind} joint '{joint}' (q[{first}..{}], w x y z) has norm {norm}: it must be within {tolerance} of 1 (it is then normalised)",
+        first + 4
     )]
     BadQuaternion {
-        /// The floating joint.
+        /// The floating or ball joint.
         joint: String,
+        /// `floating` or `ball`.
+        kind: &'static str,
+        /// The index of the quaternion's first entry (w) in `q`.
+        first: usize,
         /// The quaternion's norm.
         norm: f64,
         /// How far from 1 the norm may be.
@@ -57,7 +62,7 @@ pub enum StateError {
         got: usize,
     },
     /// A joint asked for as a screw (θ and d about one axis) that is not one.
-    #[error("joint '{joint}' is floating: its motion is not a screw about one axis")]
+    #[error("joint '{joint}' turns by a quaternion: its motion is not a screw about one axis")]
     NoScrew {
         /// The joint.
         joint: String,
@@ -128,6 +133,14 @@ pub enum StateError {
         /// Upper limit.
         upper: f64,
     },
+}
+
+/// `7 for the floating joint 'root', 4 for the ball joint 'hip', ` (each part and a comma).
+fn shares(parts: &[(String, usize, &'static str)]) -> String {
+    parts
+        .iter()
+        .map(|(joint, n, kind)| format!("{n} for the {kind} joint '{joint}', "))
+        .collect()
 }
 
 fn component_suffix(c: &Option<&'static str>) -> String {

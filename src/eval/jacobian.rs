@@ -82,13 +82,15 @@ pub(crate) fn axis_parts(s: &impl State, body: &Body) -> ([f64; 3], [f64; 3], [f
 ///
 /// A floating joint's body gives its six columns (entries 0–5 of `q̇`) from `floating`: for each
 /// world axis `e_k`, the columns of a slide along it and of a turn about it through the body's
-/// origin.
+/// origin. A ball joint's body gives its three from `columns` with the axis `Some(e_k)`: the
+/// turning columns of revolute axes fixed in the parent's frame, through the joint origin, that
+/// are the world axes in this configuration ([`crate::eval::kernel::ball`]).
 #[inline(always)]
 fn path_columns(
     s: &impl State,
     link: LinkId,
     j: &mut [f64],
-    mut columns: impl FnMut(&Body) -> ([f64; 6], [f64; 6]),
+    mut columns: impl FnMut(&Body, Option<[f64; 3]>) -> ([f64; 6], [f64; 6]),
     mut floating: impl FnMut(usize, [f64; 3]) -> ([f64; 6], [f64; 6]),
 ) {
     let chain = s.chain();
@@ -96,6 +98,16 @@ fn path_columns(
     let mut body = chain.carrier(link).body;
     while let Some(b) = body {
         let bd = &chain.bodies[b];
+        if let Some(ball) = bd.ball {
+            for k in 0..3 {
+                let mut e = [0.0; 3];
+                e[k] = 1.0;
+                let (turning, _) = columns(bd, Some(e));
+                j[6 * (ball.v + k)..6 * (ball.v + k) + 6].copy_from_slice(&turning);
+            }
+            body = bd.parent;
+            continue;
+        }
         if bd.floating {
             for k in 0..3 {
                 let mut e = [0.0; 3];
@@ -107,7 +119,7 @@ fn path_columns(
             body = bd.parent;
             continue;
         }
-        let (turning, sliding) = columns(bd);
+        let (turning, sliding) = columns(bd, None);
         for (rate, terms) in [(bd.theta_rate, turning), (bd.d_rate, sliding)] {
             if rate.scale != 0.0 {
                 let column = &mut j[6 * rate.index..6 * rate.index + 6];
@@ -155,8 +167,9 @@ pub(crate) fn jacobian(s: &impl State, link: LinkId, frame: JacobianFrame, j: &m
         s,
         link,
         j,
-        |bd| {
+        |bd, world_axis| {
             let (parent_origin, offset, z) = axis_parts(s, bd);
+            let z = world_axis.unwrap_or(z);
             let origin = add3(parent_origin, offset);
             let turning = cross3(z, sub3(p, origin));
             (join(turning, z), join(z, [0.0; 3]))
@@ -202,8 +215,9 @@ pub(crate) fn jacobian_dot(s: &impl State, link: LinkId, frame: JacobianFrame, j
         s,
         link,
         j,
-        |bd| {
+        |bd, world_axis| {
             let (parent_origin, offset, z) = axis_parts(s, bd);
+            let z = world_axis.unwrap_or(z);
             let origin = add3(parent_origin, offset);
             // The frame before the joint turns at ω and its origin moves at v; the axis point
             // at v + ω × offset (the offset in world axes, not a difference of origins).
@@ -372,6 +386,25 @@ fn stored_jacobian_generic<A: Arith>(
                 C::<A>::from_entries(pad(bd.axis_in_parent)),
             ),
         };
+        if let Some(ball) = bd.ball {
+            // Three columns, written once: turns about the world axes through the joint origin.
+            for k in 0..3 {
+                let mut e = [0.0; 4];
+                e[k] = 1.0;
+                let z = C::<A>::from_entries(e);
+                let turning = cross4(z, C::<A>::sub(p, origin));
+                let column = &mut j[6 * (ball.v + k)..6 * (ball.v + k) + 6];
+                for (half, x) in column.chunks_exact_mut(3).zip([turning, z]) {
+                    let mut x = entries(x);
+                    if link_axes {
+                        x = entries(to_link(x));
+                    }
+                    half.copy_from_slice(&x);
+                }
+            }
+            at = bd.parent;
+            continue;
+        }
         let turning = cross4(z, C::<A>::sub(p, origin));
         for (rate, halves) in [(bd.theta_rate, [turning, z]), (bd.d_rate, [z, zero])] {
             if rate.scale != 0.0 {

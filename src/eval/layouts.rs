@@ -82,6 +82,8 @@ enum Entry {
     },
     /// A floating joint.
     Free,
+    /// A ball joint: its quaternion from `q`, its rates from `v`, `body` its body.
+    Ball { q: usize, v: usize, body: usize },
 }
 
 impl Entry {
@@ -91,6 +93,7 @@ impl Entry {
             Entry::Same { .. } => (1, 1),
             Entry::CosSin { .. } => (2, 1),
             Entry::Free => (7, 6),
+            Entry::Ball { .. } => (4, 3),
         }
     }
 }
@@ -132,10 +135,24 @@ fn entries(chain: &Chain, layout: Layout) -> Vec<Entry> {
             continue;
         };
         let mimic = joint.q_index().is_none();
-        // Entries of `q̇` after a floating joint's are one before those of `q`.
-        let v = q - (chain.nq() - chain.nv()).min(q);
+        // The entry of `q̇`: the joint's own, or its primary's.
+        let Some(v) = joint.v_index().or_else(|| {
+            let primary = joint.mimic()?.primary;
+            chain.joints()[primary.index()].v_index()
+        }) else {
+            continue;
+        };
         match joint.kind() {
             JointKind::Floating => out.push(Entry::Free),
+            JointKind::Ball => {
+                let body = chain
+                    .bodies
+                    .iter()
+                    .position(|b| b.ball.is_some_and(|b| b.q == q));
+                if let Some(body) = body {
+                    out.push(Entry::Ball { q, v, body });
+                }
+            }
             JointKind::Fixed => {}
             JointKind::Cylindrical => {
                 out.push(rotation(layout, joint, 0, q, v, scale, offset, mimic));
@@ -202,6 +219,41 @@ fn base_rotation(chain: &Chain, q: &[f64]) -> Transform {
     }
 }
 
+/// The rotation in the world of each ball joint's frame at kinechain's `q`, after its turn and
+/// before the body's `post` placement (`A_k A_postᵀ`, `A_k` the body's rotation): the axes of
+/// the body-frame rates of Pinocchio's spherical joint and MuJoCo's ball joint. By body index;
+/// the identity for other bodies.
+fn ball_rotations(chain: &Chain, q: &[f64]) -> Vec<Transform> {
+    use crate::eval::kernel::frame::Frame;
+    use crate::eval::kernel::pose_lanes::pose_step;
+    use crate::eval::simd::portable::Separate;
+    let mut frames: Vec<Frame<f64>> = Vec::with_capacity(chain.bodies.len());
+    for body in &chain.bodies {
+        let sin_cos = crate::eval::kernel::joint::body_sin_cos::<f64, Separate>(body, q);
+        let f = match body.parent {
+            Some(p) => pose_step::<f64, Separate>(Some(&frames[p]), body, q, sin_cos),
+            None if body.floating => Frame::splat(&crate::eval::kernel::floating::frame(body, q)),
+            None => pose_step::<f64, Separate>(None, body, q, sin_cos),
+        };
+        frames.push(f);
+    }
+    chain
+        .bodies
+        .iter()
+        .zip(frames)
+        .map(|(body, f)| match body.ball {
+            Some(_) => {
+                let frame = Transform::from(f) * body.post.to_transform().inverse();
+                Transform {
+                    p: [0.0; 3],
+                    ..frame
+                }
+            }
+            None => Transform::IDENTITY,
+        })
+        .collect()
+}
+
 /// `R̄ᵀ w`.
 fn to_body(r: &Transform, w: [f64; 3]) -> [f64; 3] {
     let c = &r.r;
@@ -257,8 +309,25 @@ impl Chain {
             q_dot: q_dot.map(|_| Vec::with_capacity(nv)),
             q_ddot: q_ddot.map(|_| Vec::with_capacity(nv)),
         };
-        for e in entries(self, layout) {
+        let entries = entries(self, layout);
+        let balls = match entries.iter().any(|e| matches!(e, Entry::Ball { .. })) {
+            true => ball_rotations(self, q),
+            false => Vec::new(),
+        };
+        for e in entries {
             match e {
+                Entry::Ball { q: i, v, body } => {
+                    let e = &q[i..i + 4];
+                    match layout {
+                        Layout::Pinocchio => out.q.extend([e[1], e[2], e[3], e[0]]),
+                        Layout::Mujoco => out.q.extend_from_slice(e),
+                    }
+                    for (o, x) in [(&mut out.q_dot, q_dot), (&mut out.q_ddot, q_ddot)] {
+                        if let (Some(o), Some(x)) = (o.as_mut(), x) {
+                            o.extend(to_body(&balls[body], three(&x[v..])));
+                        }
+                    }
+                }
                 Entry::Same {
                     q: i,
                     v,
@@ -350,6 +419,8 @@ impl Chain {
         };
         let (mut at_q, mut at_v) = (0, 0);
         let mut free = None;
+        // (entry of the layout's rates, kinechain's, body) of each ball joint.
+        let mut balls = Vec::new();
         for e in entries(self, layout) {
             let (dq, dv) = e.sizes();
             match e {
@@ -366,6 +437,14 @@ impl Chain {
                         }
                     }
                 }
+                Entry::Ball { q: i, v, body } => {
+                    let e = &q[at_q..at_q + 4];
+                    out.q[i..i + 4].copy_from_slice(&match layout {
+                        Layout::Pinocchio => [e[3], e[0], e[1], e[2]],
+                        Layout::Mujoco => [e[0], e[1], e[2], e[3]],
+                    });
+                    balls.push((at_v, v, body));
+                }
                 Entry::Free => {
                     out.q[..3].copy_from_slice(&q[at_q..at_q + 3]);
                     let e = &q[at_q + 3..at_q + 7];
@@ -381,6 +460,16 @@ impl Chain {
             at_v += dv;
         }
         check_values(self, &out.q, "q")?;
+        if !balls.is_empty() && (q_dot.is_some() || q_ddot.is_some()) {
+            let rotations = ball_rotations(self, &out.q);
+            for (at, v, body) in balls {
+                for (o, x) in [(&mut out.q_dot, q_dot), (&mut out.q_ddot, q_ddot)] {
+                    if let (Some(o), Some(x)) = (o.as_mut(), x) {
+                        o[v..v + 3].copy_from_slice(&rotations[body].apply(three(&x[at..])));
+                    }
+                }
+            }
+        }
         if let (Some(at), Some(qd)) = (free, q_dot) {
             let r = base_rotation(self, &out.q);
             let to_world = |u: [f64; 3]| r.apply(u);

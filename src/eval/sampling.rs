@@ -56,7 +56,8 @@ impl Chain {
     /// `n` random configurations, row-major (`n · nq` entries), the same for the same `seed`:
     /// each joint coordinate uniform within its limits ([`range`]: `[−π, π]` without limits, the
     /// 2π beside a single bound), a floating joint's position uniform in `[base.0, base.1]` along
-    /// each axis and its orientation a uniformly random rotation (a unit quaternion).
+    /// each axis and its orientation, like a ball joint's, a uniformly random rotation (a unit
+    /// quaternion).
     ///
     /// # Examples
     /// ```
@@ -81,6 +82,10 @@ impl Chain {
                         *x = between(base.0, base.1, rng.unit());
                     }
                     q[first + 3..first + 7].copy_from_slice(&rng.unit_quaternion());
+                    continue;
+                }
+                if j.kind() == JointKind::Ball {
+                    q[first..first + 4].copy_from_slice(&rng.unit_quaternion());
                     continue;
                 }
                 for (k, l) in j.limits().iter().enumerate() {

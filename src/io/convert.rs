@@ -36,6 +36,14 @@ pub enum ConvertError {
         /// The joint.
         joint: String,
     },
+    /// URDF has no ball joint.
+    #[error(
+        "joint '{joint}' is a ball joint, which URDF cannot write (it has no joint that turns by a quaternion)"
+    )]
+    BallJoint {
+        /// The joint.
+        joint: String,
+    },
     /// A name holds a character that an XML file cannot contain.
     #[error(
         "the name {name:?} holds the character U+{:04X}, which an XML file cannot contain",
@@ -224,7 +232,7 @@ fn moving_kind(
 /// The chain as URDF text; its links keep their names and poses.
 ///
 /// # Errors
-/// [`ConvertError`] for a prismatic joint without limits (URDF requires them), a generated
+/// [`ConvertError`] for a ball joint (URDF has none), a prismatic joint without limits (URDF requires them), a generated
 /// name that clashes with an existing one, or a name holding a character that XML cannot (a
 /// control character other than tab, line feed and carriage return), or a URDF larger than
 /// [`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES), which kinechain would not read back.
@@ -330,6 +338,10 @@ fn write_joint(w: &mut Writer, js: &JointSpec) -> Result<(), ConvertError> {
             js.limits[1],
             None,
         )?;
+    } else if js.kind == JointKind::Ball {
+        return Err(ConvertError::BallJoint {
+            joint: js.name.clone(),
+        });
     } else if js.kind == JointKind::Floating {
         w.joint(
             js.name.clone(),

@@ -77,6 +77,7 @@ enum RawKind {
     Cylindrical,
     Fixed,
     Floating,
+    Ball,
 }
 
 #[derive(Debug, Deserialize)]
@@ -450,7 +451,7 @@ impl Reader<'_> {
                 }
                 Ok(spec.with_axis(v))
             }
-            (None, JointKind::Fixed | JointKind::Floating) => Ok(spec),
+            (None, JointKind::Fixed | JointKind::Floating | JointKind::Ball) => Ok(spec),
             (None, _) => Err(self.problem("axis", FieldProblem::Missing { context })),
         }
     }
@@ -464,14 +465,15 @@ impl Reader<'_> {
     ) -> Result<[Option<Limits>; 2], LoadErrorKind> {
         match (&j.limits, kind) {
             (None, _) => Ok([None, None]),
-            (Some(_), JointKind::Fixed | JointKind::Continuous | JointKind::Floating) => {
-                Err(self.problem(
+            (
+                Some(_),
+                JointKind::Fixed | JointKind::Continuous | JointKind::Floating | JointKind::Ball,
+            ) => Err(self.problem(
                     "limits",
                     FieldProblem::NotAllowed {
-                        context: "for a fixed, continuous or floating joint",
+                        context: "for a fixed, continuous, floating or ball joint",
                     },
-                ))
-            }
+                )),
             (Some(RawLimits::Pair(pair)), JointKind::Revolute | JointKind::Prismatic) => {
                 Ok([Some(self.limits(pair, kind == JointKind::Revolute)?), None])
             }
@@ -535,14 +537,17 @@ pub(crate) fn parse(source: &str, default_name: &str) -> Result<ChainBuilder, Lo
             RawKind::Cylindrical => JointKind::Cylindrical,
             RawKind::Fixed => JointKind::Fixed,
             RawKind::Floating => JointKind::Floating,
+            RawKind::Ball => JointKind::Ball,
         };
         let spec = JointSpec::new(j.name.clone(), kind, parent.clone(), link.clone());
         let mut spec = match raw.convention {
-            Convention::Standard | Convention::Modified if kind == JointKind::Floating => {
+            Convention::Standard | Convention::Modified
+                if matches!(kind, JointKind::Floating | JointKind::Ball) =>
+            {
                 return Err(r.problem(
                     "type",
                     FieldProblem::NotAllowed {
-                        context: "in a DH table: a floating joint is written in the axis convention (convention: axis)",
+                        context: "in a DH table: floating and ball joints are written in the axis convention (convention: axis)",
                     },
                 ));
             }

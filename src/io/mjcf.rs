@@ -418,10 +418,36 @@ impl Reader {
                 self.refs.push((name.to_string(), reference));
                 Ok(spec)
             }
-            "ball" => Err(Problem::at(
-                type_at,
-                format!("joint '{name}' is a ball joint, which kinechain does not read yet"),
-            )),
+            "ball" => {
+                // Turns about `pos` in the body's frame (its axis is unused); qpos0 is the
+                // identity quaternion, whatever `ref` says (MuJoCo uses `ref` for hinges and
+                // slides only).
+                let pos = match get("pos") {
+                    Some((v, at)) => Vector3::from(reals::<3>(v, at, "pos")?),
+                    None => Vector3::zeros(),
+                };
+                let at = Pose {
+                    p: pos,
+                    q: UnitQuaternion::identity(),
+                };
+                let mut spec = JointSpec::new(name, JointKind::Ball, parent, child)
+                    .with_origin(pose.then(&at).transform());
+                if pos != Vector3::zeros() {
+                    spec =
+                        spec.with_post(crate::model::transform::Transform::from_translation(-pos));
+                }
+                let limited = match get("limited") {
+                    Some(("auto", _)) | None => self.compiler.autolimits && get("range").is_some(),
+                    Some((v, at)) => attrs::boolean(v, at, "limited")?,
+                };
+                if limited {
+                    self.b.warn(format!(
+                        "ball joint '{name}' has a range (a cone about its reference orientation): kinechain does not check it"
+                    ));
+                }
+                self.qpos0.extend_from_slice(&[1.0, 0.0, 0.0, 0.0]);
+                Ok(spec)
+            }
             other => Err(Problem::at(
                 type_at,
                 format!(

@@ -136,7 +136,7 @@ impl Joint {
     }
 
     /// Index of this joint's first entry in `q̇` (and `q̈`), or `None` for fixed and mimic
-    /// joints: [`Joint::q_index`] but for joints after a floating one.
+    /// joints: [`Joint::q_index`] but for joints after a floating or ball one.
     #[must_use]
     pub fn v_index(&self) -> Option<usize> {
         self.v_index
@@ -152,7 +152,8 @@ impl Joint {
         }
     }
 
-    /// Entries of `q` this joint takes (0 for fixed and mimic joints, 7 for a floating one).
+    /// Entries of `q` this joint takes (0 for fixed and mimic joints, 7 for a floating one, 4 for
+    /// a ball joint).
     #[must_use]
     pub fn nq(&self) -> usize {
         if self.q_index.is_some() {
@@ -169,11 +170,11 @@ impl Joint {
     }
 
     /// Limits of each coordinate (θ then d for a cylindrical joint); `None` where unlimited.
-    /// A floating joint has none.
+    /// A floating or ball joint has none.
     #[must_use]
     pub fn limits(&self) -> &[Option<Limits>] {
         match self.kind {
-            JointKind::Floating => &[],
+            JointKind::Floating | JointKind::Ball => &[],
             kind => &self.limits[..kind.dof()],
         }
     }
@@ -223,6 +224,8 @@ pub struct Model {
     pub(crate) end_link: LinkId,
     /// [`Model::floating_joint`].
     pub(crate) floating: Option<JointId>,
+    /// [`Model::quaternions`].
+    pub(crate) quaternions: Vec<(JointId, usize)>,
     /// The description the chain was built from (for writing it out again), with the loader's
     /// warnings.
     pub(crate) source: ChainBuilder,
@@ -236,15 +239,15 @@ impl Model {
     }
 
     /// Degrees of freedom: the number of entries of `q̇` and `q̈`, and of the columns of a
-    /// Jacobian. The number of entries of `q` too, unless the chain has a floating joint
-    /// ([`Model::nq`]).
+    /// Jacobian. The number of entries of `q` too, unless the chain has a floating or ball
+    /// joint ([`Model::nq`]).
     #[must_use]
     pub fn dof(&self) -> usize {
         self.velocities.len()
     }
 
-    /// Number of entries of `q`: [`Model::dof`], plus one for a floating joint (whose
-    /// orientation is a quaternion of four entries for three degrees of freedom).
+    /// Number of entries of `q`: [`Model::dof`], plus one for a floating joint and for each ball
+    /// joint (whose orientation is a quaternion of four entries for three degrees of freedom).
     #[must_use]
     pub fn nq(&self) -> usize {
         self.variables.len()
@@ -262,6 +265,15 @@ impl Model {
     #[inline]
     pub fn floating_joint(&self) -> Option<JointId> {
         self.floating
+    }
+
+    /// The joints whose orientation is a quaternion (a floating joint, ball joints), in `q`
+    /// order, each with the index in `q` of its quaternion's first entry (w): 3 for the
+    /// floating joint, the joint's own first entry for a ball joint.
+    #[must_use]
+    #[inline]
+    pub fn quaternions(&self) -> &[(JointId, usize)] {
+        &self.quaternions
     }
 
     /// All joints (fixed and mimic included), from the base outwards (depth first, children in

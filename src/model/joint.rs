@@ -26,11 +26,16 @@ pub enum JointKind {
     /// the child's origin and the child's angular velocity, relative to the parent, in world
     /// axes; `q̈` their time derivatives). Only between the root link and the rest of a robot.
     Floating,
+    /// A rotation of the child relative to the parent by a unit quaternion, about the joint
+    /// origin. Four entries of `q` (the quaternion w, x, y, z) and three of `q̇` (the child's
+    /// angular velocity relative to the parent, in world axes; `q̈` its rate as seen from the
+    /// parent, in world axes). Anywhere in a tree (MJCF `ball`, SDF `ball`).
+    Ball,
 }
 
 impl JointKind {
     /// Degrees of freedom of an independent joint of this kind: its entries of `q̇` (and of
-    /// `q`, but for a floating joint, [`JointKind::nq`]).
+    /// `q`, but for the quaternion joints, [`JointKind::nq`]).
     #[must_use]
     pub const fn dof(self) -> usize {
         match self {
@@ -38,16 +43,29 @@ impl JointKind {
             JointKind::Cylindrical => 2,
             JointKind::Fixed => 0,
             JointKind::Floating => 6,
+            JointKind::Ball => 3,
         }
     }
 
     /// Entries of `q` an independent joint of this kind takes: its degrees of freedom, but seven
-    /// for a floating joint (a position and a quaternion).
+    /// for a floating joint (a position and a quaternion) and four for a ball joint.
     #[must_use]
     pub const fn nq(self) -> usize {
         match self {
             JointKind::Floating => 7,
+            JointKind::Ball => 4,
             kind => kind.dof(),
+        }
+    }
+
+    /// Where the quaternion (w, x, y, z) of a joint of this kind starts among its entries of `q`:
+    /// 3 for a floating joint, 0 for a ball joint, `None` for the others.
+    #[must_use]
+    pub const fn quaternion(self) -> Option<usize> {
+        match self {
+            JointKind::Floating => Some(3),
+            JointKind::Ball => Some(0),
+            _ => None,
         }
     }
 
@@ -61,6 +79,7 @@ impl JointKind {
                 &["x", "y", "z", "qw", "qx", "qy", "qz"],
                 &["vx", "vy", "vz", "wx", "wy", "wz"],
             ),
+            JointKind::Ball => (&["qw", "qx", "qy", "qz"], &["wx", "wy", "wz"]),
             _ => (&[], &[]),
         }
     }
@@ -75,6 +94,7 @@ impl JointKind {
             JointKind::Cylindrical => "cylindrical",
             JointKind::Fixed => "fixed",
             JointKind::Floating => "floating",
+            JointKind::Ball => "ball",
         }
     }
 
@@ -324,6 +344,7 @@ mod tests {
             (Cylindrical, 2, true, true, "cylindrical"),
             (Fixed, 0, false, false, "fixed"),
             (Floating, 6, false, false, "floating"),
+            (Ball, 3, false, false, "ball"),
         ];
         for (kind, dof, rotates, translates, name) in table {
             assert_eq!(kind.dof(), dof, "{name}");

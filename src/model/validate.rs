@@ -78,6 +78,11 @@ pub(crate) fn validate(spec: &ChainBuilder) -> Result<Validated, ModelError> {
             .iter()
             .position(|j| j.kind == JointKind::Floating)
             .map(JointId),
+        quaternions: joints
+            .iter()
+            .enumerate()
+            .filter_map(|(i, j)| Some((JointId(i), j.q_index? + j.kind.quaternion()?)))
+            .collect(),
         name: spec.name.clone(),
         link_index: links
             .iter()

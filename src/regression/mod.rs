@@ -53,7 +53,7 @@ pub fn velocity_names(chain: &Chain) -> Vec<String> {
 
 /// The unit of each entry of `q`, as [`variable_names`] lists them: `rad` (a revolute or
 /// continuous joint, a cylindrical joint's θ), `m` (a prismatic joint, a cylindrical joint's d, a
-/// floating joint's position) or `1` (a floating joint's quaternion).
+/// floating joint's position) or `1` (a floating or ball joint's quaternion).
 #[must_use]
 pub fn variable_units(chain: &Chain) -> Vec<&'static str> {
     use crate::model::joint::JointKind;
@@ -62,7 +62,7 @@ pub fn variable_units(chain: &Chain) -> Vec<&'static str> {
         .map(|(j, component)| match (chain.joint(j).kind(), component) {
             (JointKind::Revolute | JointKind::Continuous, _)
             | (JointKind::Cylindrical, Some("theta")) => "rad",
-            (JointKind::Floating, Some("qw" | "qx" | "qy" | "qz")) => "1",
+            (JointKind::Floating | JointKind::Ball, Some("qw" | "qx" | "qy" | "qz")) => "1",
             _ => "m",
         })
         .collect()
@@ -88,8 +88,6 @@ fn names<'c>(
 fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     let (lower, upper, neutral) = (chain.lower(), chain.upper(), chain.neutral());
     let (dof, nv) = (chain.nq(), chain.nv());
-    // A floating joint's quaternion (entries 3–6), drawn as a uniformly random rotation.
-    let quaternion = chain.floating_joint().map(|_| 3..7);
     let admitted = |q: &Vec<f64>| check_q(chain, q, LimitPolicy::Enforce).is_ok();
     let corner = |bound: &[f64]| -> Vec<f64> {
         (0..dof)
@@ -121,8 +119,9 @@ fn configurations(chain: &Chain, options: &Options) -> Vec<(Vec<f64>, Vec<f64>, 
                 between(lo, hi, rng.unit())
             })
             .collect();
-        if let Some(e) = quaternion.clone() {
-            q[e].copy_from_slice(&rng.unit_quaternion());
+        // Floating and ball joints' quaternions, drawn as uniformly random rotations.
+        for &(_, first) in chain.quaternions() {
+            q[first..first + 4].copy_from_slice(&rng.unit_quaternion());
         }
         qs.push(q);
     }

@@ -424,7 +424,8 @@ pub fn rng(seed: u64) -> rand_chacha::ChaCha8Rng {
 }
 
 /// A random configuration within the joints' limits (±π where a joint has none); a floating
-/// joint anywhere in the cube [-1, 1]³ m, turned by a uniformly random unit quaternion.
+/// joint anywhere in the cube [-1, 1]³ m, turned by a uniformly random unit quaternion, and a
+/// ball joint turned by one.
 pub fn random_q(chain: &Chain, rng: &mut impl rand::Rng) -> Vec<f64> {
     let mut q = vec![0.0; chain.nq()];
     for joint in chain.joints() {
@@ -436,6 +437,10 @@ pub fn random_q(chain: &Chain, rng: &mut impl rand::Rng) -> Vec<f64> {
                 *x = 2.0 * rng.random::<f64>() - 1.0;
             }
             q[first + 3..first + 7].copy_from_slice(&random_quaternion(rng));
+            continue;
+        }
+        if joint.kind() == kinechain::JointKind::Ball {
+            q[first..first + 4].copy_from_slice(&random_quaternion(rng));
             continue;
         }
         for (k, limits) in joint.limits().iter().enumerate() {
@@ -735,4 +740,161 @@ pub fn random_standard_dh_chain(n: usize, seed: u64) -> Chain {
         );
     }
     b.build().unwrap()
+}
+
+/// Every batch path equals single evaluations of the same configurations bit for bit (poses of
+/// every link, one link, rates, Jacobians and their rates; one thread and several), and the
+/// `f32` batch equals them to its precision: random configurations of `chain` (quaternions of
+/// floating and ball joints included), `label` naming it in failures.
+pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
+    use kinechain::JacobianFrame;
+    use kinechain::eval::batch::{
+        BatchData, forward_accelerations_batch, forward_accelerations_batch_par,
+        forward_kinematics_batch, forward_kinematics_batch_par, forward_kinematics_batch_to,
+        jacobian_batch, jacobian_batch_par, jacobian_dot_batch, single_precision,
+    };
+    let (nq, nv) = (chain.nq(), chain.nv());
+    let mut r = rng(21);
+    // Four full chunks of eight, a partial one; 600 for the parallel Jacobians' pieces.
+    for n in [37, 600] {
+        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut r)).collect();
+        let qds = random_vec(n * nv, 1.0, &mut r);
+        let qdds = random_vec(n * nv, 1.0, &mut r);
+        let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut batch = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let links: Vec<_> = chain
+            .links()
+            .iter()
+            .map(|l| chain.link_id(l.name()).unwrap())
+            .collect();
+        let end = chain.end_link();
+        let acc = forward_accelerations_batch(&chain, &mut batch, &qs, &qds, &qdds)
+            .unwrap()
+            .velocities()
+            .world_from_link(n - 1, end);
+        let mut j = vec![0.0; n * 6 * nv];
+        let mut j_par = vec![0.0; n * 6 * nv];
+        let mut j_dot = vec![0.0; n * 6 * nv];
+        jacobian_batch(&chain, &mut batch, &qs, end, JacobianFrame::Link, &mut j).unwrap();
+        jacobian_batch_par(
+            &chain,
+            &mut batch,
+            &qs,
+            end,
+            JacobianFrame::Link,
+            &mut j_par,
+        )
+        .unwrap();
+        assert_eq!(j, j_par, "{label}");
+        jacobian_dot_batch(
+            &chain,
+            &mut batch,
+            &qs,
+            &qds,
+            end,
+            JacobianFrame::World,
+            &mut j_dot,
+        )
+        .unwrap();
+        for i in 0..n {
+            let (q, qd, qdd) = (
+                &qs[i * nq..(i + 1) * nq],
+                &qds[i * nv..(i + 1) * nv],
+                &qdds[i * nv..(i + 1) * nv],
+            );
+            let s = forward_accelerations(&chain, &mut single, q, qd, qdd).unwrap();
+            if i == n - 1 {
+                assert_eq!(acc, s.world_from_link(end));
+            }
+            let want_j = s.poses().jacobian_in(end, JacobianFrame::Link);
+            let want_jd = s.velocities().jacobian_dot(end);
+            for r in 0..6 {
+                for c in 0..nv {
+                    assert_eq!(
+                        j[i * 6 * nv + r * nv + c].to_bits(),
+                        want_j[(r, c)].to_bits(),
+                        "{label} J {i} {r} {c}"
+                    );
+                    assert_eq!(
+                        j_dot[i * 6 * nv + r * nv + c].to_bits(),
+                        want_jd[(r, c)].to_bits(),
+                        "{label} J̇ {i} {r} {c}"
+                    );
+                }
+            }
+        }
+        let poses = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap();
+        let expected: Vec<Vec<Transform>> = qs
+            .chunks(nq)
+            .map(|q| {
+                let p = forward_kinematics(&chain, &mut single, q).unwrap();
+                links.iter().map(|&l| p.world_from_link(l)).collect()
+            })
+            .collect();
+        for (i, want) in expected.iter().enumerate() {
+            for (&id, pose) in links.iter().zip(want) {
+                assert_eq!(poses.world_from_link(i, id), *pose, "{label} {i} {id:?}");
+            }
+        }
+        let par = forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap();
+        for (i, want) in expected.iter().enumerate() {
+            for (&id, pose) in links.iter().zip(want) {
+                assert_eq!(par.world_from_link(i, id), *pose, "{label} {i} {id:?} par");
+            }
+        }
+        let end_index = links.iter().position(|&l| l == end).unwrap();
+        let one = forward_kinematics_batch_to(&chain, &mut batch, &qs, end).unwrap();
+        for (i, want) in expected.iter().enumerate() {
+            assert_eq!(one.world_from_link(i), want[end_index], "{label} {i} end");
+        }
+        // Rates: every link, one thread and parallel.
+        for parallel in [false, true] {
+            let r = if parallel {
+                forward_accelerations_batch_par(&chain, &mut batch, &qs, &qds, &qdds)
+            } else {
+                forward_accelerations_batch(&chain, &mut batch, &qs, &qds, &qdds)
+            }
+            .unwrap();
+            for i in [0, n / 2, n - 1] {
+                let (q, qd, qdd) = (
+                    &qs[i * nq..(i + 1) * nq],
+                    &qds[i * nv..(i + 1) * nv],
+                    &qdds[i * nv..(i + 1) * nv],
+                );
+                let s = forward_accelerations(&chain, &mut single, q, qd, qdd).unwrap();
+                for &id in &links {
+                    assert_eq!(r.velocity(i, id), s.velocity(id), "{label} {i} {id:?}");
+                    assert_eq!(
+                        r.acceleration(i, id),
+                        s.acceleration(id),
+                        "{label} {i} {id:?}"
+                    );
+                }
+            }
+        }
+        // Single precision: the same poses to its precision.
+        let mut b32 =
+            single_precision::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut e32 =
+            single_precision::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let p32 = single_precision::forward_kinematics_batch(&chain, &mut b32, &qs).unwrap();
+        let one32 =
+            single_precision::forward_kinematics_batch_to(&chain, &mut e32, &qs, end).unwrap();
+        for (i, want) in expected.iter().enumerate() {
+            let tol = 1e-5 * (1.0 + chain.reach());
+            let close = |t: Transform, w: &Transform| {
+                (t.to_homogeneous() - w.to_homogeneous()).abs().max() < tol
+            };
+            assert!(
+                close(one32.world_from_link(i), &want[end_index]),
+                "{label} {i} f32 end"
+            );
+            for (&id, pose) in links.iter().zip(want) {
+                assert!(
+                    close(p32.world_from_link(i, id), pose),
+                    "{label} {i} {id:?} f32"
+                );
+            }
+        }
+    }
 }

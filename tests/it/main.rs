@@ -7,6 +7,7 @@ mod common;
 
 #[cfg(feature = "logs")]
 mod bag;
+mod ball;
 mod batch;
 mod batch_arrays;
 mod batch_jacobians;

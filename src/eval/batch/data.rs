@@ -203,22 +203,23 @@ pub(crate) fn first_error(
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LaneCheck<'a> {
     pub(crate) limits: Option<&'a DenseLimits>,
-    pub(crate) quaternion: bool,
+    /// The first entry of each quaternion in `q` ([`crate::Model::quaternions`]).
+    pub(crate) quaternions: &'a [(crate::model::chain::JointId, usize)],
 }
 
 impl<'a> LaneCheck<'a> {
     /// `None` when the limits do not fit one check per entry ([`Chain::dense_limits`]): the
     /// configurations are then checked before evaluation.
     pub(crate) fn of(chain: &'a Chain, policy: LimitPolicy) -> Option<LaneCheck<'a>> {
-        let quaternion = chain.floating_joint().is_some();
+        let quaternions = chain.quaternions();
         match (policy, &chain.dense_limits) {
             (LimitPolicy::Ignore, _) => Some(LaneCheck {
                 limits: None,
-                quaternion,
+                quaternions,
             }),
             (LimitPolicy::Enforce, Some(limits)) => Some(LaneCheck {
                 limits: Some(limits),
-                quaternion,
+                quaternions,
             }),
             (LimitPolicy::Enforce, None) => None,
         }
@@ -244,9 +245,10 @@ impl<'a> LaneCheck<'a> {
                 }
             }
         }
-        if check.quaternion {
+        for &(_, i) in check.quaternions {
             // `floating::admits`: the squared norm within the squared tolerance band.
-            let n2 = ((q[3] * q[3] + q[4] * q[4]) + q[5] * q[5]) + q[6] * q[6];
+            let n2 =
+                ((q[i] * q[i] + q[i + 1] * q[i + 1]) + q[i + 2] * q[i + 2]) + q[i + 3] * q[i + 3];
             let (lo, hi) = crate::eval::kernel::floating::squared_norm_band();
             ok &= N::admitted(n2, 1.0, 0.0, lo, hi);
         }

@@ -162,6 +162,26 @@ fn chunk_jacobian_generic<A: Arith>(
             }
             let [origin, z] = axes[i].map(|v| v.map(|x| N::<A>::get(&x, part)));
             let d: [N<A>; 3] = std::array::from_fn(|e| p[e] - origin[e]);
+            if let Some(ball) = body.ball {
+                // Three columns, written once: turns about the world axes through the joint
+                // origin (see `crate::eval::jacobian::path_columns`).
+                let (one, zero) = (N::<A>::splat(1.0), N::<A>::splat(0.0));
+                for k in 0..3 {
+                    let z: [N<A>; 3] = std::array::from_fn(|e| if e == k { one } else { zero });
+                    let turn = [
+                        z[1] * d[2] - z[2] * d[1],
+                        z[2] * d[0] - z[0] * d[2],
+                        z[0] * d[1] - z[1] * d[0],
+                        z[0],
+                        z[1],
+                        z[2],
+                    ];
+                    for (r, x) in turn.into_iter().enumerate() {
+                        x.put(&mut columns[r * dof + ball.v + k], part);
+                    }
+                }
+                continue;
+            }
             let turning = [
                 z[1] * d[2] - z[2] * d[1],
                 z[2] * d[0] - z[0] * d[2],

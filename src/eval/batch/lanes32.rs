@@ -90,6 +90,10 @@ impl Num for F16 {
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
         sin_cos::<A>(x.0.map(f64::from))
     }
+    #[inline(always)]
+    fn two_over(self) -> Self {
+        F16(self.0.map(|x| 2.0 / x))
+    }
 }
 
 // sin r ≈ r + r³ (S1 + r² (S2 + r² S3)) and cos r ≈ 1 − r²/2 + r⁴ (C1 + r² (C2 + r² C3)) on
@@ -326,6 +330,12 @@ macro_rules! registers32 {
                 let x: F16 = unsafe { std::mem::transmute_copy(&x) };
                 let (s, c) = F16::sin_cos::<A>(x);
                 (Self::from_f16(s), Self::from_f16(c))
+            }
+            #[inline(always)]
+            fn two_over(self) -> Self {
+                // SAFETY: as for `sin_cos`.
+                let x: F16 = unsafe { std::mem::transmute_copy(&self) };
+                Self::from_f16(x.two_over())
             }
         }
         // SAFETY: `repr(C, align(64))` around 64 bytes of `f32` lanes in order.

@@ -67,29 +67,10 @@ pub(crate) fn frame(body: &Body, q: &[f64]) -> Transform {
 #[inline(always)]
 #[must_use]
 pub(crate) fn own(q: &[f64]) -> Transform {
-    let (p, e) = (&q[..3], &q[3..7]);
-    let (e0, e1, e2, e3) = (e[0], e[1], e[2], e[3]);
-    let s = 2.0 / (((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3);
-    let r = [
-        [
-            1.0 - s * (e2 * e2 + e3 * e3),
-            s * (e1 * e2 + e0 * e3),
-            s * (e1 * e3 - e0 * e2),
-        ],
-        [
-            s * (e1 * e2 - e0 * e3),
-            1.0 - s * (e1 * e1 + e3 * e3),
-            s * (e2 * e3 + e0 * e1),
-        ],
-        [
-            s * (e1 * e3 + e0 * e2),
-            s * (e2 * e3 - e0 * e1),
-            1.0 - s * (e1 * e1 + e2 * e2),
-        ],
-    ];
+    let r = crate::eval::kernel::ball::columns([q[3], q[4], q[5], q[6]]);
     Transform {
         r,
-        p: [p[0], p[1], p[2]],
+        p: [q[0], q[1], q[2]],
     }
 }
 

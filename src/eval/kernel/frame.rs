@@ -75,7 +75,7 @@ impl<N: LaneNum> Frame<N> {
 
 /// `r u + p` (the columns of `r` are its vectors).
 #[inline(always)]
-fn mat_vec_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: &V3<N>, p: V3<N>) -> V3<N> {
+pub(crate) fn mat_vec_add<N: Num, A: Arith>(r: &[[N; 3]; 3], u: &V3<N>, p: V3<N>) -> V3<N> {
     let mut out = p;
     for k in 0..3 {
         out[k] = N::mul_add::<A>(

@@ -4,6 +4,7 @@
 //! a frame per vector) for single configurations. One body is evaluated as
 //! `frame = parent · pre · M(θ, d) · post` (eq. 2.119 for `M`).
 
+pub(crate) mod ball;
 pub(crate) mod floating;
 pub(crate) mod frame;
 pub(crate) mod joint;

@@ -209,7 +209,12 @@ fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: 
         }
     }
     match m.theta {
-        Term::Const(0.0) => {}
+        // A ball joint's body has θ = 0 (tested here, the arm of prismatic joints only).
+        Term::Const(0.0) => {
+            if let Some(ball) = body.ball {
+                crate::eval::kernel::ball::turn_columns(f, ball, q);
+            }
+        }
         Term::Const(_) => {
             let (s, c) = m.const_sin_cos;
             rotate_columns::<A>(f, &m.axis, s, c);

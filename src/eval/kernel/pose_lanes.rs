@@ -8,7 +8,6 @@
 use crate::eval::kernel::frame::{Frame, V3, apply_const_add, axpy, place, plane, rotate_columns};
 use crate::eval::kernel::joint::{by_shape, term_value};
 use crate::eval::layout::body::{Body, CheapPlacement, ZTail};
-use crate::eval::simd::lanes::{LANES, Lanes};
 use crate::eval::simd::traits::{Arith, LaneNum, Num};
 use crate::model::joint::{Axis, Term};
 
@@ -26,7 +25,13 @@ fn apply_motion<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, q: &[N], sin_co
         }
     }
     let (s, c) = match m.theta {
-        Term::Const(0.0) => return,
+        // A ball joint's body has θ = 0 (tested here, the arm of prismatic joints only).
+        Term::Const(0.0) => {
+            if let Some(ball) = body.ball {
+                crate::eval::kernel::ball::turn_lanes::<N, A>(f, ball, q);
+            }
+            return;
+        }
         Term::Const(_) => (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1)),
         _ => sin_cos,
     };
@@ -164,37 +169,12 @@ pub(crate) fn root_step<N: LaneNum, A: Arith>(body: &Body, q: &[N], sin_cos: (N,
 
 /// A floating joint's body's frame in each lane of `N` (`q` one part's joint values): the
 /// expressions of [`crate::eval::kernel::floating::frame`] in lane operations (plain products and
-/// sums, in the same order, so each lane has the single evaluation's bits), the one division
-/// lane by lane.
+/// sums, in the same order, so each lane has the single evaluation's bits; the one division
+/// lane by lane, [`Num::two_over`]).
 #[inline(always)]
 fn floating_frame<N: LaneNum>(body: &Body, q: &[N]) -> Frame<N> {
-    let (e0, e1, e2, e3) = (q[3], q[4], q[5], q[6]);
-    let n2 = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3;
-    let mut lanes = Lanes([1.0; LANES]);
-    n2.put(&mut lanes, 0);
-    for x in &mut lanes.0[..LANES / N::PARTS] {
-        *x = 2.0 / *x;
-    }
-    let s = N::get(&lanes, 0);
-    let one = N::splat(1.0);
     let own = Frame {
-        r: [
-            [
-                one - s * (e2 * e2 + e3 * e3),
-                s * (e1 * e2 + e0 * e3),
-                s * (e1 * e3 - e0 * e2),
-            ],
-            [
-                s * (e1 * e2 - e0 * e3),
-                one - s * (e1 * e1 + e3 * e3),
-                s * (e2 * e3 + e0 * e1),
-            ],
-            [
-                s * (e1 * e3 + e0 * e2),
-                s * (e2 * e3 - e0 * e1),
-                one - s * (e1 * e1 + e2 * e2),
-            ],
-        ],
+        r: crate::eval::kernel::ball::columns([q[3], q[4], q[5], q[6]]),
         p: [q[0], q[1], q[2]],
     };
     use crate::eval::layout::body::Placement;

@@ -244,6 +244,50 @@ pub(crate) fn rates_sliding<A: Arith, const ACC: bool>(
     out
 }
 
+/// The rates of a ball joint's body with frame `f` (the recursion in
+/// [`crate::eval::kernel::ball`]): `w` and `ε` from `q̇` and `q̈`, `u` from the joint origin.
+#[inline(always)]
+fn rates_ball<A: Arith, const ACC: bool>(
+    parent: Option<&State<A::Col>>,
+    body: &Body,
+    ball: crate::eval::layout::body::Ball,
+    f: &Frame4<A::Col>,
+    q_dot: &[f64],
+    q_ddot: &[f64],
+) -> Rates4<A::Col> {
+    type C<A> = <A as Arith>::Col;
+    let zero = C::<A>::splat(0.0);
+    let pad = |x: [f64; 3]| C::<A>::from_entries([x[0], x[1], x[2], 0.0]);
+    let (p_joint, p_parent, parent) = match parent {
+        Some((frame, rates)) => (
+            combine_const(&frame.0, body.pre_frame.p, frame.0[3]),
+            frame.0[3],
+            *rates,
+        ),
+        None => (C::<A>::load(&body.pre4[3]), zero, Rates4::zero()),
+    };
+    let w = pad(crate::eval::kernel::ball::rate(ball, q_dot));
+    let (r, u) = (C::<A>::sub(f.0[3], p_parent), C::<A>::sub(f.0[3], p_joint));
+    let v_rel = cross(w, u);
+    let w_r = cross(parent.omega, r);
+    let mut out = Rates4 {
+        omega: C::<A>::add(parent.omega, w),
+        v: C::<A>::add(C::<A>::add(parent.v, w_r), v_rel),
+        alpha: zero,
+        a: zero,
+    };
+    if ACC {
+        let eps = pad(crate::eval::kernel::ball::rate(ball, q_ddot));
+        out.alpha = C::<A>::add(parent.alpha, cross_add(parent.omega, w, eps));
+        let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
+        a = cross_add(parent.omega, scale(2.0, v_rel), a);
+        a = cross_add(eps, u, a);
+        a = cross_add(w, v_rel, a);
+        out.a = C::<A>::add(parent.a, a);
+    }
+    out
+}
+
 /// The rates of a body whose frame is `f`, for the cases its [`Body::rate_shape`] names.
 #[inline(always)]
 pub(crate) fn body_rates<A: Arith, const ACC: bool>(
@@ -272,8 +316,11 @@ pub(crate) fn body_rates<A: Arith, const ACC: bool>(
         }
         (z, None)
     } else {
-        if shape & Body::ON_PARENT_Z != 0 {
-            return rates_on_parent_z::<A, ACC>(parent, body, f, q_dot, q_ddot);
+        if shape & (Body::ON_PARENT_Z | Body::BALL) != 0 {
+            return match body.ball {
+                Some(ball) => rates_ball::<A, ACC>(parent, body, ball, f, q_dot, q_ddot),
+                None => rates_on_parent_z::<A, ACC>(parent, body, f, q_dot, q_ddot),
+            };
         }
         let (p_joint, z) = match parent {
             Some((frame, _)) => (

@@ -178,6 +178,52 @@ fn sliding<N: Num, A: Arith, const ACC: bool>(
     out
 }
 
+/// The motion of a ball joint's body with frame `f`: the operations of
+/// `crate::eval::kernel::rates_columns::rates_ball` on lanes, so the same bits.
+#[inline(always)]
+fn ball_motion<N: Num, A: Arith, const ACC: bool>(
+    parent: Parent<'_, N>,
+    body: &Body,
+    ball: crate::eval::layout::body::Ball,
+    f: &Frame<N>,
+    q_dot: &[N],
+    q_ddot: &[N],
+) -> Motion<N> {
+    let zero = [N::splat(0.0); 3];
+    let (p_joint, p_parent, parent) = match parent {
+        Some((frame, motion)) => (
+            crate::eval::kernel::frame::apply_const_add::<N, A>(
+                &frame.r,
+                body.pre_frame.p,
+                frame.p,
+            ),
+            frame.p,
+            *motion,
+        ),
+        None => (body.pre_frame.p.map(N::splat), zero, Motion::zero()),
+    };
+    let w = crate::eval::kernel::ball::rate(ball, q_dot);
+    let (r, u) = (sub(f.p, p_parent), sub(f.p, p_joint));
+    let v_rel = cross(w, u);
+    let w_r = cross(parent.omega, r);
+    let mut out = Motion {
+        omega: add(parent.omega, w),
+        v: add(add(parent.v, w_r), v_rel),
+        alpha: zero,
+        a: zero,
+    };
+    if ACC {
+        let eps = crate::eval::kernel::ball::rate(ball, q_ddot);
+        out.alpha = add(parent.alpha, cross_add::<N, A>(parent.omega, w, eps));
+        let mut a = cross_add::<N, A>(parent.alpha, r, cross(parent.omega, w_r));
+        a = cross_add::<N, A>(parent.omega, scale(N::splat(2.0), v_rel), a);
+        a = cross_add::<N, A>(eps, u, a);
+        a = cross_add::<N, A>(w, v_rel, a);
+        out.a = add(parent.a, a);
+    }
+    out
+}
+
 /// The motion of a body whose frame is `f` (from [`crate::eval::kernel::pose_lanes::pose_step`]), from its parent's:
 /// `crate::eval::kernel::rates_columns::body_rates` on lanes. With `ACC = false`, α and a are zero.
 #[inline(always)]
@@ -201,8 +247,11 @@ pub(crate) fn body_motion<N: Num, A: Arith, const ACC: bool>(
         }
         (z, None)
     } else {
-        if shape & Body::ON_PARENT_Z != 0 {
-            return on_parent_z::<N, A, ACC>(parent, body, f, q_dot, q_ddot);
+        if shape & (Body::ON_PARENT_Z | Body::BALL) != 0 {
+            return match body.ball {
+                Some(ball) => ball_motion::<N, A, ACC>(parent, body, ball, f, q_dot, q_ddot),
+                None => on_parent_z::<N, A, ACC>(parent, body, f, q_dot, q_ddot),
+            };
         }
         let (p_joint, z) = match parent {
             Some((frame, _)) => (

@@ -131,6 +131,20 @@ pub(crate) struct Body {
     /// entries of `q` ([`crate::eval::kernel::floating`]), and its rates are the first six
     /// entries of `q̇` and `q̈`; `motion` is unused.
     pub(crate) floating: bool,
+    /// The body of a ball joint: its frame is `parent · pre · [A(e) 0] · post` with the Euler
+    /// parameters `e` the four entries of `q` from [`Ball::q`], and its angular velocity and
+    /// acceleration relative to the parent the three entries of `q̇` and `q̈` from [`Ball::v`]
+    /// ([`crate::eval::kernel::ball`]); `motion` is a constant zero (the kernels reach the ball's
+    /// own step through the arm of a zero θ).
+    pub(crate) ball: Option<Ball>,
+}
+
+/// Where a ball joint's entries are: its quaternion at `q[q..q + 4]`, its rates at
+/// `q̇[v..v + 3]` and `q̈[v..v + 3]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Ball {
+    pub(crate) q: usize,
+    pub(crate) v: usize,
 }
 
 /// How the rate of a joint term follows from `q̇` (or `q̈`): `scale · q̇[index]`, with scale zero
@@ -293,6 +307,8 @@ impl Body {
     pub(crate) const ON_PARENT_Z: u8 = 8;
     /// θ varies (the joint turns).
     pub(crate) const TURNS: u8 = 16;
+    /// A ball joint ([`Body::ball`]): the only bit of its shape.
+    pub(crate) const BALL: u8 = 32;
 
     pub(crate) fn new(
         parent: Option<usize>,
@@ -327,12 +343,17 @@ impl Body {
             pre_frame,
             axis_in_parent,
             floating: false,
+            ball: None,
         }
     }
 
     /// The entries of `q` this body's frame reads.
     pub(crate) fn variables(&self) -> impl Iterator<Item = usize> {
-        let own = if self.floating { 0..7 } else { 0..0 };
+        let own = match (self.floating, self.ball) {
+            (true, _) => 0..7,
+            (false, Some(b)) => b.q..b.q + 4,
+            (false, None) => 0..0,
+        };
         own.chain(self.motion.variables())
     }
 }

@@ -118,7 +118,7 @@ impl Chain {
     /// middle of its admitted range (the finite bound where the other is infinite). An entry
     /// whose range is empty (a mimic joint's limits that its primary's cannot reach) is the
     /// middle of the empty range, which [`crate::check_q`] then refuses, naming the joint. A
-    /// floating joint is at the origin, unturned (the quaternion 1, 0, 0, 0).
+    /// floating joint is at the origin, unturned (the quaternion 1, 0, 0, 0), and a ball joint unturned.
     #[must_use]
     pub fn neutral(&self) -> Vec<f64> {
         let mut q: Vec<f64> = self
@@ -136,8 +136,8 @@ impl Chain {
                 }
             })
             .collect();
-        if self.floating_joint().is_some() {
-            q[3] = 1.0;
+        for &(_, first) in self.quaternions() {
+            q[first] = 1.0;
         }
         q
     }
@@ -185,7 +185,7 @@ impl Chain {
     ///
     /// # Errors
     /// [`StateError::WrongLength`] if `q` does not have [`Model::nq`] entries or a rate
-    /// [`Model::nv`]; [`StateError::NoScrew`] for a floating joint.
+    /// [`Model::nv`]; [`StateError::NoScrew`] for a floating or ball joint.
     ///
     /// # Panics
     /// If `joint` comes from another chain with more joints.
@@ -210,15 +210,15 @@ impl Chain {
             }
         }
         let j = &self.joints[joint.0];
-        let source = self.coordinate_source(joint);
-        // Entries of `q̇` after a floating joint's are one before those of `q`.
-        let shift = self.nq() - self.nv();
+        // The entries of `q` and of `q̇` the joint's coordinates come from (its own, or its
+        // primary's for a mimic joint), with the mimic relation.
+        let of = |k: &crate::model::chain::Joint| k.q_index.zip(k.v_index);
+        let source = match j.mimic {
+            None => of(j).map(|(i, v)| (i, v, 1.0, 0.0)),
+            Some(m) => of(&self.joints[m.primary.0]).map(|(i, v)| (i, v, m.multiplier, m.offset)),
+        };
         let coordinate = |k: usize| match source {
-            Some((i, m, o)) => (
-                m * q[i + k] + o,
-                m * q_dot[i + k - shift],
-                m * q_ddot[i + k - shift],
-            ),
+            Some((i, v, m, o)) => (m * q[i + k] + o, m * q_dot[v + k], m * q_ddot[v + k]),
             None => (0.0, 0.0, 0.0),
         };
         let (rot, slide) = match j.kind {
@@ -226,7 +226,7 @@ impl Chain {
             JointKind::Prismatic => ((0.0, 0.0, 0.0), coordinate(0)),
             JointKind::Cylindrical => (coordinate(0), coordinate(1)),
             JointKind::Fixed => ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
-            JointKind::Floating => {
+            JointKind::Floating | JointKind::Ball => {
                 return Err(StateError::NoScrew {
                     joint: j.name.clone(),
                 });

@@ -478,6 +478,13 @@ macro_rules! simd_num {
                     )
                 }
             }
+            #[inline(always)]
+            fn two_over(self) -> Self {
+                // SAFETY: as for `sin_cos`.
+                let lanes = unsafe { std::mem::transmute::<$ty, [f64; $width]>(self) };
+                // SAFETY: as above.
+                unsafe { std::mem::transmute::<[f64; $width], $ty>(lanes.map(|x| 2.0 / x)) }
+            }
         }
     };
 }

@@ -118,6 +118,10 @@ impl Num for Lanes {
         let (s, c) = lanes_sin_cos::<A, LANES>(x.0);
         (Lanes(s), Lanes(c))
     }
+    #[inline(always)]
+    fn two_over(self) -> Self {
+        Lanes(self.0.map(|x| 2.0 / x))
+    }
 }
 
 /// `sin` and `cos` lane by lane (a loop the compiler vectorises to the lane width).
@@ -194,6 +198,10 @@ impl Num for f64 {
     #[inline(always)]
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
         crate::eval::simd::trig::sin_cos::<A>(x)
+    }
+    #[inline(always)]
+    fn two_over(self) -> Self {
+        2.0 / self
     }
 }
 
@@ -298,6 +306,10 @@ impl Num for S8 {
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self) {
         let (s, c) = lanes_sin_cos::<A, LANES>(x.lanes());
         (S8::from_lanes(s), S8::from_lanes(c))
+    }
+    #[inline(always)]
+    fn two_over(self) -> Self {
+        S8::from_lanes(self.lanes().map(|x| 2.0 / x))
     }
 }
 

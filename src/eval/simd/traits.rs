@@ -91,6 +91,8 @@ pub(crate) trait Num:
     fn splat(x: f64) -> Self;
     fn mul_add<A: Arith>(a: Self, b: Self, c: Self) -> Self;
     fn sin_cos<A: Arith>(x: Self) -> (Self, Self);
+    /// `2 / x`, lane by lane (the scale of a quaternion's rotation matrix, `2 / (e · e)`).
+    fn two_over(self) -> Self;
 }
 
 /// Whether `x` is finite with `lower ≤ scale · x + offset ≤ upper`, the product and the sum

@@ -508,7 +508,10 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
         let dirty = body.parent.is_some_and(|p| p >= first && data.dirty[p])
             || changed(&body.motion.theta)
             || changed(&body.motion.d)
-            || (body.floating && (0..7).any(|i| q[i].to_bits() != data.last_q[i].to_bits()));
+            || (body.floating && (0..7).any(|i| q[i].to_bits() != data.last_q[i].to_bits()))
+            || body.ball.is_some_and(|b| {
+                (b.q..b.q + 4).any(|i| q[i].to_bits() != data.last_q[i].to_bits())
+            });
         data.dirty[k] = dirty;
         if dirty {
             // The frame just computed stays in registers when it is the parent's.
