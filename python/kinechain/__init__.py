@@ -15,6 +15,7 @@ is evaluated in Rust with the GIL released, on all cores unless ``threads`` says
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Any, Union
 
 import numpy as np
@@ -70,11 +71,17 @@ def load(
     With ``couplings`` (MJCF), each linear ``<equality><joint>`` coupling makes its first joint
     follow the second (a mimic joint, with no entry of ``q``), so that ``q`` holds the leaders.
 
+    What the loader noticed without refusing the file (``chain.warnings``) is issued as a
+    ``UserWarning`` each.
+
     Raises ``LoadError`` (naming the file, line, column and joint) if it cannot be read."""
     pairs, paths = _xacro_keywords(args, package_paths)
-    return Chain.from_file(
+    chain = Chain.from_file(
         os.fspath(path), floating_base=floating_base, couplings=couplings, args=pairs, package_paths=paths
     )
+    for message in chain.warnings:
+        warnings.warn(f"{os.fspath(path)}: {message}", stacklevel=2)
+    return chain
 
 
 def expand_xacro(path: Union[str, "os.PathLike[str]"], *, args: Any = None, package_paths: Any = None) -> str:

@@ -71,24 +71,27 @@ class Chain:
     def name(self) -> str:
         """The robot's name."""
     @property
+    def warnings(self) -> list[str]:
+        """What the loader noticed without refusing the file (kinechain.load issues each as a UserWarning)."""
+    @property
     def dof(self) -> int:
         """Degrees of freedom: entries of qd, qdd and columns of a Jacobian (nv)."""
     @property
     def nq(self) -> int:
-        """Entries of q: dof, plus one for a floating joint (a quaternion)."""
+        """Entries of q: dof, plus one for a floating joint and for each ball joint (quaternions)."""
     @property
     def nv(self) -> int:
         """Entries of qd and qdd."""
     @property
     def q_names(self) -> list[str]:
         """The name of each entry of q (NAME.theta/NAME.d of a cylindrical joint, NAME.x ...
-        NAME.qz of a floating one)."""
+        NAME.qz of a floating one, NAME.qw ... NAME.qz of a ball joint)."""
     @property
     def q_units(self) -> list[str]:
         """Each entry of q's unit: "rad", "m" or "1" (a quaternion's)."""
     @property
     def v_names(self) -> list[str]:
-        """The name of each entry of qd (NAME.vx ... NAME.wz of a floating joint)."""
+        """The name of each entry of qd (NAME.vx ... NAME.wz of a floating joint, NAME.wx ... NAME.wz of a ball joint)."""
     @property
     def joint_names(self) -> list[str]:
         """q_names."""

@@ -278,15 +278,23 @@ impl Chain {
         self.robot.inner.name().to_string()
     }
 
+    /// What the loader noticed and did not refuse (MJCF equality constraints not applied, a
+    /// ball joint's range not checked, ...); `kinechain.load` also issues each as a
+    /// `UserWarning`.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.robot.inner.warnings().to_vec()
+    }
+
     /// Degrees of freedom: the entries of `qd`, `qdd` and the columns of a Jacobian ([`nv`]);
-    /// `q` has as many but for a floating joint ([`nq`]).
+    /// `q` has as many but for floating and ball joints ([`nq`]).
     #[getter]
     fn dof(&self) -> usize {
         self.robot.inner.dof()
     }
 
-    /// Entries of a configuration `q`: `dof`, and one more for a floating joint (its
-    /// orientation is a quaternion).
+    /// Entries of a configuration `q`: `dof`, and one more for a floating joint and for each
+    /// ball joint (their orientations are quaternions).
     #[getter]
     fn nq(&self) -> usize {
         self.robot.inner.nq()

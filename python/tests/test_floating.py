@@ -210,3 +210,75 @@ def test_a_planar_joint_agrees_with_pinocchios():
         for k, name in enumerate(links):
             worst = max(worst, np.abs(data.oMf[frames[name]].homogeneous - poses[k]).max())
     assert worst < 1e-14, worst
+
+
+BALL_ARM = """name: ballarm
+convention: axis
+joints:
+  - {name: base, type: revolute, origin: {xyz: [0, 0, 0.3]}, axis: [0, 0, 1], limits: [-3, 3]}
+  - {name: shoulder, type: ball, origin: {xyz: [0.1, 0.2, 0.4], rpy: [0.3, 0.2, 0.1]}}
+  - {name: elbow, type: revolute, origin: {xyz: [0, 0, 0.35]}, axis: [0, 1, 0], limits: [-2, 2]}
+  - {name: wrist, type: ball, origin: {xyz: [0.05, 0, 0.3], rpy: [-0.4, 1.2, 0.7]}}
+"""
+
+
+def test_ball_joints_agree_with_pinocchios_spherical_joint():
+    # The same arm built in Pinocchio joint by joint (JointModelSpherical for the balls, whose q
+    # is x y z w and whose v and a are in the joint's own axes): each joint frame's pose,
+    # velocity and classical acceleration, through to_layout("pinocchio").
+    chain = kc.Chain.from_yaml_string(BALL_ARM)
+    assert (chain.nq, chain.nv) == (10, 8)
+    model = pin.Model()
+    parent = 0
+    placements = [([0, 0, 0.3], [0, 0, 0]), ([0.1, 0.2, 0.4], [0.3, 0.2, 0.1]), ([0, 0, 0.35], [0, 0, 0]), ([0.05, 0, 0.3], [-0.4, 1.2, 0.7])]
+    kinds = [pin.JointModelRZ(), pin.JointModelSpherical(), pin.JointModelRY(), pin.JointModelSpherical()]
+    joints = []
+    for (xyz, rpy), kind, name in zip(placements, kinds, ["base", "shoulder", "elbow", "wrist"]):
+        parent = model.addJoint(parent, kind, pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz, dtype=float)), name)
+        joints.append(parent)
+    data = model.createData()
+    assert (model.nq, model.nv) == (chain.nq, chain.nv)
+    links = ["link1", "link2", "link3", "link4"]
+    qs = chain.random(20, seed=5)
+    rng = np.random.default_rng(2)
+    worst = {"pose": 0.0, "v": 0.0, "a": 0.0, "J": 0.0}
+    for q in qs:
+        qd, qdd = rng.uniform(-1, 1, chain.nv), rng.uniform(-1, 1, chain.nv)
+        pq, pv, pa = chain.to_layout(q, qd, qdd, layout="pinocchio")
+        np.testing.assert_array_equal(pq[1:5], [q[2], q[3], q[4], q[1]])
+        pin.forwardKinematics(model, data, pq, pv, pa)
+        pin.computeJointJacobians(model, data, pq)
+        r = chain.fk(q, qd, qdd, links=links)
+        for k, j in enumerate(joints):
+            m = data.oMi[j]
+            worst["pose"] = max(worst["pose"], np.abs(m.homogeneous - r.poses[k]).max())
+            v, a = data.v[j], data.a[j]
+            omega, lin = m.rotation @ v.angular, m.rotation @ v.linear
+            alpha = m.rotation @ a.angular
+            acc = m.rotation @ (a.linear + np.cross(v.angular, v.linear))
+            worst["v"] = max(worst["v"], np.abs(omega - r.omega[k]).max(), np.abs(lin - r.v[k]).max())
+            worst["a"] = max(worst["a"], np.abs(alpha - r.alpha[k]).max(), np.abs(acc - r.a[k]).max())
+            J = chain.jacobian(q, links[k])
+            Jp = pin.getJointJacobian(model, data, j, pin.LOCAL_WORLD_ALIGNED)
+            worst["J"] = max(worst["J"], np.abs(J @ qd - Jp @ pv).max())
+        back = chain.from_layout(pq, pv, pa, layout="pinocchio")
+        for got, want in zip(back, (q, qd, qdd)):
+            np.testing.assert_allclose(got, want, atol=1e-14)
+    assert worst["pose"] < 1e-14, worst
+    assert worst["v"] < 1e-14, worst
+    assert worst["a"] < 1e-13, worst
+    assert worst["J"] < 1e-14, worst
+
+
+def test_ball_joint_errors_name_the_joint():
+    chain = kc.Chain.from_yaml_string(BALL_ARM)
+    q = chain.neutral()
+    q[6:10] = [0.0, 0.0, 0.0, 0.0]
+    with pytest.raises(kc.StateError, match=r"ball joint 'wrist' \(q\[6\.\.10\]"):
+        chain.fk(q)
+    with pytest.raises(kc.StateError, match="4 for the ball joint 'shoulder', 4 for the ball joint 'wrist', 2 for the others"):
+        chain.fk(np.zeros(8))
+    qs = chain.random(4, seed=1)
+    qs[2, 1:5] *= 3.0
+    with pytest.raises(kc.StateError, match="configuration 2"):
+        chain.fk(qs)

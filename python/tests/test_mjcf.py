@@ -28,14 +28,14 @@ else:
 TOLERANCE = 1e-12
 
 
-@pytest.mark.parametrize("path", [DATA / "features.xml", DATA / "free.xml"] + MENAGERIE, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [DATA / "features.xml", DATA / "free.xml", DATA / "ball.xml"] + MENAGERIE, ids=lambda p: p.stem)
 def test_every_body_and_site_is_where_mujoco_puts_it(path):
     worst, compared, _ = mjcf_oracle.worst_error(path)
     assert compared > 0
     assert worst < TOLERANCE, f"{path.name}: {worst:.3g}"
 
 
-@pytest.mark.parametrize("path", [DATA / "features.xml"] + MENAGERIE, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [DATA / "features.xml", DATA / "ball.xml"] + MENAGERIE, ids=lambda p: p.stem)
 def test_q_is_qpos_and_keyframes_are_the_files(path):
     model = mjcf_oracle.compile_without_assets(path)
     chain = kc.load(path)
@@ -70,8 +70,8 @@ def test_includes_and_pickling():
 
 
 def test_errors_are_load_errors_with_the_line():
-    with pytest.raises(kc.LoadError, match="line 2 column 23: joint 'j' is a ball joint"):
-        kc.Chain.from_mjcf_string('<mujoco><worldbody>\n<body><joint name="j" type="ball"/></body></worldbody></mujoco>')
+    with pytest.raises(kc.LoadError, match="line 2 column 23: joint 'j' has type 'screw'"):
+        kc.Chain.from_mjcf_string('<mujoco><worldbody>\n<body><joint name="j" type="screw"/></body></worldbody></mujoco>')
     with pytest.raises(kc.LoadError, match="not well-formed"):
         kc.Chain.from_mjcf_string("<mujoco><worldbody></mujoco>")
 
@@ -93,6 +93,52 @@ def test_a_free_joint_agrees_with_mujoco_velocity_layout():
     mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_SITE, site, v, 0)
     np.testing.assert_allclose(r.omega[0], v[:3], atol=1e-12)
     np.testing.assert_allclose(r.v[0], v[3:], atol=1e-12)
+
+
+def test_ball_joints_move_bodies_and_sites_as_mujoco_does():
+    # Velocities and classical accelerations of every body and site (mj_objectVelocity and
+    # mj_objectAcceleration, world axes, without gravity) at random qpos, qvel, qacc, given to
+    # kinechain through the MuJoCo layout: the ball joints' rates are in their bodies' axes there.
+    path = DATA / "ball.xml"
+    chain = kc.load(path)
+    assert chain.q_names[:5] == ["waist.qw", "waist.qx", "waist.qy", "waist.qz", "lift"]
+    assert chain.v_names[:4] == ["waist.wx", "waist.wy", "waist.wz", "lift"]
+    model = mjcf_oracle.compile_without_assets(path)
+    model.opt.gravity[:] = 0.0
+    data = mujoco.MjData(model)
+    objects = [(mujoco.mjtObj.mjOBJ_BODY, n) for n in ("torso", "upper", "lower", "hand", "pendulum", "bob")]
+    objects += [(mujoco.mjtObj.mjOBJ_SITE, n) for n in ("tip", "head")]
+    links = [mjcf_oracle.site_link(chain, n) if t == mujoco.mjtObj.mjOBJ_SITE else n for t, n in objects]
+    rng = np.random.default_rng(9)
+    worst = 0.0
+    for _ in range(10):
+        q = mjcf_oracle.random_qpos(model, rng)
+        qvel, qacc = rng.normal(size=model.nv), rng.normal(size=model.nv)
+        data.qpos[:], data.qvel[:], data.qacc[:] = q, qvel, qacc
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_comVel(model, data)
+        mujoco.mj_rnePostConstraint(model, data)
+        q_kc, qd_kc, qdd_kc = chain.from_layout(q, qvel, qacc, layout="mujoco")
+        r = chain.fk(q_kc, qd_kc, qdd_kc, links=links, check_limits=False)
+        for k, (kind, name) in enumerate(objects):
+            i = mujoco.mj_name2id(model, kind, name)
+            v, a = np.zeros(6), np.zeros(6)
+            mujoco.mj_objectVelocity(model, data, kind, i, v, 0)
+            mujoco.mj_objectAcceleration(model, data, kind, i, a, 0)
+            for got, want in ((r.omega[k], v[:3]), (r.v[k], v[3:]), (r.alpha[k], a[:3]), (r.a[k], a[3:])):
+                worst = max(worst, np.abs(got - want).max())
+        # And back: kinechain's rates in MuJoCo's layout are the qvel and qacc given.
+        _, qvel_back, qacc_back = chain.to_layout(q_kc, qd_kc, qdd_kc, layout="mujoco")
+        np.testing.assert_allclose(qvel_back, qvel, atol=1e-14)
+        np.testing.assert_allclose(qacc_back, qacc, atol=1e-14)
+    assert worst < 1e-12, worst
+
+
+def test_a_ball_joints_range_is_reported_not_checked():
+    chain = kc.load(DATA / "ball.xml")
+    assert any("ball joint 'wrist' has a range" in w for w in chain.warnings), chain.warnings
+    assert np.isinf(chain.lower[chain.q_names.index("wrist.qw")])
 
 
 @pytest.mark.skipif(not os.environ.get("KINECHAIN_MJCF_CORPUS"), reason="set KINECHAIN_MJCF_CORPUS to the Menagerie corpus")

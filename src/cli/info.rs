@@ -160,14 +160,14 @@ pub(super) fn info(
 
 /// What `q` holds beyond one entry per degree of freedom: the floating joint's position and
 /// quaternion, each ball joint's quaternion (empty for chains without).
-fn quaternion_note(chain: &crate::Chain) -> String {
+fn quaternion_note(chain: &crate::eval::Chain) -> String {
     let parts: Vec<String> = chain
         .quaternions()
         .iter()
         .map(|&(j, _)| {
             let joint = chain.joint(j);
             match joint.kind() {
-                crate::JointKind::Floating => format!(
+                crate::model::joint::JointKind::Floating => format!(
                     "the floating joint '{}': x y z, then the quaternion qw qx qy qz",
                     joint.name()
                 ),

@@ -73,6 +73,7 @@ const EVAL_ORDER: &[&str] = &[
     "eval::layout",
     "eval::kernel::frame",
     "eval::kernel::joint",
+    "eval::kernel::ball",
     "eval::kernel::floating",
     "eval::kernel::pose_lanes",
     "eval::kernel::pose_columns",

@@ -218,6 +218,48 @@ fn a_free_joint_places_its_body_by_qpos_alone() {
     assert!(p.z < 0.8);
 }
 
+#[test]
+fn a_ball_joint_turns_its_body_about_its_pos_by_four_entries_of_qpos() {
+    let chain = Chain::from_file(data_dir().join("ball.xml")).unwrap();
+    assert_eq!((chain.nq(), chain.nv()), (18, 14));
+    assert_eq!(
+        &kinechain::regression::variable_names(&chain)[..6],
+        [
+            "waist.qw",
+            "waist.qx",
+            "waist.qy",
+            "waist.qz",
+            "lift",
+            "shoulder.qw"
+        ]
+    );
+    // The ranged ball (its cone) is reported, once, and not turned into limits.
+    let said: Vec<_> = chain
+        .warnings()
+        .iter()
+        .filter(|w| w.contains("ball joint"))
+        .collect();
+    assert_eq!(said.len(), 1, "{said:?}");
+    assert!(said[0].contains("'wrist'"));
+    // The pendulum's ball at the body origin: the bob swings about it. A quarter turn about x
+    // takes the bob from below the pivot to beside it.
+    let mut q = chain.neutral();
+    let pivot = q.len() - 4;
+    q[pivot..].copy_from_slice(&[s(), s(), 0.0, 0.0]);
+    let (p, _) = pose(&chain, &q, "bob");
+    assert!(close(&p, &Vector3::new(1.0, 1.5, 1.0)), "{p}");
+    // The waist turns the torso about its pos (0.1 below the torso's origin): the origin
+    // moves on a circle of radius 0.1 about that point.
+    let (rest, _) = pose(&chain, &chain.neutral(), "torso");
+    let mut turned = chain.neutral();
+    turned[..4].copy_from_slice(&[0.0, 1.0, 0.0, 0.0]);
+    let (p, _) = pose(&chain, &turned, "torso");
+    let (_, r) = pose(&chain, &chain.neutral(), "torso");
+    let centre = rest - r * Vector3::new(0.0, 0.0, 0.1);
+    assert!(((p - centre).norm() - 0.1).abs() < 1e-14);
+    assert!((p - rest).norm() > 0.19);
+}
+
 fn s() -> f64 {
     0.5f64.sqrt()
 }
@@ -240,11 +282,6 @@ fn a_site_sharing_a_body_name_is_qualified_and_unnamed_elements_get_names() {
 #[test]
 fn errors_name_the_line_and_what_is_wrong() {
     for (text, line, says) in [
-        (
-            "<mujoco><worldbody>\n<body><joint type=\"ball\"/></body></worldbody></mujoco>",
-            2,
-            "ball joint",
-        ),
         (
             "<mujoco><worldbody>\n<body><joint type=\"screw\"/></body></worldbody></mujoco>",
             2,
@@ -371,7 +408,7 @@ fn an_xml_file_whose_root_is_robot_is_read_as_urdf() {
 
 #[test]
 fn an_error_has_the_line_and_column_of_the_attribute_at_fault() {
-    let text = "<mujoco><worldbody>\n<body><joint type=\"ball\"/></body></worldbody></mujoco>";
+    let text = "<mujoco><worldbody>\n<body><joint type=\"screw\"/></body></worldbody></mujoco>";
     let e = Chain::from_str_with(text, Format::Mjcf, "robot", &LoadOptions::default()).unwrap_err();
     assert_eq!(e.position(), Some((2, Some(14))));
 }

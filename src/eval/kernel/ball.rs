@@ -27,7 +27,6 @@
 //! axes fixed in the parent's frame, `ė_k = ω_p × e_k`.
 
 use crate::eval::kernel::frame::{Frame, mat_vec_add};
-use crate::eval::kernel::pose_columns::combine_const;
 use crate::eval::layout::body::Ball;
 use crate::eval::simd::traits::{Arith, Col, Num};
 
@@ -79,10 +78,19 @@ pub(crate) fn turn_lanes<N: Num, A: Arith>(f: &mut Frame<N>, ball: Ball, q: &[N]
 #[inline(always)]
 pub(crate) fn turn_columns<C: Col>(f: &mut [C; 4], ball: Ball, q: &[f64]) {
     let a = columns(quaternion(ball, q));
-    let (r, zero) = (*f, C::splat(0.0));
-    f[0] = combine_const(&r, a[0], zero);
-    f[1] = combine_const(&r, a[1], zero);
-    f[2] = combine_const(&r, a[2], zero);
+    let r = *f;
+    // `r₀ a₀ + (r₁ a₁ + (r₂ a₂ + 0))`: `mat_vec_add`'s order.
+    let column = |u: [f64; 3]| {
+        let zero = C::splat(0.0);
+        C::mul_add(
+            r[0],
+            C::splat(u[0]),
+            C::mul_add(r[1], C::splat(u[1]), C::mul_add(r[2], C::splat(u[2]), zero)),
+        )
+    };
+    f[0] = column(a[0]);
+    f[1] = column(a[1]);
+    f[2] = column(a[2]);
 }
 
 /// The joint's `w` (from `q̇`) or `ε` (from `q̈`).
