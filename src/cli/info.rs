@@ -102,7 +102,7 @@ pub(super) fn info(
                 chain.name(),
                 chain.dof(),
                 if chain.dof() == 1 { "" } else { "s" },
-                quaternion_note(&chain)
+                quaternion_note(chain)
             );
             text.push_str(&format!(
                 "{:>4}  {:<28} {:<12} {}\n",

@@ -757,37 +757,29 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
     let mut r = rng(21);
     // Four full chunks of eight, a partial one; 600 for the parallel Jacobians' pieces.
     for n in [37, 600] {
-        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut r)).collect();
+        let qs: Vec<f64> = (0..n).flat_map(|_| random_q(chain, &mut r)).collect();
         let qds = random_vec(n * nv, 1.0, &mut r);
         let qdds = random_vec(n * nv, 1.0, &mut r);
-        let mut single = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
-        let mut batch = BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut single = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+        let mut batch = BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
         let links: Vec<_> = chain
             .links()
             .iter()
             .map(|l| chain.link_id(l.name()).unwrap())
             .collect();
         let end = chain.end_link();
-        let acc = forward_accelerations_batch(&chain, &mut batch, &qs, &qds, &qdds)
+        let acc = forward_accelerations_batch(chain, &mut batch, &qs, &qds, &qdds)
             .unwrap()
             .velocities()
             .world_from_link(n - 1, end);
         let mut j = vec![0.0; n * 6 * nv];
         let mut j_par = vec![0.0; n * 6 * nv];
         let mut j_dot = vec![0.0; n * 6 * nv];
-        jacobian_batch(&chain, &mut batch, &qs, end, JacobianFrame::Link, &mut j).unwrap();
-        jacobian_batch_par(
-            &chain,
-            &mut batch,
-            &qs,
-            end,
-            JacobianFrame::Link,
-            &mut j_par,
-        )
-        .unwrap();
+        jacobian_batch(chain, &mut batch, &qs, end, JacobianFrame::Link, &mut j).unwrap();
+        jacobian_batch_par(chain, &mut batch, &qs, end, JacobianFrame::Link, &mut j_par).unwrap();
         assert_eq!(j, j_par, "{label}");
         jacobian_dot_batch(
-            &chain,
+            chain,
             &mut batch,
             &qs,
             &qds,
@@ -802,7 +794,7 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
                 &qds[i * nv..(i + 1) * nv],
                 &qdds[i * nv..(i + 1) * nv],
             );
-            let s = forward_accelerations(&chain, &mut single, q, qd, qdd).unwrap();
+            let s = forward_accelerations(chain, &mut single, q, qd, qdd).unwrap();
             if i == n - 1 {
                 assert_eq!(acc, s.world_from_link(end));
             }
@@ -823,11 +815,11 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
                 }
             }
         }
-        let poses = forward_kinematics_batch(&chain, &mut batch, &qs).unwrap();
+        let poses = forward_kinematics_batch(chain, &mut batch, &qs).unwrap();
         let expected: Vec<Vec<Transform>> = qs
             .chunks(nq)
             .map(|q| {
-                let p = forward_kinematics(&chain, &mut single, q).unwrap();
+                let p = forward_kinematics(chain, &mut single, q).unwrap();
                 links.iter().map(|&l| p.world_from_link(l)).collect()
             })
             .collect();
@@ -836,23 +828,23 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
                 assert_eq!(poses.world_from_link(i, id), *pose, "{label} {i} {id:?}");
             }
         }
-        let par = forward_kinematics_batch_par(&chain, &mut batch, &qs).unwrap();
+        let par = forward_kinematics_batch_par(chain, &mut batch, &qs).unwrap();
         for (i, want) in expected.iter().enumerate() {
             for (&id, pose) in links.iter().zip(want) {
                 assert_eq!(par.world_from_link(i, id), *pose, "{label} {i} {id:?} par");
             }
         }
         let end_index = links.iter().position(|&l| l == end).unwrap();
-        let one = forward_kinematics_batch_to(&chain, &mut batch, &qs, end).unwrap();
+        let one = forward_kinematics_batch_to(chain, &mut batch, &qs, end).unwrap();
         for (i, want) in expected.iter().enumerate() {
             assert_eq!(one.world_from_link(i), want[end_index], "{label} {i} end");
         }
         // Rates: every link, one thread and parallel.
         for parallel in [false, true] {
             let r = if parallel {
-                forward_accelerations_batch_par(&chain, &mut batch, &qs, &qds, &qdds)
+                forward_accelerations_batch_par(chain, &mut batch, &qs, &qds, &qdds)
             } else {
-                forward_accelerations_batch(&chain, &mut batch, &qs, &qds, &qdds)
+                forward_accelerations_batch(chain, &mut batch, &qs, &qds, &qdds)
             }
             .unwrap();
             for i in [0, n / 2, n - 1] {
@@ -861,7 +853,7 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
                     &qds[i * nv..(i + 1) * nv],
                     &qdds[i * nv..(i + 1) * nv],
                 );
-                let s = forward_accelerations(&chain, &mut single, q, qd, qdd).unwrap();
+                let s = forward_accelerations(chain, &mut single, q, qd, qdd).unwrap();
                 for &id in &links {
                     assert_eq!(r.velocity(i, id), s.velocity(id), "{label} {i} {id:?}");
                     assert_eq!(
@@ -874,12 +866,12 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
         }
         // Single precision: the same poses to its precision.
         let mut b32 =
-            single_precision::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
+            single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
         let mut e32 =
-            single_precision::BatchData::new(&chain).with_limit_policy(LimitPolicy::Ignore);
-        let p32 = single_precision::forward_kinematics_batch(&chain, &mut b32, &qs).unwrap();
+            single_precision::BatchData::new(chain).with_limit_policy(LimitPolicy::Ignore);
+        let p32 = single_precision::forward_kinematics_batch(chain, &mut b32, &qs).unwrap();
         let one32 =
-            single_precision::forward_kinematics_batch_to(&chain, &mut e32, &qs, end).unwrap();
+            single_precision::forward_kinematics_batch_to(chain, &mut e32, &qs, end).unwrap();
         for (i, want) in expected.iter().enumerate() {
             let tol = 1e-5 * (1.0 + chain.reach());
             let close = |t: Transform, w: &Transform| {
