@@ -81,6 +81,7 @@ fn read_model(
         counts: Counts::default(),
         qpos0: Vec::new(),
         refs: Vec::new(),
+        quaternions: Vec::new(),
     };
     let worlds: Vec<&Element> = root.children_named("worldbody").collect();
     for w in &worlds {
@@ -121,6 +122,8 @@ struct Reader {
     qpos0: Vec<f64>,
     /// Each hinge or slide joint's name and reference position (`qpos0`).
     refs: Vec<(String, f64)>,
+    /// Where each free or ball joint's quaternion starts in `qpos`.
+    quaternions: Vec<usize>,
 }
 
 impl Reader {
@@ -318,6 +321,7 @@ impl Reader {
                         ),
                     ));
                 }
+                self.quaternions.push(self.qpos0.len() + 3);
                 self.qpos0
                     .extend_from_slice(&[pose.p.x, pose.p.y, pose.p.z]);
                 let c = pose.q.quaternion();
@@ -445,6 +449,7 @@ impl Reader {
                         "ball joint '{name}' has a range (a cone about its reference orientation): kinechain does not check it"
                     ));
                 }
+                self.quaternions.push(self.qpos0.len());
                 self.qpos0.extend_from_slice(&[1.0, 0.0, 0.0, 0.0]);
                 Ok(spec)
             }
@@ -511,7 +516,8 @@ impl Reader {
         Ok(())
     }
 
-    /// The `<key>` configurations (their `qpos`, or `qpos0` where a key gives none), unnamed
+    /// The `<key>` configurations (their `qpos`, with the quaternions of free and ball joints
+    /// normalised as MuJoCo's compiler normalises them, or `qpos0` where a key gives none), unnamed
     /// ones called `keyN` (N counting keys from 0), and as many more holding `qpos0` as
     /// `<size nkey>` asks for.
     fn keyframes(&mut self, root: &Element) -> Result<(), Problem> {
@@ -541,6 +547,10 @@ impl Reader {
                 }
                 None => self.qpos0.clone(),
             };
+            let mut q = q;
+            for &first in &self.quaternions {
+                normalize_quaternion(&mut q[first..first + 4]);
+            }
             self.b.keyframe(name, q);
         }
         // `<size nkey="N">` makes room for N keys: those the file does not give hold qpos0.
@@ -663,6 +673,21 @@ impl Reader {
                 "equality constraints ({}) are not applied: q is read as MuJoCo's mj_kinematics reads qpos",
                 list.join(", ")
             ));
+        }
+    }
+}
+
+/// `e` (a quaternion of `qpos`) normalised as MuJoCo's `mju_normalize4` does it: the identity
+/// when its norm is below `mjMINVAL` (10⁻¹⁵), unchanged when within that of 1, else divided by
+/// its norm.
+fn normalize_quaternion(e: &mut [f64]) {
+    const MIN: f64 = 1e-15;
+    let norm = (((e[0] * e[0] + e[1] * e[1]) + e[2] * e[2]) + e[3] * e[3]).sqrt();
+    if norm < MIN {
+        e.copy_from_slice(&[1.0, 0.0, 0.0, 0.0]);
+    } else if (norm - 1.0).abs() > MIN {
+        for x in e {
+            *x /= norm;
         }
     }
 }
