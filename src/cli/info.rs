@@ -105,7 +105,7 @@ pub(super) fn info(
                 quaternion_note(chain)
             );
             text.push_str(&format!(
-                "{:>4}  {:<28} {:<12} {}\n",
+                "{:>5}  {:<28} {:<12} {}\n",
                 "q", "joint", "type", "limits"
             ));
             for j in independent {
@@ -116,7 +116,7 @@ pub(super) fn info(
                     n => format!("{first}-{}", first + n - 1),
                 };
                 text.push_str(&format!(
-                    "{:>4}  {:<28} {:<12} {}\n",
+                    "{:>5}  {:<28} {:<12} {}\n",
                     q,
                     j.name(),
                     j.kind().as_str(),
@@ -134,7 +134,7 @@ pub(super) fn info(
                     None => String::new(),
                 };
                 text.push_str(&format!(
-                    "{:>4}  {:<28} {:<12} {}\n",
+                    "{:>5}  {:<28} {:<12} {}\n",
                     "-",
                     j.name(),
                     j.kind().as_str(),

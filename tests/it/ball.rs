@@ -546,3 +546,61 @@ fn joint_vectors_go_to_other_layouts_and_back() {
         }
     }
 }
+
+#[test]
+fn the_command_line_lists_evaluates_and_refuses_ball_joints() {
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_kinechain"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap()
+    };
+    let file = "tests/data/mjcf/ball.xml";
+    let out = run(&["info", file, "--format", "table"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("q has 18 entries"), "{text}");
+    assert!(text.contains("10-13  wrist"), "{text}");
+    // fk at a configuration given on the command line equals the library's.
+    let chain = Chain::from_file(file).unwrap();
+    let q = chain.keyframes()[0].1.clone();
+    let q_text: Vec<String> = q.iter().map(|x| format!("{x:?}")).collect();
+    let out = run(&[
+        "fk",
+        file,
+        "--link",
+        "tip",
+        "--q",
+        &q_text.join(" "),
+        "--format",
+        "json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let pose = &v["links"]["tip"]["pose"];
+    let want = link_poses(&chain, &q)[chain.link_id("tip").unwrap().index()].to_rows();
+    for r in 0..3 {
+        for c in 0..4 {
+            assert_eq!(pose[r][c].as_f64().unwrap(), want[r][c], "{r} {c}");
+        }
+    }
+    // A zero quaternion names the joint; URDF cannot hold a ball joint.
+    let mut bad = q_text.clone();
+    bad[..4].fill("0".to_string());
+    let out = run(&["fk", file, "--q", &bad.join(" ")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("ball joint 'waist'"),
+        "{err}"
+    );
+    let out = run(&["convert", file]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("is a ball joint"),
+        "{err}"
+    );
+}
