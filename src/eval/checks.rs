@@ -105,10 +105,23 @@ pub(crate) fn check_values(
     Ok(())
 }
 
-/// Each floating or ball joint's quaternion (finite) near unit length.
+/// Each floating or ball joint's quaternion (finite) near unit length. (Inlined up to the test
+/// for none, the common case: the loop of the others is out of line.)
 #[inline]
 pub(crate) fn check_quaternion(chain: &Chain, q: &[f64]) -> Result<(), StateError> {
-    for &(j, first) in chain.quaternions() {
+    match chain.quaternions() {
+        [] => Ok(()),
+        quaternions => check_quaternions(chain, quaternions, q),
+    }
+}
+
+#[inline(never)]
+fn check_quaternions(
+    chain: &Chain,
+    quaternions: &[(crate::model::chain::JointId, usize)],
+    q: &[f64],
+) -> Result<(), StateError> {
+    for &(j, first) in quaternions {
         let e = &q[first..first + 4];
         if !crate::eval::kernel::floating::admits(e) {
             return Err(StateError::BadQuaternion {

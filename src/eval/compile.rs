@@ -109,7 +109,8 @@ pub(crate) fn assemble(
 
         if js.kind == JointKind::Ball {
             // Its frame and rates come from its own entries of `q` and `q̇`
-            // ([`Body::ball`]); the zero motion about x keeps it off the kernels' z-axis paths.
+            // ([`Body::ball`]); a motion about x keeps it off the kernels' z-axis paths, and its
+            // θ, NaN, sends the kernels to the ball's step from the arm of a constant θ.
             let body = bodies.len();
             bodies.push(Body {
                 follows_previous: carrier.is_some() && carrier == body.checked_sub(1),
@@ -121,7 +122,7 @@ pub(crate) fn assemble(
                 ..Body::new(
                     carrier,
                     compose(offset, origin),
-                    Motion::new(Axis::X, Term::Const(0.0), Term::Const(0.0)),
+                    Motion::new(Axis::X, Term::Const(f64::NAN), Term::Const(0.0)),
                     post,
                     new_joint[j],
                 )

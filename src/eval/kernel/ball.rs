@@ -30,6 +30,15 @@ use crate::eval::kernel::frame::{Frame, mat_vec_add};
 use crate::eval::layout::body::Ball;
 use crate::eval::simd::traits::{Arith, Col, Num};
 
+/// Marks the path that calls it as rarely taken (a call to a cold function, which the compiler
+/// lays out of the way, keeping its registers for the other paths): the ball step inside the
+/// batch kernels, so that chains without ball joints keep their register allocation (inlined
+/// without it, the ball step made the Panda's batch of poses spill more: 2 % more instructions
+/// under callgrind).
+#[cold]
+#[inline(never)]
+pub(crate) fn rarely() {}
+
 /// The columns of `A(e)` (eq. 2.13) of the normalised `e`: `s = 2 / (e · e)`, then each entry's
 /// expression, in plain operations (no fused multiply–add), the same on every path.
 #[inline(always)]

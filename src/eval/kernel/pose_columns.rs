@@ -209,16 +209,16 @@ fn apply_motion<A: Arith>(f: &mut [A::Col; 4], body: &Body, q: &[f64], sin_cos: 
         }
     }
     match m.theta {
-        // A ball joint's body has θ = 0 (tested here, the arm of prismatic joints only).
-        Term::Const(0.0) => {
-            if let Some(ball) = body.ball {
-                crate::eval::kernel::ball::turn_columns(f, ball, q);
+        Term::Const(0.0) => {}
+        Term::Const(_) => match body.ball {
+            // A ball joint's body, whose θ is NaN (`Body::ball`): its own step, in the arm that
+            // otherwise only sliding joints with a constant θ (a DH row's offset) take.
+            Some(ball) => crate::eval::kernel::ball::turn_columns(f, ball, q),
+            None => {
+                let (s, c) = m.const_sin_cos;
+                rotate_columns::<A>(f, &m.axis, s, c);
             }
-        }
-        Term::Const(_) => {
-            let (s, c) = m.const_sin_cos;
-            rotate_columns::<A>(f, &m.axis, s, c);
-        }
+        },
         Term::Var { .. } => rotate_columns::<A>(f, &m.axis, sin_cos.0, sin_cos.1),
     }
 }

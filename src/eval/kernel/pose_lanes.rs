@@ -25,14 +25,17 @@ fn apply_motion<N: Num, A: Arith>(f: &mut Frame<N>, body: &Body, q: &[N], sin_co
         }
     }
     let (s, c) = match m.theta {
-        // A ball joint's body has θ = 0 (tested here, the arm of prismatic joints only).
-        Term::Const(0.0) => {
+        Term::Const(0.0) => return,
+        Term::Const(_) => {
+            // A ball joint's body, whose θ is NaN (`Body::ball`): its own step, in the arm that
+            // otherwise only sliding joints with a constant θ (a DH row's offset) take.
             if let Some(ball) = body.ball {
+                crate::eval::kernel::ball::rarely();
                 crate::eval::kernel::ball::turn_lanes::<N, A>(f, ball, q);
+                return;
             }
-            return;
+            (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1))
         }
-        Term::Const(_) => (N::splat(m.const_sin_cos.0), N::splat(m.const_sin_cos.1)),
         _ => sin_cos,
     };
     rotate_columns::<N, A>(&mut f.r, &m.axis, s, c);

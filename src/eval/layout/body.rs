@@ -134,8 +134,9 @@ pub(crate) struct Body {
     /// The body of a ball joint: its frame is `parent · pre · [A(e) 0] · post` with the Euler
     /// parameters `e` the four entries of `q` from [`Ball::q`], and its angular velocity and
     /// acceleration relative to the parent the three entries of `q̇` and `q̈` from [`Ball::v`]
-    /// ([`crate::eval::kernel::ball`]); `motion` is a constant zero (the kernels reach the ball's
-    /// own step through the arm of a zero θ).
+    /// ([`crate::eval::kernel::ball`]); `motion` is unused but for its θ, a constant NaN, which
+    /// leads the kernels to the ball's own step from the arm of a constant θ (taken otherwise
+    /// only by sliding joints with a θ offset, so that other chains pay nothing for it).
     pub(crate) ball: Option<Ball>,
 }
 
