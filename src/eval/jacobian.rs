@@ -346,6 +346,17 @@ fn stored_jacobian_generic<A: Arith>(
             column[3..].copy_from_slice(&unwritten);
         }
     }
+    // A column of a floating or ball joint, written once: its two halves, in link axes when asked.
+    let write_once = |j: &mut [f64], index: usize, halves: [C<A>; 2]| {
+        let column = &mut j[6 * index..6 * index + 6];
+        for (half, x) in column.chunks_exact_mut(3).zip(halves) {
+            let mut x = entries(x);
+            if link_axes {
+                x = entries(to_link(x));
+            }
+            half.copy_from_slice(&x);
+        }
+    };
     let mut at = Some(body);
     while let Some(b) = at {
         let bd = &chain.bodies[b];
@@ -358,16 +369,8 @@ fn stored_jacobian_generic<A: Arith>(
                 e[k] = 1.0;
                 let z = C::<A>::from_entries(e);
                 let turning = cross4(z, C::<A>::sub(p, origin));
-                for (index, halves) in [(k, [z, zero]), (3 + k, [turning, z])] {
-                    let column = &mut j[6 * index..6 * index + 6];
-                    for (half, x) in column.chunks_exact_mut(3).zip(halves) {
-                        let mut x = entries(x);
-                        if link_axes {
-                            x = entries(to_link(x));
-                        }
-                        half.copy_from_slice(&x);
-                    }
-                }
+                write_once(j, k, [z, zero]);
+                write_once(j, 3 + k, [turning, z]);
             }
             at = bd.parent;
             continue;
@@ -393,14 +396,7 @@ fn stored_jacobian_generic<A: Arith>(
                 e[k] = 1.0;
                 let z = C::<A>::from_entries(e);
                 let turning = cross4(z, C::<A>::sub(p, origin));
-                let column = &mut j[6 * (ball.v + k)..6 * (ball.v + k) + 6];
-                for (half, x) in column.chunks_exact_mut(3).zip([turning, z]) {
-                    let mut x = entries(x);
-                    if link_axes {
-                        x = entries(to_link(x));
-                    }
-                    half.copy_from_slice(&x);
-                }
+                write_once(j, ball.v + k, [turning, z]);
             }
             at = bd.parent;
             continue;

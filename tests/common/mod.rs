@@ -890,3 +890,33 @@ pub fn assert_batches_equal_single(chain: &Chain, label: &str) {
         }
     }
 }
+
+/// `(q, q̇, q̈)` in `layout` and back: the way back must give them again within 1e-14 (`label`
+/// naming the chain in failures). Returns them in `layout`.
+pub fn assert_layout_round_trip(
+    chain: &Chain,
+    layout: kinechain::eval::layouts::Layout,
+    (q, qd, qdd): (&[f64], &[f64], &[f64]),
+    label: &str,
+) -> kinechain::eval::layouts::JointState {
+    let theirs = chain.to_layout(layout, q, Some(qd), Some(qdd)).unwrap();
+    let back = chain
+        .from_layout(
+            layout,
+            &theirs.q,
+            theirs.q_dot.as_deref(),
+            theirs.q_ddot.as_deref(),
+        )
+        .unwrap();
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-14);
+    assert!(close(&back.q, q), "{label} {layout:?} q");
+    assert!(
+        close(back.q_dot.as_deref().unwrap(), qd),
+        "{label} {layout:?} qd"
+    );
+    assert!(
+        close(back.q_ddot.as_deref().unwrap(), qdd),
+        "{label} {layout:?} qdd"
+    );
+    theirs
+}

@@ -506,26 +506,8 @@ fn joint_vectors_go_to_other_layouts_and_back() {
                 let q = random_q(&chain, &mut r);
                 let qd = random_vec(chain.nv(), 1.0, &mut r);
                 let qdd = random_vec(chain.nv(), 1.0, &mut r);
-                let theirs = chain.to_layout(layout, &q, Some(&qd), Some(&qdd)).unwrap();
-                let back = chain
-                    .from_layout(
-                        layout,
-                        &theirs.q,
-                        theirs.q_dot.as_deref(),
-                        theirs.q_ddot.as_deref(),
-                    )
-                    .unwrap();
-                let close =
-                    |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-14);
-                assert!(close(&back.q, &q), "{label} {layout:?} q");
-                assert!(
-                    close(back.q_dot.as_deref().unwrap(), &qd),
-                    "{label} {layout:?} qd"
-                );
-                assert!(
-                    close(back.q_ddot.as_deref().unwrap(), &qdd),
-                    "{label} {layout:?} qdd"
-                );
+                let theirs =
+                    crate::common::assert_layout_round_trip(&chain, layout, (&q, &qd, &qdd), label);
                 // The quaternion's order, and the rates in the axes of the wrist's child link
                 // (its frame after the turn).
                 let e = &q[qi..qi + 4];

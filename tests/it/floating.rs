@@ -527,22 +527,8 @@ fn joint_vectors_go_to_other_layouts_and_back() {
             let q = random_q(&chain, &mut r);
             let qd = random_vec(chain.nv(), 1.0, &mut r);
             let qdd = random_vec(chain.nv(), 1.0, &mut r);
-            let theirs = chain.to_layout(layout, &q, Some(&qd), Some(&qdd)).unwrap();
-            let back = chain
-                .from_layout(
-                    layout,
-                    &theirs.q,
-                    theirs.q_dot.as_deref(),
-                    theirs.q_ddot.as_deref(),
-                )
-                .unwrap();
-            let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-14);
-            assert!(close(&back.q, &q), "{layout:?} q");
-            assert!(close(back.q_dot.as_deref().unwrap(), &qd), "{layout:?} qd");
-            assert!(
-                close(back.q_ddot.as_deref().unwrap(), &qdd),
-                "{layout:?} qdd"
-            );
+            let theirs =
+                crate::common::assert_layout_round_trip(&chain, layout, (&q, &qd, &qdd), "panda");
             // The mimicked finger follows its primary.
             let finger = theirs.q[theirs.q.len() - 1];
             assert_eq!(finger, q[q.len() - 1]);
