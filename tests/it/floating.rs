@@ -481,38 +481,7 @@ fn every_single_evaluation_mode_gives_the_full_evaluations_bits() {
 #[cfg(feature = "reference")]
 #[test]
 fn a_floating_base_is_within_a_few_ulps_of_the_256_bit_evaluation() {
-    let chain = floating("panda.urdf");
-    let mut data = Data::new(&chain).with_limit_policy(LimitPolicy::Ignore);
-    let mut r = rng(55);
-    let (mut pose_worst, mut rate_worst) = (0.0_f64, [0.0_f64; 4]);
-    for _ in 0..50 {
-        let q = random_q(&chain, &mut r);
-        let qd = random_vec(chain.nv(), 2.0, &mut r);
-        let qdd = random_vec(chain.nv(), 2.0, &mut r);
-        let exact = kinechain::reference::link_motion(&chain, &q, &qd, &qdd);
-        let got = forward_accelerations(&chain, &mut data, &q, &qd, &qdd).unwrap();
-        let poses: Vec<Transform> = (0..exact.len())
-            .map(|l| got.world_from_link(chain.link_id(chain.links()[l].name()).unwrap()))
-            .collect();
-        let want: Vec<Transform> = exact.iter().map(|m| m.pose).collect();
-        let (p, rot) = kinechain::reference::max_errors(&poses, &want);
-        pose_worst = pose_worst.max(p / 4.0).max(rot); // positions within 2 m of the origin
-        let rates: Vec<[[f64; 3]; 4]> = (0..exact.len())
-            .map(|l| {
-                let id = chain.link_id(chain.links()[l].name()).unwrap();
-                let (v, a) = (got.velocity(id), got.acceleration(id));
-                [v.omega.into(), v.v.into(), a.alpha.into(), a.a.into()]
-            })
-            .collect();
-        for (w, (_, ulps)) in rate_worst
-            .iter_mut()
-            .zip(kinechain::reference::max_rate_errors(&rates, &exact))
-        {
-            *w = w.max(ulps);
-        }
-    }
-    assert!(pose_worst < 8.0 * f64::EPSILON, "{pose_worst:e}");
-    assert!(rate_worst.iter().all(|&u| u < 8.0), "{rate_worst:?}");
+    crate::common::assert_within_8_ulp_of_the_256_bit_evaluation(&floating("panda.urdf"), "panda");
 }
 
 #[test]
