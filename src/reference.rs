@@ -109,13 +109,17 @@ fn euler_columns(e: &[f64]) -> [[F; 3]; 3] {
 }
 
 /// The frame of a floating joint's body, `pre · [A(e) p] · post`, or of a ball joint's,
-/// `pre · [A(e) 0] · post` (`eval::kernel::floating`, `eval::kernel::ball`).
+/// `pre · [A(e) 0] · post` (`eval::kernel::floating`, `eval::kernel::ball`; a floating joint other
+/// than the floating base is a free ball body).
 fn quaternion_local(body: &Body, q: &[f64]) -> BigFrame {
     let pre = BigFrame::from_transform(&body.pre_frame);
     let own = match body.ball {
         Some(ball) => BigFrame {
-            r: euler_columns(&q[ball.q..ball.q + 4]),
-            p: [F::ZERO, F::ZERO, F::ZERO],
+            r: euler_columns(&q[ball.quaternion()..ball.quaternion() + 4]),
+            p: match ball.free {
+                true => [exact(q[ball.q]), exact(q[ball.q + 1]), exact(q[ball.q + 2])],
+                false => [F::ZERO, F::ZERO, F::ZERO],
+            },
         },
         None => BigFrame {
             r: euler_columns(&q[3..7]),
@@ -352,17 +356,22 @@ pub fn link_motion(chain: &Chain, q: &[f64], q_dot: &[f64], q_ddot: &[f64]) -> V
         let u = sub(&frame.p, &p_joint);
         let r = sub(&frame.p, &p_parent);
         if let Some(ball) = body.ball {
-            // The recursion of `eval::kernel::ball`.
-            let three = |x: &[f64]| [exact(x[ball.v]), exact(x[ball.v + 1]), exact(x[ball.v + 2])];
-            let (w, eps) = (three(q_dot), three(q_ddot));
-            let v_rel = cross(&w, &u);
+            // The recursion of `eval::kernel::ball`: a free body's relative velocity and
+            // acceleration are entries of q̇ and q̈, a ball's follow from its turn about p_j.
+            let three = |x: &[f64], i: usize| [exact(x[i]), exact(x[i + 1]), exact(x[i + 2])];
+            let (w, eps) = (three(q_dot, ball.angular()), three(q_ddot, ball.angular()));
+            let (v_rel, a_rel) = match ball.free {
+                true => (three(q_dot, ball.v), three(q_ddot, ball.v)),
+                false => {
+                    let v_rel = cross(&w, &u);
+                    let a_rel = add(&cross(&eps, &u), &cross(&w, &v_rel));
+                    (v_rel, a_rel)
+                }
+            };
             let w_r = cross(&w_p, &r);
             let a = add(
                 &add(&a_p, &add(&cross(&al_p, &r), &cross(&w_p, &w_r))),
-                &add(
-                    &scale(&exact(2.0), &cross(&w_p, &v_rel)),
-                    &add(&cross(&eps, &u), &cross(&w, &v_rel)),
-                ),
+                &add(&scale(&exact(2.0), &cross(&w_p, &v_rel)), &a_rel),
             );
             bodies.push(BigMotion {
                 frame,

@@ -164,7 +164,7 @@ def test_floating_errors_name_the_joint_and_what_makes_up_q():
         chain.from_layout(q[:-1], layout="pinocchio")
     with pytest.raises(kc.Error, match="base must be"):
         chain.random(3, base=(1.0, -1.0))
-    with pytest.raises(kc.LoadError, match="another floating joint"):
+    with pytest.raises(kc.LoadError, match="two floating joints in a row"):
         kc.Chain.from_urdf_string(
             '<robot name="r"><link name="w"/><link name="b"/><joint name="f" type="floating"><parent link="w"/><child link="b"/></joint></robot>',
             floating_base=True,
@@ -222,16 +222,26 @@ joints:
 """
 
 
-def test_ball_joints_agree_with_pinocchios_spherical_joint():
-    # The same arm built in Pinocchio joint by joint (JointModelSpherical for the balls, whose q
-    # is x y z w and whose v and a are in the joint's own axes): each joint frame's pose,
-    # velocity and classical acceleration, through to_layout("pinocchio").
-    chain = kc.Chain.from_yaml_string(BALL_ARM)
-    assert (chain.nq, chain.nv) == (10, 8)
+FREE_ARM = """name: freearm
+convention: axis
+joints:
+  - {name: base, type: revolute, origin: {xyz: [0, 0, 0.3]}, axis: [0, 0, 1], limits: [-3, 3]}
+  - {name: carried, type: floating, origin: {xyz: [0.1, 0.2, 0.4], rpy: [0.3, 0.2, 0.1]}}
+  - {name: elbow, type: revolute, origin: {xyz: [0, 0, 0.35]}, axis: [0, 1, 0], limits: [-2, 2]}
+  - {name: wrist, type: ball, origin: {xyz: [0.05, 0, 0.3], rpy: [-0.4, 1.2, 0.7]}}
+"""
+
+
+def _compare_with_pinocchio_joint_by_joint(text, kinds, sizes):
+    # The same arm built in Pinocchio joint by joint (JointModelSpherical for a ball, whose q is
+    # x y z w; JointModelFreeFlyer for a floating joint below a moving one, x y z then x y z w;
+    # both with v and a in the joint's own axes): each joint frame's pose, velocity and classical
+    # acceleration, Jacobians, through to_layout("pinocchio"), and back.
+    chain = kc.Chain.from_yaml_string(text)
+    assert (chain.nq, chain.nv) == sizes
     model = pin.Model()
     parent = 0
     placements = [([0, 0, 0.3], [0, 0, 0]), ([0.1, 0.2, 0.4], [0.3, 0.2, 0.1]), ([0, 0, 0.35], [0, 0, 0]), ([0.05, 0, 0.3], [-0.4, 1.2, 0.7])]
-    kinds = [pin.JointModelRZ(), pin.JointModelSpherical(), pin.JointModelRY(), pin.JointModelSpherical()]
     joints = []
     for (xyz, rpy), kind, name in zip(placements, kinds, ["base", "shoulder", "elbow", "wrist"]):
         parent = model.addJoint(parent, kind, pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz, dtype=float)), name)
@@ -245,7 +255,6 @@ def test_ball_joints_agree_with_pinocchios_spherical_joint():
     for q in qs:
         qd, qdd = rng.uniform(-1, 1, chain.nv), rng.uniform(-1, 1, chain.nv)
         pq, pv, pa = chain.to_layout(q, qd, qdd, layout="pinocchio")
-        np.testing.assert_array_equal(pq[1:5], [q[2], q[3], q[4], q[1]])
         pin.forwardKinematics(model, data, pq, pv, pa)
         pin.computeJointJacobians(model, data, pq)
         r = chain.fk(q, qd, qdd, links=links)
@@ -268,6 +277,22 @@ def test_ball_joints_agree_with_pinocchios_spherical_joint():
     assert worst["v"] < 1e-14, worst
     assert worst["a"] < 1e-13, worst
     assert worst["J"] < 1e-14, worst
+    return chain
+
+
+def test_ball_joints_agree_with_pinocchios_spherical_joint():
+    kinds = [pin.JointModelRZ(), pin.JointModelSpherical(), pin.JointModelRY(), pin.JointModelSpherical()]
+    chain = _compare_with_pinocchio_joint_by_joint(BALL_ARM, kinds, (10, 8))
+    q = chain.random(1, seed=1)[0]
+    np.testing.assert_array_equal(chain.to_layout(q, layout="pinocchio")[0][1:5], [q[2], q[3], q[4], q[1]])
+
+
+def test_a_floating_joint_below_a_moving_one_agrees_with_pinocchios_free_flyer():
+    kinds = [pin.JointModelRZ(), pin.JointModelFreeFlyer(), pin.JointModelRY(), pin.JointModelSpherical()]
+    chain = _compare_with_pinocchio_joint_by_joint(FREE_ARM, kinds, (13, 11))
+    assert chain.q_names[1:8] == [f"carried.{c}" for c in ("x", "y", "z", "qw", "qx", "qy", "qz")]
+    q = chain.random(1, seed=1)[0]
+    np.testing.assert_array_equal(chain.to_layout(q, layout="pinocchio")[0][1:8], q[[1, 2, 3, 5, 6, 7, 4]])
 
 
 def test_ball_joint_errors_name_the_joint():

@@ -688,7 +688,11 @@ pub(super) fn k_method<'a>(
     qs: &[Vec<f64>],
 ) -> Option<(String, Box<dyn FnMut() + 'a>)> {
     // `k` reads a floating joint as a fixed one: it has no column to compare.
-    if chain.floating_joint().is_some() {
+    if chain
+        .joints()
+        .iter()
+        .any(|j| j.kind() == crate::model::joint::JointKind::Floating)
+    {
         return None;
     }
     let (robot, written, label) =

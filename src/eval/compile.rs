@@ -57,6 +57,7 @@ pub(crate) fn assemble(
         .collect();
     let v_of_q = |i: usize| i - quaternion_entries.iter().filter(|&&e| e < i).count();
     let root = tree.root;
+    let base = crate::model::validate::floating_base(spec, tree);
     let mut link_carrier: Vec<(Option<usize>, Placement)> =
         vec![(None, Placement::Identity); spec.links.len()];
     link_carrier[root] = (
@@ -89,9 +90,10 @@ pub(crate) fn assemble(
         let first = q_index[j].unwrap_or(0);
         let (theta, d) = joint_terms(js, first, mimic[j], q_index);
 
-        if js.kind == JointKind::Floating {
-            // The first body ([`Body::floating`]): its frame and rates come from the first
-            // seven entries of `q` and six of `q̇`, not from a motion about an axis.
+        if js.kind == JointKind::Floating && Some(j) == base {
+            // The floating base, the first body ([`Body::floating`]): its frame and rates come
+            // from the first seven entries of `q` and six of `q̇`, not from a motion about an
+            // axis.
             let body = bodies.len();
             bodies.push(Body {
                 floating: true,
@@ -107,10 +109,11 @@ pub(crate) fn assemble(
             continue;
         }
 
-        if js.kind == JointKind::Ball {
-            // Its frame and rates come from its own entries of `q` and `q̇`
-            // ([`Body::ball`]); a motion about x keeps it off the kernels' z-axis paths, and its
-            // θ, NaN, sends the kernels to the ball's step from the arm of a constant θ.
+        if matches!(js.kind, JointKind::Ball | JointKind::Floating) {
+            // Its frame and rates come from its own entries of `q` and `q̇` ([`Body::ball`]; a
+            // floating joint other than the floating base is a ball with a translation); a
+            // motion about x keeps it off the kernels' z-axis paths, and its θ, NaN, sends the
+            // kernels to the ball's step from the arm of a constant θ.
             let body = bodies.len();
             bodies.push(Body {
                 follows_previous: carrier.is_some() && carrier == body.checked_sub(1),
@@ -118,6 +121,7 @@ pub(crate) fn assemble(
                 ball: Some(Ball {
                     q: first,
                     v: v_of_q(first),
+                    free: js.kind == JointKind::Floating,
                 }),
                 ..Body::new(
                     carrier,
@@ -413,11 +417,12 @@ fn build(spec: &ChainBuilder) -> Result<Chain, ModelError> {
             column_terms[t.index] += 1;
         }
     }
-    // A floating joint's body writes the first six columns, a ball joint's its three, once each.
+    // The floating base's body writes the first six columns, another floating joint's its six,
+    // a ball joint's its three, once each.
     for b in &bodies {
         match (b.floating, b.ball) {
             (true, _) => column_terms[..6].fill(1),
-            (false, Some(ball)) => column_terms[ball.v..ball.v + 3].fill(1),
+            (false, Some(ball)) => column_terms[ball.v..ball.angular() + 3].fill(1),
             (false, None) => {}
         }
     }

@@ -98,7 +98,7 @@ fn path_columns(
     let mut body = chain.carrier(link).body;
     while let Some(b) = body {
         let bd = &chain.bodies[b];
-        if let Some(ball) = bd.ball {
+        if let Some(ball) = bd.ball.filter(|b| !b.free) {
             for k in 0..3 {
                 let mut e = [0.0; 3];
                 e[k] = 1.0;
@@ -108,13 +108,19 @@ fn path_columns(
             body = bd.parent;
             continue;
         }
-        if bd.floating {
+        // The floating base's six columns are the first; another floating joint's its own.
+        let free = match (bd.floating, bd.ball) {
+            (true, _) => Some(0),
+            (false, Some(ball)) => Some(ball.v),
+            (false, None) => None,
+        };
+        if let Some(v) = free {
             for k in 0..3 {
                 let mut e = [0.0; 3];
                 e[k] = 1.0;
                 let (turning, sliding) = floating(b, e);
-                j[6 * k..6 * k + 6].copy_from_slice(&sliding);
-                j[6 * (3 + k)..6 * (3 + k) + 6].copy_from_slice(&turning);
+                j[6 * (v + k)..6 * (v + k) + 6].copy_from_slice(&sliding);
+                j[6 * (v + 3 + k)..6 * (v + 3 + k) + 6].copy_from_slice(&turning);
             }
             body = bd.parent;
             continue;
@@ -244,12 +250,22 @@ pub(crate) fn jacobian_dot(s: &impl State, link: LinkId, frame: JacobianFrame, j
             )
         },
         |b, e| {
-            // World axes do not turn; the turning column's point is the body's origin, moving
-            // at the body's v.
+            // The turning column's point is the body's origin, moving at the body's v. The axes
+            // are fixed in the parent's frame: under the floating base (or any floating joint
+            // hanging from the world) they do not turn.
             let origin = s.body_frame(b).p;
             let origin_dot = s.body_rates(b)[1];
-            let turning_dot = join(cross3(e, sub3(p_dot, origin_dot)), [0.0; 3]);
-            let sliding_dot = [0.0; 6];
+            let (turning_dot, sliding_dot) = match s.chain().bodies[b].parent {
+                None => (join(cross3(e, sub3(p_dot, origin_dot)), [0.0; 3]), [0.0; 6]),
+                Some(parent) => {
+                    let e_dot = cross3(s.body_rates(parent)[0], e);
+                    let turning = add3(
+                        cross3(e_dot, sub3(p, origin)),
+                        cross3(e, sub3(p_dot, origin_dot)),
+                    );
+                    (join(turning, e_dot), join(e_dot, [0.0; 3]))
+                }
+            };
             if frame != JacobianFrame::Link {
                 return (turning_dot, sliding_dot);
             }
@@ -360,7 +376,13 @@ fn stored_jacobian_generic<A: Arith>(
     let mut at = Some(body);
     while let Some(b) = at {
         let bd = &chain.bodies[b];
-        if bd.floating {
+        // The floating base's six columns are the first; another floating joint's its own.
+        let free = match (bd.floating, bd.ball) {
+            (true, _) => Some(0),
+            (false, Some(ball)) if ball.free => Some(ball.v),
+            _ => None,
+        };
+        if let Some(v) = free {
             // Six columns: a slide along and a turn about each world axis, the turns through
             // the body's origin (see `path_columns`).
             let origin = Frame4::<C<A>>::load(&frames[b]).0[3];
@@ -369,8 +391,8 @@ fn stored_jacobian_generic<A: Arith>(
                 e[k] = 1.0;
                 let z = C::<A>::from_entries(e);
                 let turning = cross4(z, C::<A>::sub(p, origin));
-                write_once(j, k, [z, zero]);
-                write_once(j, 3 + k, [turning, z]);
+                write_once(j, v + k, [z, zero]);
+                write_once(j, v + 3 + k, [turning, z]);
             }
             at = bd.parent;
             continue;

@@ -80,8 +80,9 @@ enum Entry {
         offset: f64,
         mimic: bool,
     },
-    /// A floating joint.
-    Free,
+    /// A floating joint: its position and quaternion from `q`, its rates from `v`, `body` its
+    /// body.
+    Free { q: usize, v: usize, body: usize },
     /// A ball joint: its quaternion from `q`, its rates from `v`, `body` its body.
     Ball { q: usize, v: usize, body: usize },
 }
@@ -92,7 +93,7 @@ impl Entry {
         match self {
             Entry::Same { .. } => (1, 1),
             Entry::CosSin { .. } => (2, 1),
-            Entry::Free => (7, 6),
+            Entry::Free { .. } => (7, 6),
             Entry::Ball { .. } => (4, 3),
         }
     }
@@ -143,14 +144,15 @@ fn entries(chain: &Chain, layout: Layout) -> Vec<Entry> {
             continue;
         };
         match joint.kind() {
-            JointKind::Floating => out.push(Entry::Free),
-            JointKind::Ball => {
+            JointKind::Floating | JointKind::Ball => {
                 let body = chain
                     .bodies
                     .iter()
-                    .position(|b| b.ball.is_some_and(|b| b.q == q));
-                if let Some(body) = body {
-                    out.push(Entry::Ball { q, v, body });
+                    .position(|b| b.ball.is_some_and(|b| b.q == q) || (b.floating && q == 0));
+                match (body, joint.kind()) {
+                    (Some(body), JointKind::Floating) => out.push(Entry::Free { q, v, body }),
+                    (Some(body), _) => out.push(Entry::Ball { q, v, body }),
+                    (None, _) => {}
                 }
             }
             JointKind::Fixed => {}
@@ -210,19 +212,11 @@ fn rotation(
     }
 }
 
-/// The floating body's rotation in the world at kinechain's `q`.
-fn base_rotation(chain: &Chain, q: &[f64]) -> Transform {
-    let frame = crate::eval::kernel::floating::frame(&chain.bodies[0], q);
-    Transform {
-        p: [0.0; 3],
-        ..frame
-    }
-}
-
-/// The rotation in the world of each ball joint's frame at kinechain's `q`, after its turn and
-/// before the body's `post` placement (`A_k A_postᵀ`, `A_k` the body's rotation): the axes of
-/// the body-frame rates of Pinocchio's spherical joint and MuJoCo's ball joint. By body index;
-/// the identity for other bodies.
+/// The rotation in the world of each ball or floating joint's frame at kinechain's `q`, after
+/// its motion and before the body's `post` placement (`A_k A_postᵀ`, `A_k` the body's rotation;
+/// the floating base's whole rotation, as its rates are those of its body): the axes of the
+/// body-frame rates of Pinocchio's spherical joint and free-flyer and MuJoCo's ball and free
+/// joints. By body index; the identity for other bodies.
 fn ball_rotations(chain: &Chain, q: &[f64]) -> Vec<Transform> {
     use crate::eval::kernel::frame::Frame;
     use crate::eval::kernel::pose_lanes::pose_step;
@@ -241,15 +235,19 @@ fn ball_rotations(chain: &Chain, q: &[f64]) -> Vec<Transform> {
         .bodies
         .iter()
         .zip(frames)
-        .map(|(body, f)| match body.ball {
-            Some(_) => {
+        .map(|(body, f)| match (body.floating, body.ball) {
+            (true, _) => Transform {
+                p: [0.0; 3],
+                ..Transform::from(f)
+            },
+            (false, Some(_)) => {
                 let frame = Transform::from(f) * body.post.to_transform().inverse();
                 Transform {
                     p: [0.0; 3],
                     ..frame
                 }
             }
-            None => Transform::IDENTITY,
+            (false, None) => Transform::IDENTITY,
         })
         .collect()
 }
@@ -310,7 +308,10 @@ impl Chain {
             q_ddot: q_ddot.map(|_| Vec::with_capacity(nv)),
         };
         let entries = entries(self, layout);
-        let balls = match entries.iter().any(|e| matches!(e, Entry::Ball { .. })) {
+        let balls = match entries
+            .iter()
+            .any(|e| matches!(e, Entry::Ball { .. } | Entry::Free { .. }))
+        {
             true => ball_rotations(self, q),
             false => Vec::new(),
         };
@@ -351,31 +352,37 @@ impl Chain {
                     push_rate(&mut out.q_dot, q_dot, v, scale);
                     push_rate(&mut out.q_ddot, q_ddot, v, scale);
                 }
-                Entry::Free => {
-                    let r = base_rotation(self, q);
-                    out.q.extend_from_slice(&q[..3]);
+                Entry::Free {
+                    q: i,
+                    v: at_v,
+                    body,
+                } => {
+                    let r = &balls[body];
+                    out.q.extend_from_slice(&q[i..i + 3]);
+                    let e = &q[i + 3..i + 7];
                     match layout {
-                        Layout::Pinocchio => out.q.extend([q[4], q[5], q[6], q[3]]),
-                        Layout::Mujoco => out.q.extend_from_slice(&q[3..7]),
+                        Layout::Pinocchio => out.q.extend([e[1], e[2], e[3], e[0]]),
+                        Layout::Mujoco => out.q.extend_from_slice(e),
                     }
                     let (Some(qd), Some(out_qd)) = (q_dot, out.q_dot.as_mut()) else {
                         continue;
                     };
-                    let (v, w) = (three(qd), three(&qd[3..]));
+                    let (v, w) = (three(&qd[at_v..]), three(&qd[at_v + 3..]));
                     let linear = match layout {
-                        Layout::Pinocchio => to_body(&r, v),
+                        Layout::Pinocchio => to_body(r, v),
                         Layout::Mujoco => v,
                     };
                     out_qd.extend(linear);
-                    out_qd.extend(to_body(&r, w));
+                    out_qd.extend(to_body(r, w));
                     if let (Some(qdd), Some(out_qdd)) = (q_ddot, out.q_ddot.as_mut()) {
-                        let (a, alpha) = (three(qdd), three(&qdd[3..]));
+                        let at = &qdd[at_v..];
+                        let (a, alpha) = (three(at), three(&at[3..]));
                         let linear = match layout {
-                            Layout::Pinocchio => to_body(&r, sub3(a, cross3(w, v))),
+                            Layout::Pinocchio => to_body(r, sub3(a, cross3(w, v))),
                             Layout::Mujoco => a,
                         };
                         out_qdd.extend(linear);
-                        out_qdd.extend(to_body(&r, alpha));
+                        out_qdd.extend(to_body(r, alpha));
                     }
                 }
             }
@@ -418,9 +425,13 @@ impl Chain {
             q_ddot: q_ddot.map(|_| vec![0.0; self.nv()]),
         };
         let (mut at_q, mut at_v) = (0, 0);
-        let mut free = None;
-        // (entry of the layout's rates, kinechain's, body) of each ball joint.
-        let mut balls = Vec::new();
+        // (entry of the layout's rates, kinechain's, body) of each ball joint and of each
+        // floating one.
+        let (mut balls, mut frees) = (Vec::new(), Vec::new());
+        let quaternion = |e: &[f64]| match layout {
+            Layout::Pinocchio => [e[3], e[0], e[1], e[2]],
+            Layout::Mujoco => [e[0], e[1], e[2], e[3]],
+        };
         for e in entries(self, layout) {
             let (dq, dv) = e.sizes();
             match e {
@@ -438,21 +449,13 @@ impl Chain {
                     }
                 }
                 Entry::Ball { q: i, v, body } => {
-                    let e = &q[at_q..at_q + 4];
-                    out.q[i..i + 4].copy_from_slice(&match layout {
-                        Layout::Pinocchio => [e[3], e[0], e[1], e[2]],
-                        Layout::Mujoco => [e[0], e[1], e[2], e[3]],
-                    });
+                    out.q[i..i + 4].copy_from_slice(&quaternion(&q[at_q..at_q + 4]));
                     balls.push((at_v, v, body));
                 }
-                Entry::Free => {
-                    out.q[..3].copy_from_slice(&q[at_q..at_q + 3]);
-                    let e = &q[at_q + 3..at_q + 7];
-                    out.q[3..7].copy_from_slice(&match layout {
-                        Layout::Pinocchio => [e[3], e[0], e[1], e[2]],
-                        Layout::Mujoco => [e[0], e[1], e[2], e[3]],
-                    });
-                    free = Some(at_v);
+                Entry::Free { q: i, v, body } => {
+                    out.q[i..i + 3].copy_from_slice(&q[at_q..at_q + 3]);
+                    out.q[i + 3..i + 7].copy_from_slice(&quaternion(&q[at_q + 3..at_q + 7]));
+                    frees.push((at_v, v, body));
                 }
                 _ => {}
             }
@@ -460,27 +463,28 @@ impl Chain {
             at_v += dv;
         }
         check_values(self, &out.q, "q")?;
-        if !balls.is_empty() && (q_dot.is_some() || q_ddot.is_some()) {
-            let rotations = ball_rotations(self, &out.q);
-            for (at, v, body) in balls {
-                for (o, x) in [(&mut out.q_dot, q_dot), (&mut out.q_ddot, q_ddot)] {
-                    if let (Some(o), Some(x)) = (o.as_mut(), x) {
-                        o[v..v + 3].copy_from_slice(&rotations[body].apply(three(&x[at..])));
-                    }
+        if (balls.is_empty() && frees.is_empty()) || q_dot.is_none() && q_ddot.is_none() {
+            return Ok(out);
+        }
+        let rotations = ball_rotations(self, &out.q);
+        for (at, v, body) in balls {
+            for (o, x) in [(&mut out.q_dot, q_dot), (&mut out.q_ddot, q_ddot)] {
+                if let (Some(o), Some(x)) = (o.as_mut(), x) {
+                    o[v..v + 3].copy_from_slice(&rotations[body].apply(three(&x[at..])));
                 }
             }
         }
-        if let (Some(at), Some(qd)) = (free, q_dot) {
-            let r = base_rotation(self, &out.q);
-            let to_world = |u: [f64; 3]| r.apply(u);
+        for (at, i, body) in frees {
+            let Some(qd) = q_dot else { break };
+            let to_world = |u: [f64; 3]| rotations[body].apply(u);
             let (v, w) = (three(&qd[at..]), to_world(three(&qd[at + 3..])));
             let v = match layout {
                 Layout::Pinocchio => to_world(v),
                 Layout::Mujoco => v,
             };
             if let Some(o) = out.q_dot.as_mut() {
-                o[..3].copy_from_slice(&v);
-                o[3..6].copy_from_slice(&w);
+                o[i..i + 3].copy_from_slice(&v);
+                o[i + 3..i + 6].copy_from_slice(&w);
             }
             if let (Some(qdd), Some(o)) = (q_ddot, out.q_ddot.as_mut()) {
                 let (a, alpha) = (three(&qdd[at..]), to_world(three(&qdd[at + 3..])));
@@ -488,8 +492,8 @@ impl Chain {
                     Layout::Pinocchio => crate::model::transform::add3(to_world(a), cross3(w, v)),
                     Layout::Mujoco => a,
                 };
-                o[..3].copy_from_slice(&a);
-                o[3..6].copy_from_slice(&alpha);
+                o[i..i + 3].copy_from_slice(&a);
+                o[i + 3..i + 6].copy_from_slice(&alpha);
             }
         }
         Ok(out)

@@ -259,8 +259,10 @@ impl Model {
         self.velocities.len()
     }
 
-    /// The floating joint, if the chain has one: it is then the first joint, and its entries
-    /// come first in `q` (seven) and in `q̇` (six).
+    /// The floating base, if the chain has one: a floating joint that is the first moving joint
+    /// and hangs from a link fixed to the world, so that its entries come first in `q` (seven)
+    /// and in `q̇` (six). Other floating joints (the free bodies of a scene, a floating joint
+    /// below a moving one) are listed by [`Model::quaternions`].
     #[must_use]
     #[inline]
     pub fn floating_joint(&self) -> Option<JointId> {

@@ -137,9 +137,7 @@ pub enum ModelError {
         kind: &'static str,
     },
     /// A floating joint where kinechain cannot evaluate one.
-    #[error(
-        "floating joint '{joint}': {problem} (a floating joint moves the whole robot below the root link)"
-    )]
+    #[error("floating joint '{joint}': {problem}")]
     FloatingJoint {
         /// The floating joint.
         joint: String,

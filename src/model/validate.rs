@@ -74,10 +74,7 @@ pub(crate) fn validate(spec: &ChainBuilder) -> Result<Validated, ModelError> {
 
     let model = Model {
         end_link: farthest_link(&links, &joints),
-        floating: joints
-            .iter()
-            .position(|j| j.kind == JointKind::Floating)
-            .map(JointId),
+        floating: floating_base(spec, &tree).map(|f| JointId(new_joint[f])),
         quaternions: joints
             .iter()
             .enumerate()
@@ -353,50 +350,66 @@ fn q_layout(spec: &ChainBuilder, joint_order: &[usize], new_joint: &[usize]) -> 
     }
     (q_index, v_index, variables, velocities)
 }
-/// A floating joint is the only one, hangs from a link fixed to the world (the root, or a link
-/// joined to it by fixed joints), and is the first moving joint in depth-first order, so that
-/// its entries lead `q` and `q̇`.
+/// Floating joints may stand anywhere in the tree and be any number (a scene of free bodies),
+/// but not in a row: a floating joint that is the only moving joint below another (through
+/// fixed joints only) adds nothing but six redundant degrees of freedom (what a floating base
+/// added to a robot that already floats would be).
 fn check_floating(spec: &ChainBuilder, tree: &Tree) -> Result<(), ModelError> {
-    let mut floating = spec
-        .joints
-        .iter()
-        .enumerate()
-        .filter(|(_, j)| j.kind == JointKind::Floating);
-    let Some((f, joint)) = floating.next() else {
-        return Ok(());
-    };
-    let problem = |problem: String| ModelError::FloatingJoint {
-        joint: joint.name.clone(),
-        problem,
-    };
-    if let Some((_, second)) = floating.next() {
-        return Err(problem(format!(
-            "the robot has another floating joint, '{}'",
-            second.name
-        )));
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); spec.links.len()];
+    for (j, &(parent, _)) in tree.ends.iter().enumerate() {
+        children[parent].push(j);
     }
-    let mut link = tree.ends[f].0;
-    while let Some(j) = tree.parent_joint[link] {
-        if spec.joints[j].kind != JointKind::Fixed {
-            return Err(problem(format!(
-                "it hangs from link '{}', which joint '{}' moves (a floating joint hangs from a link fixed to the world)",
-                spec.links[tree.ends[f].0], spec.joints[j].name
-            )));
+    for (f, joint) in spec.joints.iter().enumerate() {
+        if joint.kind != JointKind::Floating {
+            continue;
         }
-        link = tree.ends[j].0;
+        // The moving joints that hang from what the floating joint moves, through fixed ones.
+        let mut moving = Vec::new();
+        let mut stack = vec![tree.ends[f].1];
+        while let Some(link) = stack.pop() {
+            for &j in &children[link] {
+                match spec.joints[j].kind {
+                    JointKind::Fixed => stack.push(tree.ends[j].1),
+                    _ => moving.push(j),
+                }
+            }
+        }
+        if let [only] = moving[..]
+            && spec.joints[only].kind == JointKind::Floating
+        {
+            return Err(ModelError::FloatingJoint {
+                joint: spec.joints[only].name.clone(),
+                problem: format!(
+                    "it is the only joint that moves below floating joint '{}' (through fixed \
+                     joints only): two floating joints in a row are one",
+                    joint.name
+                ),
+            });
+        }
     }
-    let first_moving = tree
+    Ok(())
+}
+/// The floating base, in the builder's indices: a floating joint that hangs from a link fixed
+/// to the world (the root, or a link joined to it by fixed joints) and is the first moving
+/// joint (the first body), so that its entries lead `q` and `q̇`. Evaluated on a path of its own; any
+/// other floating joint is evaluated where it stands, as a ball joint is.
+pub(crate) fn floating_base(spec: &ChainBuilder, tree: &Tree) -> Option<usize> {
+    let first = tree
         .joint_order
         .iter()
         .copied()
-        .find(|&j| spec.joints[j].kind != JointKind::Fixed && spec.joints[j].mimic.is_none());
-    if let Some(m) = first_moving.filter(|&m| m != f) {
-        return Err(problem(format!(
-            "joint '{}' comes before it in depth-first order (a floating joint's entries lead q: declare its branch first)",
-            spec.joints[m].name
-        )));
+        .find(|&j| spec.joints[j].kind != JointKind::Fixed)?;
+    if spec.joints[first].kind != JointKind::Floating {
+        return None;
     }
-    Ok(())
+    let mut link = tree.ends[first].0;
+    while let Some(j) = tree.parent_joint[link] {
+        if spec.joints[j].kind != JointKind::Fixed {
+            return None;
+        }
+        link = tree.ends[j].0;
+    }
+    Some(first)
 }
 /// Each mimic joint's (primary joint, multiplier, offset), following mimics of mimics to an
 /// independent joint. Each joint's target is looked up once and each joint resolved once, so a

@@ -964,3 +964,115 @@ pub fn assert_within_8_ulp_of_the_256_bit_evaluation(chain: &Chain, label: &str)
         "{label} {rate_worst:?}"
     );
 }
+
+/// The rotation of the quaternion `e` (w, x, y, z) normalised, from nalgebra.
+pub fn rotation(e: &[f64]) -> kinechain::nalgebra::Matrix3<f64> {
+    let q = kinechain::nalgebra::UnitQuaternion::from_quaternion(
+        kinechain::nalgebra::Quaternion::new(e[0], e[1], e[2], e[3]),
+    );
+    *q.to_rotation_matrix().matrix()
+}
+
+/// Every link's pose at `q`, limits not checked.
+pub fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
+    let mut d = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
+    let p = forward_kinematics(chain, &mut d, q).unwrap();
+    (0..chain.links().len())
+        .map(|i| p.world_from_link(chain.link_id(chain.links()[i].name()).unwrap()))
+        .collect()
+}
+
+/// `q` moved along `(q̇, q̈)` for a time `t`, and the world `q̇` there: each one-coordinate entry
+/// by `q + q̇ t + q̈ t²/2`; each ball or floating joint's quaternion by the turn `ω t + ε t²/2`
+/// taken in the axes of the frame it turns in (fixed in its parent, where `ε` is the rate of
+/// `ω`), a floating joint's position by `u t + a t²/2` in those axes (`u`, `a` its `q̇` and `q̈`
+/// in them), its `q̇` at `t` that frame's world rotation then times `ω + ε t` (and `u + a t`).
+/// (The turn's error is of order t³.)
+pub fn advance(chain: &Chain, q: &[f64], qd: &[f64], qdd: &[f64], t: f64) -> (Vec<f64>, Vec<f64>) {
+    let mut out = q.to_vec();
+    let mut qd_t: Vec<f64> = qd.iter().zip(qdd).map(|(v, a)| v + a * t).collect();
+    // The world rotation of each ball's or floating joint's frame before its turn (at the q in
+    // `at`; `first` the quaternion's first entry).
+    let frame_of = |at: &[f64], first: usize| {
+        let joint = chain
+            .quaternions()
+            .iter()
+            .find(|x| x.1 == first)
+            .map(|x| chain.joint(x.0))
+            .unwrap();
+        let poses = link_poses(chain, at);
+        let child = poses[joint.child().index()].rotation();
+        child * rotation(&at[first..first + 4]).transpose()
+    };
+    // Linear rates first: in the frame's axes at the start.
+    let mut moved_positions = Vec::new();
+    for joint in chain.joints() {
+        let (Some(first), Some(v)) = (joint.q_index(), joint.v_index()) else {
+            continue;
+        };
+        match joint.kind() {
+            kinechain::JointKind::Ball => {}
+            kinechain::JointKind::Floating => {
+                let r0 = frame_of(q, first + 3);
+                let u =
+                    r0.transpose() * kinechain::nalgebra::Vector3::new(qd[v], qd[v + 1], qd[v + 2]);
+                let a = r0.transpose()
+                    * kinechain::nalgebra::Vector3::new(qdd[v], qdd[v + 1], qdd[v + 2]);
+                for k in 0..3 {
+                    out[first + k] += u[k] * t + 0.5 * a[k] * t * t;
+                }
+                moved_positions.push((first + 3, v, u + a * t));
+            }
+            _ => {
+                for k in 0..joint.nq() {
+                    out[first + k] += qd[v + k] * t + 0.5 * qdd[v + k] * t * t;
+                }
+            }
+        }
+    }
+    // Turns last: each frame's rotation at t needs the joints before it moved.
+    let angular = |j: kinechain::JointId| {
+        let joint = chain.joint(j);
+        joint.v_index().unwrap()
+            + if joint.kind() == kinechain::JointKind::Floating {
+                3
+            } else {
+                0
+            }
+    };
+    for &(j, first) in chain.quaternions() {
+        let v = angular(j);
+        let r0 = frame_of(q, first);
+        let w = r0.transpose() * kinechain::nalgebra::Vector3::new(qd[v], qd[v + 1], qd[v + 2]);
+        let eps =
+            r0.transpose() * kinechain::nalgebra::Vector3::new(qdd[v], qdd[v + 1], qdd[v + 2]);
+        let dq = kinechain::nalgebra::UnitQuaternion::from_scaled_axis(w * t + eps * (0.5 * t * t));
+        let e = kinechain::nalgebra::Quaternion::new(
+            q[first],
+            q[first + 1],
+            q[first + 2],
+            q[first + 3],
+        );
+        // The turn is about axes of the frame before the joint: it multiplies from the left.
+        let moved = dq.into_inner() * e;
+        out[first..first + 4].copy_from_slice(&[moved.w, moved.i, moved.j, moved.k]);
+    }
+    for &(j, first) in chain.quaternions() {
+        let v = angular(j);
+        let r0 = frame_of(q, first);
+        let rt = frame_of(&out, first);
+        let local = r0.transpose()
+            * kinechain::nalgebra::Vector3::new(
+                qd[v] + qdd[v] * t,
+                qd[v + 1] + qdd[v + 1] * t,
+                qd[v + 2] + qdd[v + 2] * t,
+            );
+        let world = rt * local;
+        qd_t[v..v + 3].copy_from_slice(world.as_slice());
+    }
+    for (first, v, local) in moved_positions {
+        let world = frame_of(&out, first) * local;
+        qd_t[v..v + 3].copy_from_slice(world.as_slice());
+    }
+    (out, qd_t)
+}

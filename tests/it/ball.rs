@@ -4,8 +4,8 @@
 //! trajectory, Jacobians against the rates, batches against single evaluations, the 256-bit
 //! evaluation, the loaders, layouts and errors.
 
-use crate::common::{random_q, random_vec, rng};
-use kinechain::nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use crate::common::{advance, link_poses, random_q, random_vec, rng, rotation};
+use kinechain::nalgebra::Vector3;
 use kinechain::{
     Chain, Data, JointKind, LimitPolicy, StateError, Transform, forward_accelerations,
     forward_kinematics, forward_velocities,
@@ -28,22 +28,6 @@ fn arms() -> Vec<(Chain, &'static str)> {
     let mut b = arm().description().clone();
     let floating = b.floating_base().build().unwrap();
     vec![(arm(), "arm"), (floating, "floating arm")]
-}
-
-/// The rotation of the quaternion `e` (w, x, y, z) normalised, from nalgebra.
-fn rotation(e: &[f64]) -> Matrix3<f64> {
-    let q = UnitQuaternion::from_quaternion(kinechain::nalgebra::Quaternion::new(
-        e[0], e[1], e[2], e[3],
-    ));
-    *q.to_rotation_matrix().matrix()
-}
-
-fn link_poses(chain: &Chain, q: &[f64]) -> Vec<Transform> {
-    let mut d = Data::new(chain).with_limit_policy(LimitPolicy::Ignore);
-    let p = forward_kinematics(chain, &mut d, q).unwrap();
-    (0..chain.links().len())
-        .map(|i| p.world_from_link(chain.link_id(chain.links()[i].name()).unwrap()))
-        .collect()
 }
 
 #[test]
@@ -146,72 +130,6 @@ fn poses_are_the_product_of_the_joints_own_transforms() {
             assert!(err < 1e-15, "link {}: {err:e}", i + 1);
         }
     }
-}
-
-/// `q` moved along `(q̇, q̈)` for a time `t`, and the world `q̇` there: each one-coordinate entry
-/// by `q + q̇ t + q̈ t²/2`; each ball joint's quaternion by the turn `ω t + ε t²/2` taken in the
-/// axes of the frame it turns in (fixed in its parent, where `ε` is the rate of `ω`), its `q̇`
-/// at `t` that frame's world rotation then times `ω + ε t`. (The turn's error is of order t³.)
-fn advance(chain: &Chain, q: &[f64], qd: &[f64], qdd: &[f64], t: f64) -> (Vec<f64>, Vec<f64>) {
-    let mut out = q.to_vec();
-    let mut qd_t: Vec<f64> = qd.iter().zip(qdd).map(|(v, a)| v + a * t).collect();
-    // The world rotation of each ball's frame before its turn (at the q in `at`).
-    let frame_of = |at: &[f64], first: usize| {
-        let joint = chain
-            .quaternions()
-            .iter()
-            .find(|x| x.1 == first)
-            .map(|x| chain.joint(x.0))
-            .unwrap();
-        let poses = link_poses(chain, at);
-        let child = poses[joint.child().index()].rotation();
-        child * rotation(&at[first..first + 4]).transpose()
-    };
-    for joint in chain.joints() {
-        let (Some(first), Some(v)) = (joint.q_index(), joint.v_index()) else {
-            continue;
-        };
-        match joint.kind() {
-            JointKind::Ball => {}
-            JointKind::Floating => panic!("not in these tests"),
-            _ => {
-                for k in 0..joint.nq() {
-                    out[first + k] += qd[v + k] * t + 0.5 * qdd[v + k] * t * t;
-                }
-            }
-        }
-    }
-    // Balls last: each frame's rotation at t needs the joints before it moved.
-    for &(j, first) in chain.quaternions() {
-        let v = chain.joint(j).v_index().unwrap();
-        let r0 = frame_of(q, first);
-        let w = r0.transpose() * Vector3::new(qd[v], qd[v + 1], qd[v + 2]);
-        let eps = r0.transpose() * Vector3::new(qdd[v], qdd[v + 1], qdd[v + 2]);
-        let dq = UnitQuaternion::from_scaled_axis(w * t + eps * (0.5 * t * t));
-        let e = kinechain::nalgebra::Quaternion::new(
-            q[first],
-            q[first + 1],
-            q[first + 2],
-            q[first + 3],
-        );
-        // The turn is about axes of the frame before the joint: it multiplies from the left.
-        let moved = dq.into_inner() * e;
-        out[first..first + 4].copy_from_slice(&[moved.w, moved.i, moved.j, moved.k]);
-    }
-    for &(j, first) in chain.quaternions() {
-        let v = chain.joint(j).v_index().unwrap();
-        let r0 = frame_of(q, first);
-        let rt = frame_of(&out, first);
-        let local = r0.transpose()
-            * Vector3::new(
-                qd[v] + qdd[v] * t,
-                qd[v + 1] + qdd[v + 1] * t,
-                qd[v + 2] + qdd[v + 2] * t,
-            );
-        let world = rt * local;
-        qd_t[v..v + 3].copy_from_slice(world.as_slice());
-    }
-    (out, qd_t)
 }
 
 #[test]

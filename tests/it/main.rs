@@ -23,6 +23,7 @@ mod csv;
 mod docs;
 mod evaluation_modes;
 mod floating;
+mod free;
 mod fuzz_pass;
 mod interop;
 mod k_crosscheck;

@@ -120,7 +120,7 @@ fn chunk_jacobian_generic<A: Arith>(
             } else {
                 crate::eval::kernel::pose_lanes::pose_step::<N<A>, A>(Some(&f), body, qp, sin_cos)
             };
-            if body.floating {
+            if body.floating || body.ball.is_some_and(|b| b.free) {
                 // Its turns are about the world axes through its own origin.
                 for (x, y) in axes[i][0].iter_mut().zip(f.p) {
                     y.put(x, part);
@@ -137,7 +137,13 @@ fn chunk_jacobian_generic<A: Arith>(
         };
         for (i, &k) in path.iter().enumerate().rev() {
             let body = &chain.bodies[k];
-            if body.floating {
+            // The floating base's six columns are the first; another floating joint's its own.
+            let free = match (body.floating, body.ball) {
+                (true, _) => Some(0),
+                (false, Some(ball)) if ball.free => Some(ball.v),
+                _ => None,
+            };
+            if let Some(v) = free {
                 // Six columns, written once (see `crate::eval::jacobian::path_columns`): a slide
                 // along and a turn about each world axis.
                 let origin = axes[i][0].map(|x| N::<A>::get(&x, part));
@@ -152,7 +158,7 @@ fn chunk_jacobian_generic<A: Arith>(
                     ];
                     let slide = [z[0], z[1], z[2], zero, zero, zero];
                     let turn = [turning[0], turning[1], turning[2], z[0], z[1], z[2]];
-                    for (column, terms) in [(k, slide), (3 + k, turn)] {
+                    for (column, terms) in [(v + k, slide), (v + 3 + k, turn)] {
                         for (r, x) in terms.into_iter().enumerate() {
                             x.put(&mut columns[r * dof + column], part);
                         }

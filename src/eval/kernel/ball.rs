@@ -25,6 +25,23 @@
 //! by the Jacobi identity). The Jacobian's three columns of the joint are a turn about each world
 //! axis `e_k` through `p_j`, `[e_k × (p − p_j); e_k]`, and their rates those of three revolute
 //! axes fixed in the parent's frame, `ė_k = ω_p × e_k`.
+//!
+//! A floating joint other than the floating base is the same body with a translation `t` (three
+//! entries of `q` before the quaternion, in the joint frame): its frame is
+//! `parent · pre · [A(e) t] · post`, and its six entries of `q̇` are `(v_rel, w)`: the velocity of
+//! the body's origin relative to the parent and the angular velocity relative to it, in world
+//! axes; those of `q̈` `(a_rel, ε)` their rates as the parent sees them, in world axes — for a
+//! body hanging from the world, its own velocity and acceleration, as for the floating base
+//! (`crate::eval::kernel::floating`). Relative motion (eqs. 2.120–2.127 with a moving point) gives
+//!
+//! ```text
+//! ω = ω_p + w                    v = v_p + ω_p × r + v_rel
+//! α = α_p + ω_p × w + ε          a = a_p + α_p × r + ω_p × (ω_p × r) + 2 ω_p × v_rel + a_rel
+//! ```
+//!
+//! and the joint's six Jacobian columns are, for each world axis `e_k`, a slide along it
+//! `[e_k; 0]` and a turn about it through the body's origin `[e_k × (p − o); e_k]`, both fixed in
+//! the parent's frame (`ė_k = ω_p × e_k`).
 
 use crate::eval::kernel::frame::{Frame, mat_vec_add};
 use crate::eval::layout::body::Ball;
@@ -67,13 +84,19 @@ pub(crate) fn columns<N: Num>([e0, e1, e2, e3]: [N; 4]) -> [[N; 3]; 3] {
 /// The quaternion of `ball` in `q`.
 #[inline(always)]
 pub(crate) fn quaternion<N: Copy>(ball: Ball, q: &[N]) -> [N; 4] {
-    [q[ball.q], q[ball.q + 1], q[ball.q + 2], q[ball.q + 3]]
+    let i = ball.quaternion();
+    [q[i], q[i + 1], q[i + 2], q[i + 3]]
 }
 
-/// `f ← f · [A(e) 0]` on lanes: each new column `r a_c`, summed as a general placement's
-/// (`kernel::frame::place`), with the coefficients of the lane's own `A(e)`.
+/// `f ← f · [A(e) 0]` on lanes (`f ← f · [A(e) t]` for a free body): each new column `r a_c`,
+/// summed as a general placement's (`kernel::frame::place`), with the coefficients of the lane's
+/// own `A(e)`.
 #[inline(always)]
 pub(crate) fn turn_lanes<N: Num, A: Arith>(f: &mut Frame<N>, ball: Ball, q: &[N]) {
+    if ball.free {
+        let t = [q[ball.q], q[ball.q + 1], q[ball.q + 2]];
+        f.p = mat_vec_add::<N, A>(&f.r, &t, f.p);
+    }
     let a = columns(quaternion(ball, q));
     let (r, zero) = (f.r, [N::splat(0.0); 3]);
     f.r = [
@@ -83,28 +106,39 @@ pub(crate) fn turn_lanes<N: Num, A: Arith>(f: &mut Frame<N>, ball: Ball, q: &[N]
     ];
 }
 
-/// `f ← f · [A(e) 0]` on padded columns: the operations of [`turn_lanes`], so the same bits.
+/// `f ← f · [A(e) 0]` (`[A(e) t]` for a free body) on padded columns: the operations of
+/// [`turn_lanes`], so the same bits.
 #[inline(always)]
 pub(crate) fn turn_columns<C: Col>(f: &mut [C; 4], ball: Ball, q: &[f64]) {
-    let a = columns(quaternion(ball, q));
     let r = *f;
-    // `r₀ a₀ + (r₁ a₁ + (r₂ a₂ + 0))`: `mat_vec_add`'s order.
-    let column = |u: [f64; 3]| {
-        let zero = C::splat(0.0);
+    // `r₀ u₀ + (r₁ u₁ + (r₂ u₂ + p))`: `mat_vec_add`'s order.
+    let column = |u: [f64; 3], p: C| {
         C::mul_add(
             r[0],
             C::splat(u[0]),
-            C::mul_add(r[1], C::splat(u[1]), C::mul_add(r[2], C::splat(u[2]), zero)),
+            C::mul_add(r[1], C::splat(u[1]), C::mul_add(r[2], C::splat(u[2]), p)),
         )
     };
-    f[0] = column(a[0]);
-    f[1] = column(a[1]);
-    f[2] = column(a[2]);
+    if ball.free {
+        f[3] = column([q[ball.q], q[ball.q + 1], q[ball.q + 2]], r[3]);
+    }
+    let a = columns(quaternion(ball, q));
+    let zero = C::splat(0.0);
+    f[0] = column(a[0], zero);
+    f[1] = column(a[1], zero);
+    f[2] = column(a[2], zero);
 }
 
-/// The joint's `w` (from `q̇`) or `ε` (from `q̈`).
+/// The joint's `w` (from `q̇`) or `ε` (from `q̈`): its angular rates.
 #[inline(always)]
 pub(crate) fn rate<N: Copy>(ball: Ball, rates: &[N]) -> [N; 3] {
+    let i = ball.angular();
+    [rates[i], rates[i + 1], rates[i + 2]]
+}
+
+/// A free body's `v_rel` (from `q̇`) or `a_rel` (from `q̈`): its linear rates.
+#[inline(always)]
+pub(crate) fn linear_rate<N: Copy>(ball: Ball, rates: &[N]) -> [N; 3] {
     [rates[ball.v], rates[ball.v + 1], rates[ball.v + 2]]
 }
 
@@ -135,7 +169,11 @@ mod tests {
     #[test]
     fn lanes_and_columns_turn_a_frame_alike_and_as_the_matrix_product() {
         let t = crate::model::transform::Transform::from_xyz_rpy([0.1, 0.2, 0.3], [0.4, -1.1, 2.0]);
-        let ball = Ball { q: 1, v: 0 };
+        let ball = Ball {
+            q: 1,
+            v: 0,
+            free: false,
+        };
         let q = [9.0, 0.6, 0.0, -0.8, 0.1];
         let mut lanes = Frame::<f64>::splat(&t);
         turn_lanes::<f64, Separate>(&mut lanes, ball, &q);

@@ -268,7 +268,11 @@ fn rates_ball<A: Arith, const ACC: bool>(
     };
     let w = pad(crate::eval::kernel::ball::rate(ball, q_dot));
     let (r, u) = (C::<A>::sub(f.0[3], p_parent), C::<A>::sub(f.0[3], p_joint));
-    let v_rel = cross(w, u);
+    // A free body's relative velocity is its own entry of `q̇`; a ball's, the turn about `p_j`.
+    let v_rel = match ball.free {
+        true => pad(crate::eval::kernel::ball::linear_rate(ball, q_dot)),
+        false => cross(w, u),
+    };
     let w_r = cross(parent.omega, r);
     let mut out = Rates4 {
         omega: C::<A>::add(parent.omega, w),
@@ -281,8 +285,10 @@ fn rates_ball<A: Arith, const ACC: bool>(
         out.alpha = C::<A>::add(parent.alpha, cross_add(parent.omega, w, eps));
         let mut a = cross_add(parent.alpha, r, cross(parent.omega, w_r));
         a = cross_add(parent.omega, scale(2.0, v_rel), a);
-        a = cross_add(eps, u, a);
-        a = cross_add(w, v_rel, a);
+        a = match ball.free {
+            true => C::<A>::add(a, pad(crate::eval::kernel::ball::linear_rate(ball, q_ddot))),
+            false => cross_add(w, v_rel, cross_add(eps, u, a)),
+        };
         out.a = C::<A>::add(parent.a, a);
     }
     out

@@ -204,7 +204,11 @@ fn ball_motion<N: Num, A: Arith, const ACC: bool>(
     };
     let w = crate::eval::kernel::ball::rate(ball, q_dot);
     let (r, u) = (sub(f.p, p_parent), sub(f.p, p_joint));
-    let v_rel = cross(w, u);
+    // A free body's relative velocity is its own entry of `q̇`; a ball's, the turn about `p_j`.
+    let v_rel = match ball.free {
+        true => crate::eval::kernel::ball::linear_rate(ball, q_dot),
+        false => cross(w, u),
+    };
     let w_r = cross(parent.omega, r);
     let mut out = Motion {
         omega: add(parent.omega, w),
@@ -217,8 +221,10 @@ fn ball_motion<N: Num, A: Arith, const ACC: bool>(
         out.alpha = add(parent.alpha, cross_add::<N, A>(parent.omega, w, eps));
         let mut a = cross_add::<N, A>(parent.alpha, r, cross(parent.omega, w_r));
         a = cross_add::<N, A>(parent.omega, scale(N::splat(2.0), v_rel), a);
-        a = cross_add::<N, A>(eps, u, a);
-        a = cross_add::<N, A>(w, v_rel, a);
+        a = match ball.free {
+            true => add(a, crate::eval::kernel::ball::linear_rate(ball, q_ddot)),
+            false => cross_add::<N, A>(w, v_rel, cross_add::<N, A>(eps, u, a)),
+        };
         out.a = add(parent.a, a);
     }
     out

@@ -126,10 +126,11 @@ pub(crate) struct Body {
     /// The rates of θ and d as read by the rate recursion.
     pub(crate) theta_rate: RateTerm,
     pub(crate) d_rate: RateTerm,
-    /// The body of a floating joint (always the first body, hanging from the world): its frame
+    /// The body of the floating base (always the first body, hanging from the world): its frame
     /// is `pre · [R(e) | p] · post` with `p` and the Euler parameters `e` the first seven
     /// entries of `q` ([`crate::eval::kernel::floating`]), and its rates are the first six
-    /// entries of `q̇` and `q̈`; `motion` is unused.
+    /// entries of `q̇` and `q̈`; `motion` is unused. Other floating joints are [`Body::ball`]
+    /// bodies with [`Ball::free`].
     pub(crate) floating: bool,
     /// The body of a ball joint: its frame is `parent · pre · [A(e) 0] · post` with the Euler
     /// parameters `e` the four entries of `q` from [`Ball::q`], and its angular velocity and
@@ -141,11 +142,33 @@ pub(crate) struct Body {
 }
 
 /// Where a ball joint's entries are: its quaternion at `q[q..q + 4]`, its rates at
-/// `q̇[v..v + 3]` and `q̈[v..v + 3]`.
+/// `q̇[v..v + 3]` and `q̈[v..v + 3]`. With `free`, the body of a floating joint other than the
+/// floating base: a translation at `q[q..q + 3]` before the quaternion at `q[q + 3..q + 7]`, and
+/// six rates each, linear then angular ([`crate::eval::kernel::ball`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Ball {
     pub(crate) q: usize,
     pub(crate) v: usize,
+    pub(crate) free: bool,
+}
+
+impl Ball {
+    /// The first entry of the quaternion in `q`.
+    #[inline(always)]
+    pub(crate) fn quaternion(self) -> usize {
+        if self.free { self.q + 3 } else { self.q }
+    }
+
+    /// The first entry of the angular rates in `q̇` and `q̈`.
+    #[inline(always)]
+    pub(crate) fn angular(self) -> usize {
+        if self.free { self.v + 3 } else { self.v }
+    }
+
+    /// The entries of `q` it reads.
+    pub(crate) fn q_range(self) -> std::ops::Range<usize> {
+        self.q..self.quaternion() + 4
+    }
 }
 
 /// How the rate of a joint term follows from `q̇` (or `q̈`): `scale · q̇[index]`, with scale zero
@@ -352,7 +375,7 @@ impl Body {
     pub(crate) fn variables(&self) -> impl Iterator<Item = usize> {
         let own = match (self.floating, self.ball) {
             (true, _) => 0..7,
-            (false, Some(b)) => b.q..b.q + 4,
+            (false, Some(b)) => b.q_range(),
             (false, None) => 0..0,
         };
         own.chain(self.motion.variables())

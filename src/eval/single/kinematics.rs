@@ -510,7 +510,8 @@ fn poses_incremental_generic<A: Arith>(chain: &Chain, data: &mut Data, q: &[f64]
             || changed(&body.motion.d)
             || (body.floating && (0..7).any(|i| q[i].to_bits() != data.last_q[i].to_bits()))
             || body.ball.is_some_and(|b| {
-                (b.q..b.q + 4).any(|i| q[i].to_bits() != data.last_q[i].to_bits())
+                b.q_range()
+                    .any(|i| q[i].to_bits() != data.last_q[i].to_bits())
             });
         data.dirty[k] = dirty;
         if dirty {
