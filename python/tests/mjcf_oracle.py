@@ -32,9 +32,11 @@ def compile_without_assets(path: str):
         for item in list(group):
             spec.delete(item)
     # Small test files have bodies without mass, which MuJoCo refuses to move; a sphere on each
-    # body gives them some without moving any frame.
+    # body without a geom gives them some without moving any frame (a body with geoms keeps
+    # them alone, so that the inertial frame alignfree gives it stays MuJoCo's).
     for body in spec.bodies[1:]:
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0.0, 0.0], meshname="")
+        if not body.geoms:
+            body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0.0, 0.0], meshname="")
     for material in spec.materials:
         material.textures = [""] * len(material.textures)
     return spec.compile()
@@ -68,11 +70,63 @@ def site_link(chain: kc.Chain, name: str) -> str:
     return f"site:{name}" if f"site:{name}" in links else name
 
 
-def worst_error(path: str, random_configurations: int = 8, seed: int = 7):
+def joint_names(model) -> list[str]:
+    """The names kinechain gives MuJoCo's joints, by id: the model's, or ``joint#ID`` (one ``#``
+    more while the model uses that name)."""
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or "" for j in range(model.njnt)]
+
+    def fresh(j: int) -> str:
+        hashes = "#"
+        while f"joint{hashes}{j}" in names:
+            hashes += "#"
+        return f"joint{hashes}{j}"
+
+    return [n or fresh(j) for j, n in enumerate(names)]
+
+
+def link_names(model) -> tuple[list[str], list[str]]:
+    """The links kinechain makes of every body but the world and of every site, by MuJoCo id:
+    the model's names, ``body#ID`` and ``site#ID`` for unnamed ones (one ``#`` more while the
+    file uses that name), ``site:NAME`` for a site that has a body's name."""
+    bodies = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)]
+    sites = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_SITE, s) or "" for s in range(model.nsite)]
+    taken = set(bodies) | set(sites)
+
+    def fresh(kind: str, i: int) -> str:
+        hashes = "#"
+        while f"{kind}{hashes}{i}" in taken:
+            hashes += "#"
+        return f"{kind}{hashes}{i}"
+
+    def site(name: str, i: int) -> str:
+        if not name:
+            return fresh("site", i)
+        if name in bodies:
+            colons = ":"
+            while f"site{colons}{name}" in taken:
+                colons += ":"
+            return f"site{colons}{name}"
+        return name
+
+    body_links = [n or fresh("body", b) for b, n in enumerate(bodies)][1:]
+    return body_links, [site(n, i) for i, n in enumerate(sites)]
+
+
+def compile_model(path: str):
+    """The MuJoCo model of ``path`` as MuJoCo compiles the file, or, when it cannot (mesh files
+    absent from the corpus, bodies without mass), :func:`compile_without_assets`'s."""
+    try:
+        return mujoco.MjModel.from_xml_path(os.fspath(path))
+    except ValueError:
+        return compile_without_assets(path)
+
+
+def worst_error(path: str, random_configurations: int = 8, seed: int = 7, model=None):
     """The largest pose difference (position over ``max(1 m, farthest body)``, rotation matrix entries)
-    between kinechain and MuJoCo over ``qpos0``, every keyframe and random configurations, and
-    how many poses were compared."""
-    model = compile_without_assets(path)
+    between kinechain and MuJoCo over ``qpos0``, every keyframe and random configurations, for
+    every body and site (unnamed ones by kinechain's names for them), and how many poses were
+    compared."""
+    model = compile_model(path) if model is None else model
     data = mujoco.MjData(model)
     chain = kc.load(path)
     assert chain.nq == model.nq, (chain.nq, model.nq)
@@ -81,12 +135,9 @@ def worst_error(path: str, random_configurations: int = 8, seed: int = 7):
     configurations = [model.qpos0.copy()]
     configurations += [model.key_qpos[k].copy() for k in range(model.nkey)]
     configurations += [random_qpos(model, rng) for _ in range(random_configurations)]
-    bodies = [
-        (mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b), b) for b in range(1, model.nbody)
-    ]
-    sites = [(mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_SITE, s), s) for s in range(model.nsite)]
-    bodies = [(n, i) for n, i in bodies if n]
-    sites = [(site_link(chain, n), i) for n, i in sites if n]
+    body_links, site_links = link_names(model)
+    bodies = list(zip(body_links, range(1, model.nbody)))
+    sites = list(zip(site_links, range(model.nsite)))
     links = [n for n, _ in bodies] + [n for n, _ in sites]
     worst, compared = 0.0, 0
     for q in configurations:

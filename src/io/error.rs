@@ -123,11 +123,12 @@ pub enum LoadErrorKind {
     /// what MJCF defines, or use what kinechain does not read.
     #[error(
         "invalid MJCF: {}{}{message}",
-        file.as_ref().map(|f| format!("in included file {}: ", f.display())).unwrap_or_default(),
+        file.as_ref().map(|f| format!("in file {}: ", f.display())).unwrap_or_default(),
         location_prefix(*line, *column)
     )]
     Mjcf {
-        /// The included file the problem is in; `None` for the main file.
+        /// The file the problem is in (an included file, or a model an `<attach>` reads);
+        /// `None` for the main file.
         file: Option<PathBuf>,
         /// 1-based line of the element or attribute at fault, when known.
         line: Option<u32>,

@@ -10,41 +10,34 @@
 //! sensors, tendons, contacts and the rest do not move a body: they are skipped.
 
 mod attrs;
+mod inertia;
+mod names;
+mod scene;
 mod tree;
 
 use crate::io::error::LoadErrorKind;
 use crate::model::builder::{ChainBuilder, JointSpec};
 use crate::model::joint::JointKind;
-use attrs::{Compiler, Defaults, Kind, placement, real_list, reals, transform};
+use attrs::{Kind, Pose, fromto, placement, real_list, reals};
+use inertia::align;
 use nalgebra::{UnitQuaternion, Vector3};
+use names::Names;
+use scene::{Scene, Source};
 use std::collections::HashSet;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tree::{Element, Problem};
 
-/// A position and an orientation: where a frame is in its parent's.
-#[derive(Clone, Copy, Debug)]
-struct Pose {
-    p: Vector3<f64>,
-    q: UnitQuaternion<f64>,
-}
-
-impl Pose {
-    const IDENTITY: Pose = Pose {
-        p: Vector3::new(0.0, 0.0, 0.0),
-        q: UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0, 0.0, 0.0, 0.0)),
-    };
-
-    /// `self` then `then` (in `self`'s frame).
-    fn then(&self, then: &Pose) -> Pose {
-        Pose {
-            p: self.p + self.q * then.p,
-            q: self.q * then.q,
-        }
-    }
-
-    fn transform(&self) -> crate::model::transform::Transform {
-        transform(&self.p, &self.q)
-    }
+/// Where a joint of a body goes: its name, the links it joins, the body's placement in the
+/// parent link (the identity for the second and later joints of a body), the frames around the
+/// joint in the body, whether the body hangs from the world, and how many joints it has.
+struct JointAt<'a> {
+    name: &'a str,
+    parent: &'a str,
+    child: &'a str,
+    body: &'a Pose,
+    frame: &'a Pose,
+    top: bool,
+    count: usize,
 }
 
 /// Reads MJCF text: `main` is its file (for includes and messages), `base` the directory
@@ -56,42 +49,84 @@ pub(crate) fn parse(
     default_name: &str,
     (max_bytes, couplings): (u64, bool),
 ) -> Result<ChainBuilder, LoadErrorKind> {
-    let tree = tree::read(text, main, base, max_bytes)?;
-    read_model(&tree.root, default_name, couplings).map_err(|p| p.into_kind(&tree.files))
+    let mut tree = tree::read(text, main, base, max_bytes)?;
+    let sources = match read_sources(&mut tree) {
+        Ok(s) => s,
+        Err(p) => return Err(p.into_kind(tree.files())),
+    };
+    read_model(&sources, tree.files(), default_name, couplings)
+        .map_err(|p| p.into_kind(tree.files()))
+}
+
+/// The main model and every model its `<asset><model>` elements (and theirs) read for
+/// `<attach>`, the main one first.
+fn read_sources(tree: &mut tree::Tree) -> Result<Vec<Source>, Problem> {
+    let placeholder = Element {
+        name: String::new(),
+        attributes: Vec::new(),
+        children: Vec::new(),
+        at: tree.root.at,
+    };
+    let root = std::mem::replace(&mut tree.root, placeholder);
+    let mut sources = vec![Source::new(root)?];
+    let mut next = 0;
+    while next < sources.len() {
+        let declared: Vec<(Option<String>, String, tree::At)> = sources[next]
+            .root
+            .children_named("asset")
+            .flat_map(|a| a.children_named("model"))
+            .map(|m| {
+                let file = m.attribute("file").map(|(f, _)| f.to_string());
+                (m.attribute("name").map(|(n, _)| n.to_string()), file, m.at)
+            })
+            .map(|(name, file, at)| {
+                file.map(|f| (name, f, at))
+                    .ok_or_else(|| Problem::at(at, "<model> has no file attribute"))
+            })
+            .collect::<Result<_, _>>()?;
+        for (name, file, at) in declared {
+            let root = tree.read_model(&file, at)?;
+            // Named by the asset, else by the model's own name (MuJoCo's default if none).
+            let name = name
+                .or_else(|| root.attribute("model").map(|(m, _)| m.to_string()))
+                .unwrap_or_else(|| "MuJoCo Model".to_string());
+            sources.push(Source::new(root)?);
+            let index = sources.len() - 1;
+            sources[next].models.push((name, index));
+        }
+        next += 1;
+    }
+    Ok(sources)
 }
 
 fn read_model(
-    root: &Element,
+    sources: &[Source],
+    files: &[PathBuf],
     default_name: &str,
     couplings: bool,
 ) -> Result<ChainBuilder, Problem> {
-    let mut compiler = Compiler::default();
-    for c in root.children_named("compiler") {
-        compiler.read(c)?;
-    }
-    let defaults = Defaults::read(root)?;
+    let root = &sources[0].root;
     let name = root.attribute("model").map_or(default_name, |(v, _)| v);
+    let scene = scene::collect(sources)?;
+    let names = Names::of(&scene)?;
     let mut reader = Reader {
-        compiler,
-        defaults,
+        sources,
+        files,
         b: ChainBuilder::new(name),
-        bodies: HashSet::new(),
-        joint_names: HashSet::new(),
         link_names: HashSet::new(),
-        counts: Counts::default(),
+        joint_names: HashSet::new(),
         qpos0: Vec::new(),
         refs: Vec::new(),
         quaternions: Vec::new(),
+        joint_keys: Vec::new(),
     };
-    let worlds: Vec<&Element> = root.children_named("worldbody").collect();
-    for w in &worlds {
-        reader.body_names(w);
+    reader.link_names.extend(names.links());
+    reader.joint_names.extend(names.joints.iter().cloned());
+    reader.b.link("world");
+    for b in 0..scene.bodies.len() {
+        reader.body(&scene, &names, b)?;
     }
-    reader.add_link("world");
-    for w in &worlds {
-        reader.contents(w, "world", &Pose::IDENTITY, "main", true)?;
-    }
-    reader.keyframes(root)?;
+    reader.keyframes(root, &scene.attached_keys)?;
     if couplings {
         reader.couplings(root)?;
     }
@@ -99,53 +134,40 @@ fn read_model(
     Ok(reader.b)
 }
 
-/// Elements that would add bodies or joints kinechain does not read.
-const UNSUPPORTED: [&str; 5] = ["replicate", "attach", "composite", "flexcomp", "skin"];
-
-#[derive(Default)]
-struct Counts {
-    bodies: usize,
-    joints: usize,
-    sites: usize,
-}
-
-struct Reader {
-    compiler: Compiler,
-    defaults: Defaults,
+struct Reader<'a> {
+    sources: &'a [Source],
+    files: &'a [PathBuf],
     b: ChainBuilder,
-    /// Every body's name (sites that share one get a qualified name).
-    bodies: HashSet<String>,
-    joint_names: HashSet<String>,
+    /// Every link name (the file's, and those made up), to keep made-up ones apart.
     link_names: HashSet<String>,
-    counts: Counts,
+    joint_names: HashSet<String>,
     /// MuJoCo's `qpos0`: what a keyframe without `qpos` holds.
     qpos0: Vec<f64>,
     /// Each hinge or slide joint's name and reference position (`qpos0`).
     refs: Vec<(String, f64)>,
     /// Where each free or ball joint's quaternion starts in `qpos`.
     quaternions: Vec<usize>,
+    /// Each joint's entries in the keyframes of attached models, and its first entry in `qpos`.
+    joint_keys: Vec<(usize, usize, scene::KeyEntries)>,
 }
 
-impl Reader {
-    fn body_names(&mut self, el: &Element) {
-        for c in &el.children {
-            if c.name == "body"
-                && let Some((n, _)) = c.attribute("name")
-            {
-                self.bodies.insert(n.to_string());
-            }
-            if c.name == "body" || c.name == "frame" {
-                self.body_names(c);
-            }
-        }
+impl Reader<'_> {
+    /// Where `at` is, for a warning, as errors say it: `line L column C`, after `in file F:`
+    /// for a file other than the main one.
+    fn place(&self, at: tree::At) -> String {
+        let file = match self.files.get(at.file) {
+            Some(f) if at.file > 0 => format!("in file {}: ", f.display()),
+            _ => String::new(),
+        };
+        format!("{file}line {} column {}", at.line, at.column)
     }
 
-    fn add_link(&mut self, name: &str) {
-        self.link_names.insert(name.to_string());
-        self.b.link(name);
+    fn warn(&mut self, at: tree::At, message: String) {
+        let place = self.place(at);
+        self.b.warn(format!("{place}: {message}"));
     }
 
-    /// `base`, or `base_1`, `base_2`, … : the first no joint has (generated names only).
+    /// `base`, or `base_1`, `base_2`, … : the first no joint has (names made up here only).
     fn joint_name(&mut self, base: String) -> String {
         let name = std::iter::once(base.clone())
             .chain((1..).map(|i| format!("{base}_{i}")))
@@ -155,149 +177,123 @@ impl Reader {
         name
     }
 
-    /// The children of a body, a frame or the world body, placed by `frame` in link `link`.
-    fn contents(
-        &mut self,
-        el: &Element,
-        link: &str,
-        frame: &Pose,
-        class: &str,
-        top: bool,
-    ) -> Result<(), Problem> {
-        for c in &el.children {
-            match c.name.as_str() {
-                "body" => self.body(c, link, frame, class, top)?,
-                "frame" => {
-                    let inner = self.childclass(c, class)?;
-                    let (p, q) = placement(c, |n| c.attribute(n), &self.compiler)?;
-                    let placed = frame.then(&Pose { p, q });
-                    self.contents(c, link, &placed, &inner, top)?;
-                }
-                "site" => self.site(c, link, frame, class)?,
-                "joint" | "freejoint" if el.name == "frame" => {
-                    return Err(Problem::at(
-                        c.at,
-                        format!("<{}> inside a <frame>: a joint belongs to a body", c.name),
-                    ));
-                }
-                name if UNSUPPORTED.contains(&name) => {
-                    return Err(Problem::at(
-                        c.at,
-                        format!(
-                            "<{name}> is not supported: kinechain reads bodies and joints written out"
-                        ),
-                    ));
-                }
-                _ => {}
-            }
-        }
-        Ok(())
+    /// Likewise for links.
+    fn link_name(&mut self, base: String) -> String {
+        let name = std::iter::once(base.clone())
+            .chain((1..).map(|i| format!("{base}_{i}")))
+            .find(|n| !self.link_names.contains(n))
+            .unwrap_or(base);
+        self.link_names.insert(name.clone());
+        name
     }
 
-    fn childclass(&self, el: &Element, class: &str) -> Result<String, Problem> {
-        match el.attribute("childclass") {
-            Some((v, at)) => {
-                self.defaults.check(v, at)?;
-                Ok(v.to_string())
-            }
-            None => Ok(class.to_string()),
-        }
-    }
-
-    fn body(
-        &mut self,
-        el: &Element,
-        parent: &str,
-        frame: &Pose,
-        class: &str,
-        top: bool,
-    ) -> Result<(), Problem> {
-        self.counts.bodies += 1;
-        let name = match el.attribute("name") {
-            Some((n, _)) => n.to_string(),
-            None => format!("body{}", self.counts.bodies),
+    /// Body `b` of the scene: its link, its joints (a chain of links when it has several, a
+    /// fixed joint when none) and its sites.
+    fn body(&mut self, scene: &Scene<'_>, names: &Names, b: usize) -> Result<(), Problem> {
+        let body = &scene.bodies[b];
+        let name = names.bodies[b].clone();
+        let parent = match b {
+            0 => String::new(),
+            _ => names.bodies[body.parent].clone(),
         };
-        let class = self.childclass(el, class)?;
-        let (p, q) = placement(el, |n| el.attribute(n), &self.compiler)?;
-        let pose = frame.then(&Pose { p, q });
-        if let Some((v, at)) = el.attribute("mocap")
+        let source = &self.sources[body.item.source];
+        let first_joint: usize = scene.bodies[..b].iter().map(|x| x.joints.len()).sum();
+        let first_site: usize = scene.bodies[..b].iter().map(|x| x.sites.len()).sum();
+        let mut pose = body.pose;
+        // alignfree: a free body without children moves onto its inertial frame, and what it
+        // holds moves the other way (MuJoCo's free-joint alignment).
+        let aligned = match if b == 0 { None } else { align(body, source)? } {
+            Some(frame) => {
+                pose = pose.then(&frame);
+                Some(frame.inverse())
+            }
+            None => None,
+        };
+        let held = |item: &scene::Item<'_>| match &aligned {
+            Some(inverse) => inverse.then(&item.frame),
+            None => item.frame,
+        };
+        if let Some((v, at)) = body.item.el.attribute("mocap")
             && attrs::boolean(v, at, "mocap")?
         {
-            self.b.warn(format!(
-                "body '{name}' is a mocap body: it is fixed where the file places it (MuJoCo's \
-                 mocap_pos and mocap_quat at their defaults)"
-            ));
+            self.warn(
+                body.item.el.at,
+                format!(
+                    "body '{name}' is a mocap body: it is fixed where the file places it (MuJoCo's \
+                     mocap_pos and mocap_quat at their defaults)"
+                ),
+            );
         }
-        let joints: Vec<&Element> = el
-            .children
-            .iter()
-            .filter(|c| c.name == "joint" || c.name == "freejoint")
-            .collect();
-        if joints.is_empty() {
+        if b == 0 {
+            // The world: its link is there; only its sites follow.
+        } else if body.joints.is_empty() {
             let joint = self.joint_name(format!("{name}/weld"));
-            self.add_link(&name);
+            self.b.link(&name);
             self.b.joint(
-                JointSpec::new(joint, JointKind::Fixed, parent, name.as_str())
+                JointSpec::new(joint, JointKind::Fixed, parent.as_str(), name.as_str())
                     .with_origin(pose.transform()),
             );
         } else {
-            let mut from = parent.to_string();
-            for (i, j) in joints.iter().enumerate() {
-                let last = i + 1 == joints.len();
-                let jname = self.joint_label(j);
-                let to = if last {
+            let mut from = parent;
+            let count = body.joints.len();
+            for (i, j) in body.joints.iter().enumerate() {
+                let jname = names.joints[first_joint + i].clone();
+                let to = if i + 1 == count {
                     name.clone()
                 } else {
-                    format!("{name}/{jname}")
+                    self.link_name(format!("{name}/{jname}"))
                 };
                 let placed = if i == 0 { pose } else { Pose::IDENTITY };
-                let spec = self.joint(j, &jname, &from, &to, &placed, &class, top, joints.len())?;
-                self.add_link(&to);
+                let at_joint = JointAt {
+                    name: &jname,
+                    parent: &from,
+                    child: &to,
+                    body: &placed,
+                    frame: &held(j),
+                    top: body.parent == 0,
+                    count,
+                };
+                let spec = self.joint(j, &at_joint)?;
+                if !j.keys.is_empty() {
+                    let first = self.qpos0.len() - spec.kind.nq();
+                    self.joint_keys
+                        .push((first, spec.kind.nq(), j.keys.clone()));
+                }
+                self.b.link(&to);
                 self.b.joint(spec);
                 from = to;
             }
         }
-        self.contents(el, &name, &Pose::IDENTITY, &class, false)
-    }
-
-    fn joint_label(&mut self, j: &Element) -> String {
-        self.counts.joints += 1;
-        match j.attribute("name") {
-            Some((n, _)) => {
-                self.joint_names.insert(n.to_string());
-                n.to_string()
-            }
-            None => {
-                let n = self.counts.joints;
-                self.joint_name(format!("joint{n}"))
-            }
+        for (k, site) in body.sites.iter().enumerate() {
+            let link = names.sites[first_site + k].clone();
+            let placed = self.site(site, &held(site), &link)?;
+            let joint = self.joint_name(format!("{link}/site"));
+            self.b.link(&link);
+            self.b.joint(
+                JointSpec::new(joint, JointKind::Fixed, name.as_str(), link.as_str())
+                    .with_origin(placed.transform()),
+            );
         }
+        Ok(())
     }
 
-    /// The joint `el` of a body placed at `pose` in link `parent`, moving link `child`.
-    #[allow(clippy::too_many_arguments)]
-    fn joint(
-        &mut self,
-        el: &Element,
-        name: &str,
-        parent: &str,
-        child: &str,
-        pose: &Pose,
-        class: &str,
-        top: bool,
-        count: usize,
-    ) -> Result<JointSpec, Problem> {
+    /// The joint `j` of a body ([`JointAt`]).
+    fn joint(&mut self, j: &scene::Item<'_>, at: &JointAt<'_>) -> Result<JointSpec, Problem> {
+        let el = j.el;
+        let source = &self.sources[j.source];
+        let (compiler, defaults) = (&source.compiler, &source.defaults);
+        let name = at.name;
         let free = el.name == "freejoint";
         let class = if free {
             "main"
         } else {
-            self.defaults.class_of(el, class)?
+            defaults.class_of(el, &j.class)?
         };
         let get = |n: &str| {
             if free {
                 el.attribute(n)
             } else {
-                self.defaults.value(el, Kind::Joint, class, n)
+                defaults.value(el, Kind::Joint, class, n)
             }
         };
         let kind = if free {
@@ -306,14 +302,16 @@ impl Reader {
             get("type").map_or("hinge", |(v, _)| v)
         };
         let type_at = get("type").map_or(el.at, |(_, at)| at);
+        // The joint's anchor and axis in the body's frame: the frames around it place them.
+        let anchor = |pos: Vector3<f64>| at.frame.p + at.frame.q * pos;
         match kind {
             "free" => {
-                if !top || count > 1 {
+                if !at.top || at.count > 1 {
                     return Err(Problem::at(
                         el.at,
                         format!(
                             "free joint '{name}' {}; MuJoCo allows a free joint only as the one joint of a body at the top of the tree",
-                            if top {
+                            if at.top {
                                 "shares its body with other joints"
                             } else {
                                 "is not in a top-level body"
@@ -322,15 +320,21 @@ impl Reader {
                     ));
                 }
                 self.quaternions.push(self.qpos0.len() + 3);
+                let pose = at.body;
                 self.qpos0
                     .extend_from_slice(&[pose.p.x, pose.p.y, pose.p.z]);
                 let c = pose.q.quaternion();
                 self.qpos0.extend_from_slice(&[c.w, c.i, c.j, c.k]);
-                Ok(JointSpec::new(name, JointKind::Floating, parent, child))
+                Ok(JointSpec::new(
+                    name,
+                    JointKind::Floating,
+                    at.parent,
+                    at.child,
+                ))
             }
             "hinge" | "slide" => {
                 let hinge = kind == "hinge";
-                let angle = |v: f64| if hinge { self.compiler.angle(v) } else { v };
+                let angle = |v: f64| if hinge { compiler.angle(v) } else { v };
                 let axis = match get("axis") {
                     Some((v, at)) => reals::<3>(v, at, "axis")?,
                     None => [0.0, 0.0, 1.0],
@@ -341,11 +345,13 @@ impl Reader {
                         format!("joint '{name}': the axis is zero or too small"),
                     ));
                 };
+                let unit_axis = at.frame.q * unit_axis;
                 let axis = [unit_axis.x, unit_axis.y, unit_axis.z];
                 let pos = match get("pos") {
                     Some((v, at)) => Vector3::from(reals::<3>(v, at, "pos")?),
                     None => Vector3::zeros(),
                 };
+                let pos = anchor(pos);
                 let reference = match get("ref") {
                     Some((v, at)) => angle(reals::<1>(v, at, "ref")?[0]),
                     None => 0.0,
@@ -356,7 +362,7 @@ impl Reader {
                 };
                 let limited = match get("limited") {
                     Some(("auto", _)) | None => {
-                        if !self.compiler.autolimits && range.is_some() {
+                        if !compiler.autolimits && range.is_some() {
                             return Err(Problem::at(
                                 el.at,
                                 format!(
@@ -379,17 +385,17 @@ impl Reader {
                     } else {
                         JointKind::Prismatic
                     },
-                    parent,
-                    child,
+                    at.parent,
+                    at.child,
                 )
                 .with_axis(axis);
                 if hinge {
-                    let at = Pose {
+                    let about = Pose {
                         p: pos,
                         q: UnitQuaternion::identity(),
                     };
                     spec = spec
-                        .with_origin(pose.then(&at).transform())
+                        .with_origin(at.body.then(&about).transform())
                         .with_offsets(-reference, 0.0);
                     if pos != Vector3::zeros() {
                         spec = spec
@@ -397,7 +403,7 @@ impl Reader {
                     }
                 } else {
                     spec = spec
-                        .with_origin(pose.transform())
+                        .with_origin(at.body.transform())
                         .with_offsets(0.0, -reference);
                 }
                 if limited {
@@ -430,24 +436,28 @@ impl Reader {
                     Some((v, at)) => Vector3::from(reals::<3>(v, at, "pos")?),
                     None => Vector3::zeros(),
                 };
-                let at = Pose {
+                let pos = anchor(pos);
+                let about = Pose {
                     p: pos,
                     q: UnitQuaternion::identity(),
                 };
-                let mut spec = JointSpec::new(name, JointKind::Ball, parent, child)
-                    .with_origin(pose.then(&at).transform());
+                let mut spec = JointSpec::new(name, JointKind::Ball, at.parent, at.child)
+                    .with_origin(at.body.then(&about).transform());
                 if pos != Vector3::zeros() {
                     spec =
                         spec.with_post(crate::model::transform::Transform::from_translation(-pos));
                 }
                 let limited = match get("limited") {
-                    Some(("auto", _)) | None => self.compiler.autolimits && get("range").is_some(),
+                    Some(("auto", _)) | None => compiler.autolimits && get("range").is_some(),
                     Some((v, at)) => attrs::boolean(v, at, "limited")?,
                 };
                 if limited {
-                    self.b.warn(format!(
-                        "ball joint '{name}' has a range (a cone about its reference orientation): kinechain does not check it"
-                    ));
+                    self.warn(
+                        el.at,
+                        format!(
+                            "ball joint '{name}' has a range (a cone about its reference orientation): kinechain does not check it"
+                        ),
+                    );
                 }
                 self.quaternions.push(self.qpos0.len());
                 self.qpos0.extend_from_slice(&[1.0, 0.0, 0.0, 0.0]);
@@ -462,67 +472,38 @@ impl Reader {
         }
     }
 
-    fn site(&mut self, el: &Element, link: &str, frame: &Pose, class: &str) -> Result<(), Problem> {
-        self.counts.sites += 1;
-        let class = self.defaults.class_of(el, class)?.to_string();
-        let get = |n: &str| self.defaults.value(el, Kind::Site, &class, n);
+    /// The placement of site `s` in its body's frame (`frame` the frames around it there).
+    fn site(&self, s: &scene::Item<'_>, frame: &Pose, name: &str) -> Result<Pose, Problem> {
+        let el = s.el;
+        let source = &self.sources[s.source];
+        let class = source.defaults.class_of(el, &s.class)?.to_string();
+        let get = |n: &str| source.defaults.value(el, Kind::Site, &class, n);
         let pose = match get("fromto") {
             Some((_, at)) if get("pos").is_some() => {
                 return Err(Problem::at(
                     at,
-                    "a site with fromto cannot also have pos (MuJoCo refuses both)",
+                    format!("site '{name}' has fromto and pos; MuJoCo refuses both"),
                 ));
             }
-            Some((v, at)) => {
-                let [a, b, c, d, e, f] = reals::<6>(v, at, "fromto")?;
-                let (from, to) = (Vector3::new(a, b, c), Vector3::new(d, e, f));
-                // MuJoCo turns the site's z axis to point from `to` to `from`.
-                let axis = attrs::unit(from - to).ok_or_else(|| {
-                    Problem::at(
-                        at,
-                        "fromto: the two points coincide (or their distance overflows)",
-                    )
-                })?;
-                Pose {
-                    p: (from + to) * 0.5,
-                    q: attrs::z_to(&axis),
-                }
-            }
+            Some((v, at)) => fromto(v, at)?,
             None => {
-                let (p, q) = placement(el, get, &self.compiler)?;
+                let (p, q) = placement(el, get, &source.compiler)?;
                 Pose { p, q }
             }
         };
-        let given = el.attribute("name").map(|(n, _)| n.to_string());
-        let base = match &given {
-            Some(n) if self.bodies.contains(n) || self.link_names.contains(n) => {
-                format!("site:{n}")
-            }
-            Some(n) => n.clone(),
-            None => format!("site{}", self.counts.sites),
-        };
-        if self.link_names.contains(&base) {
-            return Err(Problem::at(
-                el.at,
-                format!("site '{base}' has the name of another site or body"),
-            ));
-        }
-        let joint = self.joint_name(format!("{base}/site"));
-        self.add_link(&base);
-        self.b.joint(
-            JointSpec::new(joint, JointKind::Fixed, link, base.as_str())
-                .with_origin(frame.then(&pose).transform()),
-        );
-        Ok(())
+        Ok(frame.then(&pose))
     }
 
-    /// The `<key>` configurations (their `qpos`, with the quaternions of free and ball joints
-    /// normalised as MuJoCo's compiler normalises them, or `qpos0` where a key gives none), unnamed
-    /// ones called `keyN` (N counting keys from 0), and as many more holding `qpos0` as
-    /// `<size nkey>` asks for.
-    fn keyframes(&mut self, root: &Element) -> Result<(), Problem> {
+    /// The `<key>` configurations of the main model (their `qpos`, padded with `qpos0` when
+    /// shorter than `nq`, as MuJoCo pads them; `qpos0` where a key gives none), unnamed ones
+    /// called `keyN` (N counting keys from 0), as many more holding `qpos0` as `<size nkey>`
+    /// asks for, then those of attached models (`attached`: each joint's own entries, or its
+    /// `qpos0`). The quaternions of free and ball joints are normalised as MuJoCo's compiler
+    /// normalises them.
+    fn keyframes(&mut self, root: &Element, attached: &[String]) -> Result<(), Problem> {
         let nq = self.qpos0.len();
         let mut i = 0;
+        let mut keys = Vec::new();
         for k in root
             .children_named("keyframe")
             .flat_map(|k| k.children_named("key"))
@@ -533,8 +514,8 @@ impl Reader {
             i += 1;
             let q = match k.attribute("qpos") {
                 Some((v, at)) => {
-                    let q = real_list(v, at, "qpos")?;
-                    if q.len() != nq {
+                    let mut q = real_list(v, at, "qpos")?;
+                    if q.len() > nq {
                         return Err(Problem::at(
                             at,
                             format!(
@@ -543,15 +524,12 @@ impl Reader {
                             ),
                         ));
                     }
+                    q.extend_from_slice(&self.qpos0[q.len()..]);
                     q
                 }
                 None => self.qpos0.clone(),
             };
-            let mut q = q;
-            for &first in &self.quaternions {
-                normalize_quaternion(&mut q[first..first + 4]);
-            }
-            self.b.keyframe(name, q);
+            keys.push((name, q));
         }
         // `<size nkey="N">` makes room for N keys: those the file does not give hold qpos0.
         for size in root.children_named("size") {
@@ -566,10 +544,25 @@ impl Reader {
                     ));
                 }
                 while i < n {
-                    self.b.keyframe(format!("key{i}"), self.qpos0.clone());
+                    keys.push((format!("key{i}"), self.qpos0.clone()));
                     i += 1;
                 }
             }
+        }
+        for name in attached {
+            let mut q = self.qpos0.clone();
+            for (first, size, entries) in &self.joint_keys {
+                if let Some((_, values)) = entries.iter().find(|(n, _)| n == name) {
+                    q[*first..first + size].copy_from_slice(&values[..*size]);
+                }
+            }
+            keys.push((name.clone(), q));
+        }
+        for (name, mut q) in keys {
+            for &first in &self.quaternions {
+                normalize_quaternion(&mut q[first..first + 4]);
+            }
+            self.b.keyframe(name, q);
         }
         Ok(())
     }

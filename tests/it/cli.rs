@@ -2156,6 +2156,60 @@ fn mjcf_files_load_with_their_keyframes_and_couplings_on_request() {
 }
 
 #[test]
+fn a_scene_of_two_arms_and_ten_free_boxes_lists_and_evaluates() {
+    let file = "tests/data/mjcf/scene/pick.xml";
+    let info = &ok_json(&["info", file])[0];
+    assert_eq!(
+        (info["nq"].as_u64(), info["nv"].as_u64()),
+        (Some(85), Some(75))
+    );
+    let joints = info["joints"].as_array().unwrap();
+    let free: Vec<&str> = joints
+        .iter()
+        .filter(|j| j["type"] == "floating")
+        .map(|j| j["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(free.len(), 10);
+    assert_eq!(free[0], "box_00");
+    assert_eq!(
+        info["keyframes"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .collect::<Vec<_>>(),
+        ["left/home", "right/home"]
+    );
+    let table = ok_text(&["info", file, "--format", "table"]);
+    assert!(table.contains("the floating joint 'box_09'"), "{table}");
+    // fk of a box's site and the Panda's hand at the first keyframe: the box where the file
+    // puts it (alignfree: its top site keeps its place), the hand as the library says.
+    let q: Vec<f64> = numbers(&info["keyframes"]["left/home"]);
+    let q_text = serde_json::to_string(&q).unwrap();
+    let lines = ok_json(&[
+        "fk",
+        file,
+        "--q",
+        &q_text,
+        "--link",
+        "top_00",
+        "--link",
+        "left/hand",
+    ]);
+    let top = position(&lines[0], "top_00");
+    assert!(
+        (top[0] + 0.36).abs() < 1e-12 && (top[1] - 0.45).abs() < 1e-12,
+        "{top:?}"
+    );
+    let chain = kinechain::Chain::from_file(file).unwrap();
+    let mut data = kinechain::Data::new(&chain);
+    let poses = kinechain::forward_kinematics(&chain, &mut data, &q).unwrap();
+    let hand = poses
+        .world_from_link(chain.link_id("left/hand").unwrap())
+        .translation();
+    assert_eq!(position(&lines[0], "left/hand"), [hand.x, hand.y, hand.z]);
+}
+
+#[test]
 fn xacro_files_expand_and_load_with_args_and_package_paths() {
     let ur = "tests/data/xacro/packages/ur_description/urdf/ur.urdf.xacro";
     let args = ["--arg", "name:=ur", "--arg", "ur_type:=ur5e"];

@@ -119,7 +119,7 @@ fn a_slide_moves_along_its_axis_by_qpos_minus_ref() {
            </worldbody></mujoco>"#,
     );
     assert_eq!(
-        chain.joint(chain.joint_id("joint1").unwrap()).kind(),
+        chain.joint(chain.joint_id("joint#0").unwrap()).kind(),
         JointKind::Prismatic
     );
     let (p, _) = pose(&chain, &[0.75], "b");
@@ -265,18 +265,206 @@ fn s() -> f64 {
 }
 
 #[test]
-fn a_site_sharing_a_body_name_is_qualified_and_unnamed_elements_get_names() {
+fn a_site_sharing_a_body_name_is_qualified_and_unnamed_elements_are_named_by_mujoco_id() {
     let chain = mjcf(
         r#"<mujoco><worldbody><body name="hand"><joint/><site name="hand" pos="0 0 1"/>
-             <body><joint/><joint type="slide"/></body></body></worldbody></mujoco>"#,
+             <body><site/><joint/><joint type="slide"/></body><site name=""/></body>
+             <body><site name="x"/></body></worldbody></mujoco>"#,
     );
     assert!(chain.link_id("site:hand").is_ok());
+    // Joints 0, 1, 2 and bodies 1, 2, 3 as MuJoCo numbers them; sites body by body: the hand's
+    // two (0, 1), then the unnamed body's (2), then the last body's (3).
     assert_eq!(
         kinechain::regression::variable_names(&chain),
-        ["joint1", "joint2", "joint3"]
+        ["joint#0", "joint#1", "joint#2"]
     );
-    assert!(chain.link_id("body2").is_ok());
-    assert!(chain.link_id("body2/joint2").is_ok());
+    for link in [
+        "body#2",
+        "body#2/joint#1",
+        "body#3",
+        "site#1",
+        "site#2",
+        "x",
+    ] {
+        assert!(chain.link_id(link).is_ok(), "{link}");
+    }
+    // A made-up name the file already uses takes one # more.
+    let chain = mjcf(
+        r#"<mujoco><worldbody><body><joint/><site name="body#1"/></body>
+             <body name="b"><joint name="joint#0"/></body></worldbody></mujoco>"#,
+    );
+    assert_eq!(
+        kinechain::regression::variable_names(&chain),
+        ["joint##0", "joint#0"]
+    );
+    assert!(chain.link_id("body##1").is_ok());
+}
+
+#[test]
+fn frames_place_joints_and_sites_and_a_free_body_may_follow_an_arm() {
+    let chain = Chain::from_file(data_dir().join("scene/frames_and_names.xml")).unwrap();
+    let names = kinechain::regression::variable_names(&chain);
+    assert_eq!(
+        names,
+        [
+            "joint#0",
+            "joint##1",
+            "joint#1",
+            "joint#3.qw",
+            "joint#3.qx",
+            "joint#3.qy",
+            "joint#3.qz",
+            "joint#4.x",
+            "joint#4.y",
+            "joint#4.z",
+            "joint#4.qw",
+            "joint#4.qx",
+            "joint#4.qy",
+            "joint#4.qz"
+        ]
+    );
+    assert!(chain.floating_joint().is_none());
+    // The first hinge turns about the axis its frame turns (body x → body y), through the point
+    // the frame places.
+    // euler="0.1 0.2 0.3" in MuJoCo's default sequence xyz: about the moving axes, x first.
+    let turn_about = |axis: kinechain::nalgebra::Unit<Vector3<f64>>, a: f64| {
+        Rotation3::from_axis_angle(&axis, a)
+    };
+    let body = turn_about(Vector3::x_axis(), 0.1)
+        * turn_about(Vector3::y_axis(), 0.2)
+        * turn_about(Vector3::z_axis(), 0.3);
+    let axis = body * Vector3::y();
+    let anchor = Vector3::new(0.0, 0.0, 0.5) + body * Vector3::new(0.1, 0.05, 0.0);
+    let mut q = chain.neutral();
+    let (p0, _) = pose(&chain, &q, "body#1");
+    q[0] = 0.7;
+    let (p1, r1) = pose(&chain, &q, "body#1");
+    let turn = Rotation3::from_axis_angle(&kinechain::nalgebra::Unit::new_normalize(axis), 0.7);
+    assert!(close(&p1, &(anchor + turn * (p0 - anchor))), "{p1} {p0}");
+    assert!(close_m(&r1, &(turn * body).into_inner()));
+    // The free ball: its qpos0 is where the frame puts it; a keyframe shorter than nq takes the
+    // rest from qpos0.
+    let keys = chain.keyframes();
+    assert_eq!(keys[0].0, "short");
+    let (c, s) = (0.25f64.cos(), 0.25f64.sin());
+    let want_p = Vector3::new(1.0, 0.0, 0.0)
+        + Rotation3::from_euler_angles(0.0, 0.0, 0.5) * Vector3::new(0.0, 0.5, 1.0);
+    assert!(close(
+        &Vector3::from_column_slice(&keys[0].1[7..10]),
+        &want_p
+    ));
+    assert!((keys[0].1[10] - c).abs() < 1e-15 && (keys[0].1[13] - s).abs() < 1e-15);
+    assert_eq!(keys[0].1[..2], [0.2, -0.3]);
+}
+
+#[test]
+fn replicas_are_placed_step_by_step_and_named_with_suffixes() {
+    let chain = Chain::from_file(data_dir().join("scene/replicate.xml")).unwrap();
+    assert_eq!(chain.nq(), 33);
+    let names = kinechain::regression::variable_names(&chain);
+    // Inner suffixes first, two digits for eleven copies, one for three.
+    assert_eq!(names[..3], ["stem00-0", "stem01-0", "stem02-0"]);
+    assert_eq!(names[11], "stem00-1");
+    assert!(chain.link_id("tip10-2").is_ok() && chain.link_id("row-2").is_ok());
+    // Copy k of the inner row: turned k·5° about y, at the sum of the offsets turned by the
+    // copies before it; the outer rows likewise about z.
+    let q = vec![0.0; 33];
+    let (p, r) = pose(&chain, &q, "leaf02-1");
+    let (rz, ry) = (
+        Rotation3::from_euler_angles(0.0, 0.0, 20f64.to_radians()),
+        |k: f64| Rotation3::from_euler_angles(0.0, (5.0 * k).to_radians(), 0.0),
+    );
+    let inner = Vector3::new(0.1, 0.0, 0.0) + ry(1.0) * Vector3::new(0.1, 0.0, 0.0);
+    let want = Vector3::new(0.0, 0.5, 0.0) + rz * (inner + ry(2.0) * Vector3::new(0.0, 0.0, 0.1));
+    assert!((p - want).norm() < 1e-14, "{p} {want}");
+    assert!(close_m(&r, &(rz * ry(2.0)).into_inner()));
+}
+
+#[test]
+fn attached_models_keep_their_own_settings_and_take_prefixes() {
+    let chain = Chain::from_file(data_dir().join("scene/attach.xml")).unwrap();
+    let names = kinechain::regression::variable_names(&chain);
+    // The cup's free joint is unnamed in its file: named by its MuJoCo id here.
+    assert_eq!(names[..4], ["turn", "a/shoulder", "a/wrist", "joint#3.x"]);
+    assert!(chain.link_id("w/grip").is_ok() && chain.link_id("copy/a/grip").is_ok());
+    assert!(chain.link_id("f/shelf_mark").is_ok());
+    // Keyframes: the model's own, then the attached model's under each prefix, its values for
+    // the joints it brought and qpos0 for the others.
+    let keys = chain.keyframes();
+    let key_names: Vec<&str> = keys.iter().map(|k| k.0.as_str()).collect();
+    assert_eq!(key_names, ["mine", "k/ready"]);
+    let tilt = names.iter().position(|n| n == "k/tilt").unwrap();
+    // (qpos values are radians whatever the compiler's angle units.)
+    assert_eq!(
+        keys[1].1[tilt..tilt + 8],
+        [10.0, 0.1, 0.2, 0.3, 0.0, 1.0, 0.0, 0.0]
+    );
+    assert_eq!(keys[1].1[0], 0.0);
+    assert_eq!(keys[0].1[0], 0.3);
+    // The child's angles are radians and its Euler sequence ZYX, whatever the parent's.
+    let (p, _) = pose(&chain, &chain.neutral(), "w/arm");
+    assert!(close(&p, &Vector3::new(0.1, 0.0, 0.0)));
+    let (_, r) = pose(&chain, &chain.neutral(), "w/arm");
+    // ZYX, upper case: about the fixed axes, Z first, so Y's turn multiplies from the left.
+    let want = Rotation3::from_axis_angle(&Vector3::y_axis(), 0.2)
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2);
+    assert!(close_m(&r, want.matrix()), "{r}");
+}
+
+#[test]
+fn a_free_body_aligned_with_its_inertial_frame_keeps_its_sites_in_place() {
+    let aligned = Chain::from_file(data_dir().join("scene/alignfree.xml")).unwrap();
+    let text = std::fs::read_to_string(data_dir().join("scene/alignfree.xml")).unwrap();
+    let plain = mjcf(&text.replace(r#"alignfree="true""#, r#"alignfree="false""#));
+    // At qpos0 every site is where it is without the alignment; the bodies are not.
+    for site in ["corner", "stick_end", "weighted_site", "kept_site"] {
+        let qa0 = zero_key(&aligned);
+        let qp0 = zero_key(&plain);
+        let (a, ra) = pose(&aligned, &qa0, site);
+        let (b, rb) = pose(&plain, &qp0, site);
+        assert!(
+            (a - b).norm() < 1e-14 && (ra - rb).abs().max() < 1e-14,
+            "{site}"
+        );
+    }
+    // The brick's frame is its geom's: at (0.01, 0.02, 0.03) in the body, turned 40° about z.
+    let q = zero_key(&aligned);
+    let (p, _) = pose(&aligned, &q, "brick");
+    let r = Rotation3::from_axis_angle(&Vector3::x_axis(), 10f64.to_radians())
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), 20f64.to_radians())
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), 30f64.to_radians());
+    let want = Vector3::new(0.1, 0.2, 0.3) + r * Vector3::new(0.01, 0.02, 0.03);
+    assert!(close(&p, &want), "{p} {want}");
+    // Unmoved: align="false", and a free body with a child.
+    for body in ["kept", "parent"] {
+        assert_eq!(
+            pose(&aligned, &q, body).0,
+            pose(&plain, &zero_key(&plain), body).0
+        );
+    }
+    // A body whose inertia needs principal axes is refused, naming it.
+    let two = text.replace(
+        r#"<geom type="box" size="0.02 0.03 0.04" pos="0.01 0.02 0.03" euler="0 0 40"/>"#,
+        r#"<geom type="box" size="0.02 0.03 0.04"/><geom type="sphere" size="0.02" pos="0.1 0 0"/>"#,
+    );
+    let e = mjcf_error_or_any(&two);
+    assert!(
+        e.contains("body 'brick'") && e.contains("2 geoms give it mass"),
+        "{e}"
+    );
+}
+
+/// `qpos0` of `alignfree.xml` (its free joints where the file puts them): the key its
+/// `<size nkey="2">` adds.
+fn zero_key(chain: &Chain) -> Vec<f64> {
+    chain.keyframes()[1].1.clone()
+}
+
+#[test]
+fn an_included_file_may_have_any_root_element() {
+    let chain = Chain::from_file(data_dir().join("scene/legacy.xml")).unwrap();
+    assert_eq!(kinechain::regression::variable_names(&chain), ["hinge"]);
+    assert!(chain.link_id("handle").is_ok());
 }
 
 #[test]
@@ -323,9 +511,29 @@ fn errors_name_the_line_and_what_is_wrong() {
             "not a finite number",
         ),
         (
-            "<mujoco><worldbody>\n<replicate count=\"2\"/></worldbody></mujoco>",
+            "<mujoco><worldbody>\n<flexcomp type=\"grid\"/></worldbody></mujoco>",
             2,
-            "<replicate> is not supported",
+            "deformable",
+        ),
+        (
+            "<mujoco><worldbody>\n<replicate count=\"0\"/></worldbody></mujoco>",
+            2,
+            "positive whole number",
+        ),
+        (
+            "<mujoco><worldbody>\n<attach model=\"m\" prefix=\"p\"/></worldbody></mujoco>",
+            2,
+            "no model asset 'm'",
+        ),
+        (
+            "<mujoco><worldbody><body name=\"a\"/>\n<body name=\"a\"/></worldbody></mujoco>",
+            2,
+            "repeated name 'a' in body (the first is at line 1, column 20)",
+        ),
+        (
+            "<mujoco><worldbody>\n<joint/></worldbody></mujoco>",
+            2,
+            "world body has no joints",
         ),
         ("<mujoco>\n<worldbody></mujoco>", 2, "not well-formed"),
         ("<robot name=\"r\">\n</robot><x/>", 2, ""),
@@ -362,7 +570,7 @@ fn includes_are_read_once_and_their_errors_name_the_included_file() {
         "twice.xml",
         r#"<mujoco><include file="b.xml"/><include file="b.xml"/></mujoco>"#,
     );
-    dir.write("b.xml", "<mujoco/>");
+    dir.write("b.xml", "<mujoco><option/></mujoco>");
     let message = Chain::from_file(dir.path("twice.xml"))
         .unwrap_err()
         .kind()

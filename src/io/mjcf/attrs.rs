@@ -17,6 +17,14 @@ pub(crate) struct Compiler {
     pub(crate) eulerseq: [u8; 3],
     /// `autolimits` (default true): a joint with a `range` and `limited="auto"` is limited.
     pub(crate) autolimits: bool,
+    /// `alignfree` (default false): a free body without children is moved onto its inertial
+    /// frame (unless its free joint's `align` says otherwise).
+    pub(crate) alignfree: bool,
+    /// `inertiafromgeom`: `Some(true)` always from the geoms, `Some(false)` never, `None`
+    /// ("auto", the default) when the body has no `<inertial>`.
+    pub(crate) inertiafromgeom: Option<bool>,
+    /// `inertiagrouprange` (default 0 5): the geom groups that count for a body's inertia.
+    pub(crate) inertiagrouprange: [i64; 2],
 }
 
 impl Default for Compiler {
@@ -25,6 +33,9 @@ impl Default for Compiler {
             degrees: true,
             eulerseq: *b"xyz",
             autolimits: true,
+            alignfree: false,
+            inertiafromgeom: None,
+            inertiagrouprange: [0, 5],
         }
     }
 }
@@ -56,6 +67,30 @@ impl Compiler {
         }
         if let Some((v, at)) = el.attribute("autolimits") {
             self.autolimits = boolean(v, at, "autolimits")?;
+        }
+        if let Some((v, at)) = el.attribute("alignfree") {
+            self.alignfree = boolean(v, at, "alignfree")?;
+        }
+        if let Some((v, at)) = el.attribute("inertiafromgeom") {
+            self.inertiafromgeom = match v {
+                "auto" => None,
+                v => Some(boolean(v, at, "inertiafromgeom")?),
+            };
+        }
+        if let Some((v, at)) = el.attribute("inertiagrouprange") {
+            let [lo, hi] = reals::<2>(v, at, "inertiagrouprange")?;
+            self.inertiagrouprange = [lo as i64, hi as i64];
+        }
+        // MuJoCo refuses global coordinates; "local" is the only meaning kinechain reads.
+        if let Some((v, at)) = el.attribute("coordinate")
+            && v != "local"
+        {
+            return Err(Problem::at(
+                at,
+                format!(
+                    "compiler coordinate is '{v}'; MuJoCo reads only 'local' (global coordinates are no longer supported)"
+                ),
+            ));
         }
         Ok(())
     }
@@ -110,6 +145,7 @@ pub(crate) fn real_list(value: &str, at: At, what: &str) -> Result<Vec<f64>, Pro
 pub(crate) struct Class {
     joint: Vec<(String, String, At)>,
     site: Vec<(String, String, At)>,
+    geom: Vec<(String, String, At)>,
 }
 
 /// Every default class by name (`main` is the top one).
@@ -123,6 +159,8 @@ pub(crate) struct Defaults {
 pub(crate) enum Kind {
     Joint,
     Site,
+    /// For the inertial frame of a body that `alignfree` moves.
+    Geom,
 }
 
 impl Defaults {
@@ -181,6 +219,7 @@ impl Defaults {
             let list = match kind {
                 Kind::Joint => &class.joint,
                 Kind::Site => &class.site,
+                Kind::Geom => &class.geom,
             };
             list.iter()
                 .find(|(n, _, _)| n == name)
@@ -199,6 +238,7 @@ fn collect(
         let list = match child.name.as_str() {
             "joint" => &mut class.joint,
             "site" => &mut class.site,
+            "geom" => &mut class.geom,
             _ => continue,
         };
         for (n, v, at) in &child.attributes {
@@ -359,4 +399,56 @@ pub(crate) fn z_to(z: &Vector3<f64>) -> UnitQuaternion<f64> {
 /// The rigid transform of a position and a rotation.
 pub(crate) fn transform(pos: &Vector3<f64>, rotation: &UnitQuaternion<f64>) -> Transform {
     Transform::from_parts(&rotation.to_rotation_matrix().into_inner(), pos)
+}
+
+/// A position and an orientation: where a frame is in its parent's.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pose {
+    pub(crate) p: Vector3<f64>,
+    pub(crate) q: UnitQuaternion<f64>,
+}
+
+impl Pose {
+    pub(crate) const IDENTITY: Pose = Pose {
+        p: Vector3::new(0.0, 0.0, 0.0),
+        q: UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(1.0, 0.0, 0.0, 0.0)),
+    };
+
+    /// `self` then `then` (in `self`'s frame).
+    pub(crate) fn then(&self, then: &Pose) -> Pose {
+        Pose {
+            p: self.p + self.q * then.p,
+            q: self.q * then.q,
+        }
+    }
+
+    /// The pose that undoes `self`.
+    pub(crate) fn inverse(&self) -> Pose {
+        let q = self.q.inverse();
+        Pose {
+            p: -(q * self.p),
+            q,
+        }
+    }
+
+    pub(crate) fn transform(&self) -> crate::model::transform::Transform {
+        transform(&self.p, &self.q)
+    }
+}
+
+/// The placement `fromto="x1 y1 z1 x2 y2 z2"` gives a site or geom: at the middle, its z axis
+/// turned to point from the second point to the first, as MuJoCo turns it.
+pub(crate) fn fromto(value: &str, at: At) -> Result<Pose, Problem> {
+    let [a, b, c, d, e, f] = reals::<6>(value, at, "fromto")?;
+    let (from, to) = (Vector3::new(a, b, c), Vector3::new(d, e, f));
+    let axis = unit(from - to).ok_or_else(|| {
+        Problem::at(
+            at,
+            "fromto: the two points coincide (or their distance overflows)",
+        )
+    })?;
+    Ok(Pose {
+        p: (from + to) * 0.5,
+        q: z_to(&axis),
+    })
 }

@@ -55,12 +55,34 @@ impl Element {
     }
 }
 
-/// A model's files and its `<mujoco>` element with the includes spliced in.
+/// A model's files and its `<mujoco>` element with the includes spliced in, and the reader that
+/// reads the models it attaches ([`Tree::read_model`]) into the same list of files.
 #[derive(Debug)]
 pub(crate) struct Tree {
     pub(crate) root: Element,
+    reader: Reader,
+}
+
+impl Tree {
     /// The files read, the main file first (`<string>` for text given without a path).
-    pub(crate) files: Vec<PathBuf>,
+    pub(crate) fn files(&self) -> &[PathBuf] {
+        &self.reader.files
+    }
+
+    /// The `<mujoco>` element of the model file `name` that an `<asset><model file>` at `at`
+    /// names (looked up as an include is), with its includes read.
+    pub(crate) fn read_model(&mut self, name: &str, at: At) -> Result<Element, Problem> {
+        let r = &mut self.reader;
+        let path = r.locate(name, at)?;
+        let text = read_limited(&path, r.max_bytes)
+            .map_err(|why| Problem::at(at, format!("cannot read model file '{name}': {why}")))?;
+        r.files.push(path);
+        let index = r.files.len() - 1;
+        r.stack.push(index);
+        let root = r.document(&text, index, true);
+        r.stack.pop();
+        root
+    }
 }
 
 /// An error at `at` (or in no particular place), in the terms of [`LoadErrorKind::Mjcf`].
@@ -115,14 +137,12 @@ pub(crate) fn read(
         stack: vec![0],
     };
     let root = reader
-        .document(text, 0)
+        .document(text, 0, true)
         .map_err(|p| p.into_kind(&reader.files))?;
-    Ok(Tree {
-        root,
-        files: reader.files,
-    })
+    Ok(Tree { root, reader })
 }
 
+#[derive(Debug)]
 struct Reader {
     /// The most bytes an included file may have.
     max_bytes: u64,
@@ -133,8 +153,10 @@ struct Reader {
 }
 
 impl Reader {
-    /// The `<mujoco>` element of file `file`, whose text is `text`, with its includes read.
-    fn document(&mut self, text: &str, file: usize) -> Result<Element, Problem> {
+    /// The root element of file `file`, whose text is `text`, with its includes read: a
+    /// `<mujoco>` element for a model (`model`), any element for an included file (MuJoCo
+    /// splices the children of whatever root it has: `<mujocoinclude>` in older models).
+    fn document(&mut self, text: &str, file: usize, model: bool) -> Result<Element, Problem> {
         let limit = (text.len() / BYTES_PER_NODE).max(MIN_NODES);
         let xml_problem = |kind: LoadErrorKind| match kind {
             LoadErrorKind::Urdf {
@@ -166,7 +188,7 @@ impl Reader {
             .map_err(|e| xml_problem(xml_error(text, &e, limit)))?;
         let root = doc.root_element();
         let at = position(&doc, root.range().start, file);
-        if root.tag_name().name() != "mujoco" {
+        if model && root.tag_name().name() != "mujoco" {
             return Err(Problem::at(
                 at,
                 format!(
@@ -204,7 +226,7 @@ impl Reader {
             .collect();
         let mut children = Vec::new();
         for child in node.children().filter(Node::is_element) {
-            if child.tag_name().name() == "include" {
+            if child.tag_name().name().eq_ignore_ascii_case("include") {
                 children.extend(self.include(doc, child, file)?);
             } else {
                 children.push(self.element(doc, child, file, depth + 1)?);
@@ -230,27 +252,13 @@ impl Reader {
         let Some(name) = node.attribute("file") else {
             return Err(Problem::at(at, "<include> has no file attribute"));
         };
-        if self.stack.len() > MAX_INCLUDE_DEPTH {
+        if node.children().any(|c| c.is_element()) {
             return Err(Problem::at(
                 at,
-                format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"),
+                "<include> has child elements; it takes none",
             ));
         }
-        if self.files.len() >= MAX_FILES {
-            return Err(Problem::at(
-                at,
-                format!("the model is made of more than {MAX_FILES} files"),
-            ));
-        }
-        let path = self.resolve(Path::new(name), file).ok_or_else(|| {
-            Problem::at(
-                at,
-                format!(
-                    "included file '{name}' is not found (looked in {})",
-                    self.searched(file)
-                ),
-            )
-        })?;
+        let path = self.locate(name, at)?;
         if let Some(seen) = self.files.iter().position(|f| same_file(f, &path)) {
             let message = if self.stack.contains(&seen) {
                 format!(
@@ -271,9 +279,41 @@ impl Reader {
         self.files.push(path);
         let index = self.files.len() - 1;
         self.stack.push(index);
-        let root = self.document(&text, index)?;
+        let root = self.document(&text, index, false)?;
         self.stack.pop();
+        if root.children.is_empty() {
+            return Err(Problem::at(
+                at,
+                format!("included file '{name}' has no elements under its root"),
+            ));
+        }
         Ok(root.children)
+    }
+
+    /// The path of file `name` that an element at `at` names (an include, a model asset), after
+    /// checking the bounds on nesting and on the number of files.
+    fn locate(&self, name: &str, at: At) -> Result<PathBuf, Problem> {
+        if self.stack.len() > MAX_INCLUDE_DEPTH {
+            return Err(Problem::at(
+                at,
+                format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"),
+            ));
+        }
+        if self.files.len() >= MAX_FILES {
+            return Err(Problem::at(
+                at,
+                format!("the model is made of more than {MAX_FILES} files"),
+            ));
+        }
+        self.resolve(Path::new(name), at.file).ok_or_else(|| {
+            Problem::at(
+                at,
+                format!(
+                    "file '{name}' is not found (looked in {})",
+                    self.searched(at.file)
+                ),
+            )
+        })
     }
 
     /// Where `name` is: as it is if absolute; else in the base directory, then beside the file
