@@ -483,3 +483,61 @@ fn the_cobot_pump_case_fails_as_xacro_does() {
     );
     assert!(e.to_string().contains("in macro `franka_robot`"), "{e}");
 }
+
+/// xacro's comment rules: the comments right before a xacro element go (walking back over
+/// single line breaks only, and never into what the previous xacro element expanded to); a
+/// comment after a blank line stays; comments in a kept branch stay; `xacro:eval-comments`
+/// evaluates the comments after it until an element, text, `:off` or the list's end. And the
+/// namespace declarations of a file included inside a macro reach the document's root. (The
+/// expected document is xacro 2.1.1's.)
+#[test]
+fn comments_stay_or_go_as_xacro_decides_and_namespaces_are_lifted() {
+    let dir = Scratch::new("xacro-comments");
+    dir.write(
+        "ns.xacro",
+        r#"<inc xmlns:xacro="http://www.ros.org/wiki/xacro" xmlns:b="http://www.ros.org/b"><b:x/></inc>"#,
+    );
+    let path = dir.write(
+        "r.urdf.xacro",
+        &robot(
+            r#"  <!-- kept: a blank line follows -->
+
+  <!-- dropped -->
+  <!-- dropped too -->
+  <xacro:property name="n" value="three"/>
+  <!-- dropped -->
+  <xacro:if value="1"><!-- kept: in the branch --></xacro:if>
+  <!-- dropped -->
+  <xacro:macro name="m"><xacro:include filename="ns.xacro"/><!-- kept: from the macro --></xacro:macro>
+  <xacro:m/>
+  <!-- xacro:eval-comments -->
+  <!-- evaluated: ${n} -->
+  <!-- evaluated too: ${n} -->
+  <link name="l"/>
+  <!-- not evaluated: ${n} -->"#,
+        ),
+    );
+    let out = expand_file(Path::new(&path), &XacroOptions::default())
+        .unwrap()
+        .urdf;
+    let comments: Vec<&str> = out
+        .lines()
+        .skip(2)
+        .filter_map(|l| l.trim().strip_prefix("<!--")?.strip_suffix("-->"))
+        .map(str::trim)
+        .collect();
+    assert_eq!(
+        comments,
+        [
+            "kept: a blank line follows",
+            "kept: in the branch",
+            "kept: from the macro",
+            "evaluated: three",
+            "evaluated too: three",
+            "not evaluated: ${n}"
+        ],
+        "{out}"
+    );
+    assert!(out.contains(r#"xmlns:b="http://www.ros.org/b""#), "{out}");
+    assert!(out.contains("<b:x/>"), "{out}");
+}

@@ -169,11 +169,9 @@ fn convert(
         if child.is_element() {
             children.push(Node::Element(convert(doc, child, lines, depth + 1)?));
         } else if child.is_text() {
-            // White space between elements means nothing to URDF (and is not written).
-            let t = child.text().unwrap_or_default();
-            if !t.trim().is_empty() {
-                children.push(Node::Text(t.to_string()));
-            }
+            // White space between elements means nothing to URDF (and is not written), but
+            // xacro's rules for dropping comments count its line breaks.
+            children.push(Node::Text(child.text().unwrap_or_default().to_string()));
         } else if child.is_comment() {
             children.push(Node::Comment(child.text().unwrap_or_default().to_string()));
         }
@@ -211,11 +209,17 @@ fn write_element(e: &Element, depth: usize, out: &mut String) {
         out.push_str(&escape_shown(v));
         out.push('"');
     }
-    if e.children.is_empty() {
+    // White-space text is not written (it is kept for the expansion's comment rules only).
+    let shown: Vec<&Node> = e
+        .children
+        .iter()
+        .filter(|c| !matches!(c, Node::Text(t) if t.trim().is_empty()))
+        .collect();
+    if shown.is_empty() {
         out.push_str("/>\n");
         return;
     }
-    if let [Node::Text(t)] = e.children.as_slice() {
+    if let [Node::Text(t)] = shown.as_slice() {
         out.push('>');
         out.push_str(&escape_text(t));
         out.push_str("</");
@@ -224,10 +228,9 @@ fn write_element(e: &Element, depth: usize, out: &mut String) {
         return;
     }
     out.push_str(">\n");
-    for child in &e.children {
+    for child in shown {
         match child {
             Node::Element(c) => write_element(c, depth + 1, out),
-            Node::Text(t) if t.trim().is_empty() => {}
             Node::Text(t) => {
                 out.push_str(&indent);
                 out.push_str("  ");

@@ -119,6 +119,25 @@ pub(crate) struct Expander {
     parsed: HashMap<String, Rc<expr::Parsed>>,
     /// The directory of the last file asked for ([`Expander::current_dir`]).
     dir_cache: Option<(usize, PathBuf)>,
+    /// Where xacro's one "stop" text node is ([`Stop`]).
+    stop: Stop,
+    /// Numbers the children lists being evaluated, for [`Stop::list`].
+    lists: usize,
+    /// The children list evaluated last (its nodes about to join another list).
+    finished: usize,
+}
+
+/// xacro drops the comments right before a xacro element (they describe it), walking back
+/// over comments and single line breaks, and then puts one text node of two line breaks after
+/// the element (its expansion) so that a later walk stops there; there is one such node in a
+/// document, moved each time. `list` is the children list it is in (0: none yet), `at` its
+/// place in that list's output once the element's expansion is there (`None` before), `mark`
+/// the walk that put it there.
+#[derive(Debug, Default, Clone, Copy)]
+struct Stop {
+    list: usize,
+    at: Option<usize>,
+    mark: usize,
 }
 
 /// Most parsed expressions kept.
@@ -179,6 +198,9 @@ impl Expander {
             max_bytes,
             parsed: HashMap::new(),
             dir_cache: None,
+            stop: Stop::default(),
+            lists: 0,
+            finished: 0,
         }
     }
 
@@ -606,19 +628,92 @@ impl Expander {
         parent_at: Place,
     ) -> Result<Vec<Node>> {
         let mut out = Vec::with_capacity(children.len());
-        for child in children {
+        self.lists += 1;
+        let list = self.lists;
+        // `<!-- xacro:eval-comments -->` (or `:on`) has the comments after it evaluated until an
+        // element, text that is not white space, `:off` or the end of the list.
+        let mut eval_comments = false;
+        let mut children = children.into_iter().peekable();
+        while let Some(child) = children.next() {
+            // xacro moves its stop node only before a next sibling.
+            let last = children.peek().is_none();
             match child {
-                Node::Text(t) if !t.contains('$') => out.push(Node::Text(t)),
+                Node::Text(t) if !t.contains('$') => {
+                    eval_comments &= t.trim().is_empty();
+                    out.push(Node::Text(t));
+                }
                 Node::Text(t) => {
                     self.here = parent_at;
                     let v = self.eval_text(&t, env.table);
-                    out.push(Node::Text(self.check(v)?.to_text()));
+                    let t = self.check(v)?.to_text();
+                    eval_comments &= t.trim().is_empty();
+                    out.push(Node::Text(t));
+                }
+                Node::Comment(c) if c.contains("xacro:eval-comments") => {
+                    eval_comments = !c.contains("xacro:eval-comments:off");
+                }
+                Node::Comment(c) if eval_comments => {
+                    self.here = parent_at;
+                    let v = self.eval_text(&c, env.table);
+                    out.push(Node::Comment(self.check(v)?.to_text()));
                 }
                 Node::Comment(c) => out.push(Node::Comment(c)),
-                Node::Element(e) => self.eval_element(e, env, &mut out, parent_attrs)?,
+                Node::Element(e) => {
+                    eval_comments = false;
+                    self.eval_element(e, env, &mut out, parent_attrs, (list, last))?;
+                }
             }
         }
+        self.finished = list;
         Ok(out)
+    }
+
+    /// The nodes of children list `from` join `out` of list `into` at its end: xacro's stop,
+    /// if among them, comes along.
+    fn splice(&mut self, out: &mut Vec<Node>, nodes: Vec<Node>, from: usize, into: usize) {
+        if self.stop.list == from {
+            self.stop.list = into;
+            self.stop.at = self.stop.at.map(|at| at + out.len());
+        }
+        out.extend(nodes);
+    }
+
+    /// [`remove_previous_comments`] for a xacro element about to be expanded at the end of
+    /// `out` (children list `list`, the element its last child when `last`); returns the
+    /// walk's mark for [`Expander::place_stop`] when the stop moves after the element.
+    fn drop_comments_before(
+        &mut self,
+        out: &mut Vec<Node>,
+        (list, last): (usize, bool),
+    ) -> Option<usize> {
+        let floor = match self.stop {
+            Stop {
+                list: l,
+                at: Some(at),
+                ..
+            } if l == list => Some(at),
+            _ => None,
+        };
+        if remove_previous_comments(out, floor) && !last {
+            // Stopped at a node: the stop goes after this element's expansion.
+            self.stop.mark += 1;
+            self.stop = Stop {
+                list,
+                at: None,
+                mark: self.stop.mark,
+            };
+            Some(self.stop.mark)
+        } else {
+            None
+        }
+    }
+
+    /// Puts the stop after the expansion now at the end of `out`, unless a walk inside the
+    /// expansion has moved it since `mark`.
+    fn place_stop(&mut self, mark: Option<usize>, out: &[Node]) {
+        if mark.is_some_and(|m| m == self.stop.mark && self.stop.at.is_none()) {
+            self.stop.at = Some(out.len());
+        }
     }
 
     fn required<'e>(&self, e: &'e Element, name: &str) -> Result<&'e str> {
@@ -637,6 +732,7 @@ impl Expander {
         env: Env,
         out: &mut Vec<Node>,
         parent_attrs: &mut Vec<(String, String)>,
+        list: (usize, bool),
     ) -> Result<()> {
         self.here = e.at;
         let r = self.spend(1);
@@ -667,21 +763,26 @@ impl Expander {
                 }
             }
             "xacro:include" => {
-                remove_previous_comments(out);
                 let (nodes, namespaces) = self.include(&e, env)?;
-                out.extend(nodes);
+                let from = self.finished;
+                let mark = self.drop_comments_before(out, list);
+                self.splice(out, nodes, from, list.0);
+                self.place_stop(mark, out);
                 parent_attrs.extend(namespaces);
             }
             "xacro:property" => {
-                remove_previous_comments(out);
+                let mark = self.drop_comments_before(out, list);
+                self.place_stop(mark, out);
                 self.property(e, env)?;
             }
             "xacro:macro" => {
-                remove_previous_comments(out);
+                let mark = self.drop_comments_before(out, list);
+                self.place_stop(mark, out);
                 self.define_macro(e, env)?;
             }
             "xacro:arg" => {
-                remove_previous_comments(out);
+                let mark = self.drop_comments_before(out, list);
+                self.place_stop(mark, out);
                 let name = self.required(&e, "name")?.to_string();
                 let default = self.required(&e, "default")?.to_string();
                 if !self.args.contains_key(&name) {
@@ -697,7 +798,7 @@ impl Expander {
                 }
                 e.remove_attr("xacro:name");
                 e.name = name;
-                return self.eval_element(e, env, out, parent_attrs);
+                return self.eval_element(e, env, out, parent_attrs, list);
             }
             "xacro:attribute" => {
                 let name = self.required(&e, "name")?.to_string();
@@ -710,17 +811,26 @@ impl Expander {
                 parent_attrs.push((name, value));
             }
             "xacro:if" | "xacro:unless" => {
-                remove_previous_comments(out);
+                // The stop goes after the branch before it is evaluated (a walk in it moves it).
+                let mark = self.drop_comments_before(out, list);
                 let cond = self.required(&e, "value")?.to_string();
                 let v = self.eval_text(&cond, env.table);
                 let v = self.check(v)?;
                 let keep = self.check(boolean(&v, &cond))? == (e.name == "xacro:if");
+                let before = out.len();
+                self.place_stop(mark, out);
                 if keep {
                     // What the branch gives its parent (xacro:attribute) stays with the
                     // branch, as in xacro.
                     let mut lost = Vec::new();
                     let nodes = self.eval_children(e.children, env, &mut lost, e.at)?;
-                    out.extend(nodes);
+                    let stop_here = self.stop.list == list.0 && self.stop.at == Some(before);
+                    let from = self.finished;
+                    self.splice(out, nodes, from, list.0);
+                    // Still where it was put: after the branch's nodes.
+                    if stop_here {
+                        self.stop.at = Some(out.len());
+                    }
                 }
             }
             "xacro:call" => {
@@ -728,12 +838,10 @@ impl Expander {
                 let name = self.text_of(&raw, env.table)?;
                 e.remove_attr("macro");
                 e.name = format!("xacro:{name}");
-                remove_previous_comments(out);
-                self.call(e, env, out)?;
+                self.call(e, env, out, parent_attrs, list)?;
             }
             name if name.starts_with("xacro:") => {
-                remove_previous_comments(out);
-                self.call(e, env, out)?;
+                self.call(e, env, out, parent_attrs, list)?;
             }
             name if self.lenient && NON_KINEMATIC.contains(&name) => {
                 let name = name.to_string();
@@ -935,7 +1043,17 @@ impl Expander {
         }
     }
 
-    fn call(&mut self, call: Element, env: Env, out: &mut Vec<Node>) -> Result<()> {
+    /// Expands the macro call `call` into `out`; the namespace declarations its expansion
+    /// brings (from the macro element and from includes in its body) go to the call's parent,
+    /// `parent_attrs`, as xacro lifts them.
+    fn call(
+        &mut self,
+        call: Element,
+        env: Env,
+        out: &mut Vec<Node>,
+        parent_attrs: &mut Vec<(String, String)>,
+        list: (usize, bool),
+    ) -> Result<()> {
         let name = call.name["xacro:".len()..].to_string();
         let Some((m, scope)) = self.resolve_macro(&name, env) else {
             return Err(self.fail(format!("unknown macro name: xacro:{name}")));
@@ -958,7 +1076,13 @@ impl Expander {
             self.tables.truncate(marks.0);
             self.macro_tables.truncate(marks.1);
         }
-        out.extend(result?);
+        let (nodes, namespaces) = result?;
+        let from = self.finished;
+        // xacro drops the comments before the call once the body is expanded.
+        let mark = self.drop_comments_before(out, list);
+        self.splice(out, nodes, from, list.0);
+        self.place_stop(mark, out);
+        parent_attrs.extend(namespaces);
         Ok(())
     }
 
@@ -966,7 +1090,15 @@ impl Expander {
         self.tables.iter().filter(|t| t.namespace).count()
     }
 
-    fn expand_call(&mut self, m: &Macro, call: Element, env: Env, scope: Env) -> Result<Vec<Node>> {
+    /// The nodes of `m`'s body for `call`, and the namespace declarations the expansion lifts
+    /// to the call's parent.
+    fn expand_call(
+        &mut self,
+        m: &Macro,
+        call: Element,
+        env: Env,
+        scope: Env,
+    ) -> Result<(Vec<Node>, Vec<(String, String)>)> {
         let table = self.new_table(Some(scope.table), false);
         let macros = self.new_macro_table(Some(scope.macros));
         let mut params = m.params.clone();
@@ -1044,8 +1176,18 @@ impl Expander {
         }
         let body = (*m.body).clone();
         self.count_nodes(body.size())?;
-        let mut lost = Vec::new();
-        self.eval_children(body.children, Env { table, macros }, &mut lost, body.at)
+        let mut given = Vec::new();
+        let nodes =
+            self.eval_children(body.children, Env { table, macros }, &mut given, body.at)?;
+        // What the body gives the macro element, xacro keeps only the namespace declarations
+        // of (with the macro element's own).
+        let namespaces = body
+            .attrs
+            .into_iter()
+            .chain(given)
+            .filter(|(k, _)| k.starts_with("xmlns:") && k != "xmlns:xacro")
+            .collect();
+        Ok((nodes, namespaces))
     }
 
     /// The nodes an include stands for and the namespace declarations it brings to its parent.
@@ -1311,20 +1453,25 @@ fn wildcard(pattern: &str, name: &str) -> bool {
     go(&p, &n)
 }
 
-/// Drops the comments right before a xacro element, as xacro does (they describe it).
-fn remove_previous_comments(out: &mut Vec<Node>) {
+/// Drops the comments right before a xacro element at the end of `out`, as xacro does (they
+/// describe it): walking back over comments, each after at most one white-space text of at
+/// most one line break, down to `stop` (where xacro's stop node is in this list, if it is).
+/// True if the walk stopped at a node (the stop, or what is not a comment; xacro then moves
+/// its stop after the element), false if it reached the start of the list.
+fn remove_previous_comments(out: &mut Vec<Node>, stop: Option<usize>) -> bool {
+    let floor = stop.unwrap_or(0);
     let mut i = out.len();
     loop {
-        if i == 0 {
-            return;
+        if i <= floor {
+            return stop.is_some() || i > 0;
         }
         let mut j = i - 1;
         if let Node::Text(t) = &out[j]
             && t.trim().is_empty()
             && t.matches('\n').count() <= 1
         {
-            if j == 0 {
-                return;
+            if j <= floor {
+                return stop.is_some() || j > 0;
             }
             j -= 1;
         }
@@ -1332,7 +1479,7 @@ fn remove_previous_comments(out: &mut Vec<Node>) {
             out.remove(j);
             i = j;
         } else {
-            return;
+            return true;
         }
     }
 }

@@ -106,7 +106,7 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
                 tokens.push(Token::Int(v));
             }
         } else if c == '\'' || c == '"' {
-            let (s, next) = string_literal(&chars, i)?;
+            let (s, next) = string_literal(&chars, i, false)?;
             tokens.push(Token::Str(Rc::from(s.as_str())));
             i = next;
         } else if c.is_alphabetic() || c == '_' {
@@ -116,9 +116,21 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
             }
             let name: String = chars[start..i].iter().collect();
             if i < chars.len() && (chars[i] == '\'' || chars[i] == '"') {
-                return Err(format!(
-                    "string prefix '{name}' is not supported (plain quoted strings only)"
-                ));
+                // Python 3's prefixes of text strings: `u` changes nothing, `r` keeps
+                // backslashes; bytes and f-strings are other things.
+                let raw = match name.to_ascii_lowercase().as_str() {
+                    "u" => false,
+                    "r" => true,
+                    _ => {
+                        return Err(format!(
+                            "string prefix '{name}' is not supported (plain, u'' and r'' strings only)"
+                        ));
+                    }
+                };
+                let (s, next) = string_literal(&chars, i, raw)?;
+                tokens.push(Token::Str(Rc::from(s.as_str())));
+                i = next;
+                continue;
             }
             tokens.push(Token::Name(Rc::from(name.as_str())));
         } else {
@@ -135,13 +147,19 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
 
 /// A quoted string starting at `chars[start]`, with Python's common escapes; the string and
 /// the index after its closing quote.
-fn string_literal(chars: &[char], start: usize) -> Result<(String, usize), String> {
+fn string_literal(chars: &[char], start: usize, raw: bool) -> Result<(String, usize), String> {
     let quote = chars[start];
     let mut s = String::new();
     let mut i = start + 1;
     while i < chars.len() {
         match chars[i] {
             c if c == quote => return Ok((s, i + 1)),
+            // A raw string keeps a backslash and what follows it (which cannot end it).
+            '\\' if raw && i + 1 < chars.len() => {
+                s.push('\\');
+                s.push(chars[i + 1]);
+                i += 1;
+            }
             '\\' if i + 1 < chars.len() => {
                 i += 1;
                 match chars[i] {
@@ -2095,6 +2113,17 @@ mod tests {
             ("1./12 * 6", "0.5"),
             ("x if x > 2 else 0", "3"),
             ("'a' + 'b' * 2", "'abb'"),
+            ("u'🍔' * 2 == U\"🍔🍔\"", "True"),
+            ("r'a\\nb' + 'c'", "'a\\\\nbc'"),
+            ("len(R'\\'')", "2"),
+            (
+                "b'x'",
+                "error: string prefix 'b' is not supported (plain, u'' and r'' strings only)",
+            ),
+            (
+                "f'{x}'",
+                "error: string prefix 'f' is not supported (plain, u'' and r'' strings only)",
+            ),
             ("1 < x <= 3", "True"),
             ("s.find('left_') != -1", "True"),
             ("s.split('_')", "['left', 'arm']"),
