@@ -417,7 +417,14 @@ fn a_free_body_aligned_with_its_inertial_frame_keeps_its_sites_in_place() {
     let text = std::fs::read_to_string(data_dir().join("scene/alignfree.xml")).unwrap();
     let plain = mjcf(&text.replace(r#"alignfree="true""#, r#"alignfree="false""#));
     // At qpos0 every site is where it is without the alignment; the bodies are not.
-    for site in ["corner", "stick_end", "weighted_site", "kept_site"] {
+    for site in [
+        "corner",
+        "stick_end",
+        "weighted_site",
+        "kept_site",
+        "cluster_site",
+        "tensor_site",
+    ] {
         let qa0 = zero_key(&aligned);
         let qp0 = zero_key(&plain);
         let (a, ra) = pose(&aligned, &qa0, site);
@@ -442,16 +449,23 @@ fn a_free_body_aligned_with_its_inertial_frame_keeps_its_sites_in_place() {
             pose(&plain, &zero_key(&plain), body).0
         );
     }
-    // A body whose inertia needs principal axes is refused, naming it.
-    let two = text.replace(
-        r#"<geom type="box" size="0.02 0.03 0.04" pos="0.01 0.02 0.03" euler="0 0 40"/>"#,
-        r#"<geom type="box" size="0.02 0.03 0.04"/><geom type="sphere" size="0.02" pos="0.1 0 0"/>"#,
-    );
-    let e = mjcf_error_or_any(&two);
+    // The tensor body's frame: its principal axes, moments decreasing (the columns of its
+    // rotation are eigenvectors of the inertia, in that order).
+    let (_, r) = pose(&aligned, &q, "tensor");
+    let inertia = Matrix3::new(0.3, 0.01, 0.02, 0.01, 0.25, 0.03, 0.02, 0.03, 0.2);
+    let d = r.transpose() * inertia * r;
     assert!(
-        e.contains("body 'brick'") && e.contains("2 geoms give it mass"),
-        "{e}"
+        d[(0, 1)].abs() < 1e-15 && d[(0, 2)].abs() < 1e-15 && d[(1, 2)].abs() < 1e-15,
+        "{d}"
     );
+    assert!(d[(0, 0)] > d[(1, 1)] && d[(1, 1)] > d[(2, 2)]);
+    // A body whose inertial frame is a mesh's is refused, naming it.
+    let mesh = text.replace(
+        r#"<geom type="box" size="0.02 0.03 0.04" pos="0.01 0.02 0.03" euler="0 0 40"/>"#,
+        r#"<geom type="mesh" mesh="part"/>"#,
+    );
+    let e = mjcf_error_or_any(&mesh);
+    assert!(e.contains("mesh geom with mass"), "{e}");
 }
 
 /// `qpos0` of `alignfree.xml` (its free joints where the file puts them): the key its
