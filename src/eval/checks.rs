@@ -192,6 +192,51 @@ pub fn check_q(chain: &Chain, q: &[f64], policy: LimitPolicy) -> Result<(), Stat
     Ok(())
 }
 
+/// [`check_q`] on the entries of `q` that `reads` lists (a one-link evaluation's): its length,
+/// then those entries finite, the quaternions among them near unit length, and under
+/// [`LimitPolicy::Enforce`] the limit checks on them. All of [`check_q`] when they are all of
+/// `q`.
+pub(crate) fn check_q_entries(
+    chain: &Chain,
+    q: &[f64],
+    reads: &crate::eval::layout::chain::PathReads,
+    policy: LimitPolicy,
+) -> Result<(), StateError> {
+    if reads.all {
+        return check_q(chain, q, policy);
+    }
+    if q.len() != chain.nq() {
+        return Err(wrong_length(chain, "q", chain.nq(), q.len()));
+    }
+    if let Some(&index) = reads.entries.iter().find(|&&i| !q[i].is_finite()) {
+        let (joint, component) = chain.variable(index);
+        return Err(StateError::NonFinite {
+            what: "q",
+            index,
+            joint: chain.joints()[joint].name().to_string(),
+            component,
+            value: q[index],
+        });
+    }
+    check_quaternions(chain, &reads.quaternions, q)?;
+    if policy == LimitPolicy::Enforce {
+        for c in &chain.limit_checks {
+            let value = c.value(q[c.index]);
+            if reads.entries.binary_search(&c.index).is_ok() && !c.limits.contains(value) {
+                return Err(StateError::OutOfLimits {
+                    joint: chain.joints()[c.joint].name().to_string(),
+                    component: c.component,
+                    angular: c.angular,
+                    value,
+                    lower: c.limits.lower,
+                    upper: c.limits.upper,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Whether `q` (of the chain's length) passes the check `single::kinematics::kernel_check`
 /// chose: finiteness, or [`within`](crate::eval::simd::traits::within) the limits of each entry.
 /// Four entries per vector compare on the AVX paths (a loop over single entries stays scalar,
@@ -205,6 +250,30 @@ pub(crate) fn admitted<A: Arith>(q: &[f64], limits: Option<&DenseLimits>) -> boo
         Some(limits) => admitted_rows::<A>(q, limits.blocks().iter()),
         None => admitted_rows::<A>(q, std::iter::repeat(&DenseLimits::FREE)),
     }
+}
+
+/// Whether the span of `q` that `reads` gives passes [`admitted`]'s check (against its columns
+/// `reads.columns` when `limits`, else for finiteness), in vectors, and the quaternions in it are
+/// near unit length.
+#[inline(always)]
+pub(crate) fn admitted_entries<A: Arith>(
+    q: &[f64],
+    reads: &crate::eval::layout::chain::PathReads,
+    limits: bool,
+) -> bool {
+    let span = match (reads.entries.first(), reads.entries.last()) {
+        (Some(&first), Some(&last)) => &q[first..=last],
+        _ => &[],
+    };
+    let admitted = match limits {
+        true => admitted_rows::<A>(span, reads.columns.iter()),
+        false => admitted_rows::<A>(span, std::iter::repeat(&DenseLimits::FREE)),
+    };
+    admitted
+        && reads
+            .quaternions
+            .iter()
+            .all(|&(_, i)| crate::eval::kernel::floating::admits(&q[i..i + 4]))
 }
 
 /// [`admitted`] with the limit columns of each block of four entries of `q` from `columns`,

@@ -352,3 +352,124 @@ fn two_floating_joints_in_a_row_are_refused_and_a_floating_base_on_a_floating_ro
     let mut d = Data::new(&chain);
     forward_kinematics(&chain, &mut d, &q).unwrap();
 }
+
+/// The MJCF pick scene: two arms and ten free boxes.
+fn pick() -> Chain {
+    Chain::from_file(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mjcf/scene/pick.xml"),
+    )
+    .unwrap()
+}
+
+#[test]
+fn one_link_evaluations_of_a_scene_equal_the_full_ones_bit_for_bit() {
+    use kinechain::eval::batch::{
+        BatchData, forward_kinematics_batch_to, forward_kinematics_batch_to_par, single_precision,
+    };
+    let chain = pick();
+    let mut r = rng(40);
+    let n = 3000;
+    let qs: Vec<f64> = (0..n).flat_map(|_| random_q(&chain, &mut r)).collect();
+    let mut full = Data::new(&chain);
+    let mut one = Data::new(&chain);
+    let mut batch = BatchData::new(&chain);
+    let mut batch32 = single_precision::BatchData::new(&chain);
+    for d in [&mut full, &mut one] {
+        d.set_limit_policy(LimitPolicy::Ignore);
+    }
+    batch.set_limit_policy(LimitPolicy::Ignore);
+    batch32.set_limit_policy(LimitPolicy::Ignore);
+    let all32 = single_precision::forward_kinematics_batch(&chain, &mut batch32, &qs).unwrap();
+    let all32: Vec<Vec<Transform>> = (0..n)
+        .map(|i| {
+            chain
+                .links()
+                .iter()
+                .map(|l| all32.world_from_link(i, chain.link_id(l.name()).unwrap()))
+                .collect()
+        })
+        .collect();
+    for link in [
+        "left/hand",
+        "right/wrist_3_link",
+        "top_07",
+        "box_09",
+        "table_top",
+    ] {
+        let id = chain.link_id(link).unwrap();
+        let b = forward_kinematics_batch_to(&chain, &mut batch, &qs, id).unwrap();
+        let got: Vec<Transform> = (0..n).map(|i| b.world_from_link(i)).collect();
+        let p = forward_kinematics_batch_to_par(&chain, &mut batch, &qs, id).unwrap();
+        let got_par: Vec<Transform> = (0..n).map(|i| p.world_from_link(i)).collect();
+        let f =
+            single_precision::forward_kinematics_batch_to(&chain, &mut batch32, &qs, id).unwrap();
+        for (i, q) in qs.chunks(chain.nq()).enumerate() {
+            let want = forward_kinematics(&chain, &mut full, q)
+                .unwrap()
+                .world_from_link(id);
+            assert_eq!(
+                kinechain::forward_kinematics_to(&chain, &mut one, q, id).unwrap(),
+                want,
+                "{link} {i}"
+            );
+            assert_eq!(got[i], want, "{link} batch {i}");
+            assert_eq!(got_par[i], want, "{link} parallel batch {i}");
+            assert_eq!(
+                f.world_from_link(i),
+                all32[i][id.index()],
+                "{link} f32 batch {i}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_one_link_evaluation_checks_the_span_of_q_its_path_reads() {
+    use kinechain::StateError;
+    use kinechain::eval::batch::{BatchData, forward_kinematics_batch_to, single_precision};
+    let chain = pick();
+    let hand = chain.link_id("left/hand").unwrap();
+    let top = chain.link_id("top_07").unwrap();
+    let box_entry = chain
+        .joint(chain.joint_id("box_07").unwrap())
+        .q_index()
+        .unwrap();
+    let mut q = chain.keyframes()[0].1.clone();
+    let mut data = Data::new(&chain);
+    // A box's quaternion at zero: the Panda's hand is evaluated, the box and all links refused.
+    q[box_entry + 3..box_entry + 7].fill(0.0);
+    kinechain::forward_kinematics_to(&chain, &mut data, &q, hand).unwrap();
+    assert!(matches!(
+        kinechain::forward_kinematics_to(&chain, &mut data, &q, top),
+        Err(StateError::BadQuaternion { .. })
+    ));
+    assert!(forward_kinematics(&chain, &mut data, &q).is_err());
+    let qs: Vec<f64> = [q.clone(), chain.keyframes()[0].1.clone()].concat();
+    let mut batch = BatchData::new(&chain);
+    forward_kinematics_batch_to(&chain, &mut batch, &qs, hand).unwrap();
+    let e = forward_kinematics_batch_to(&chain, &mut batch, &qs, top).unwrap_err();
+    assert_eq!(e.index, 0);
+    let mut batch32 = single_precision::BatchData::new(&chain);
+    single_precision::forward_kinematics_batch_to(&chain, &mut batch32, &qs, hand).unwrap();
+    assert!(single_precision::forward_kinematics_batch_to(&chain, &mut batch32, &qs, top).is_err());
+    // Within the hand's span: an entry out of its limits, a NaN, named in the error as
+    // `check_q` names them; the wrong length, whatever the link.
+    let mut q = chain.keyframes()[0].1.clone();
+    q[3] = 1.0; // joint4's limits are [-3.0718, -0.0698]
+    let e = kinechain::forward_kinematics_to(&chain, &mut data, &q, hand).unwrap_err();
+    assert!(e.to_string().contains("left/joint4"), "{e}");
+    let qs: Vec<f64> = [chain.keyframes()[0].1.clone(), q.clone()].concat();
+    let e = forward_kinematics_batch_to(&chain, &mut batch, &qs, hand).unwrap_err();
+    assert_eq!(e.index, 1);
+    let e = kinechain::error::error_chain(&e);
+    assert!(e.contains("left/joint4"), "{e}");
+    q[3] = f64::NAN;
+    assert!(matches!(
+        kinechain::forward_kinematics_to(&chain, &mut data, &q, hand),
+        Err(StateError::NonFinite { index: 3, .. })
+    ));
+    assert!(matches!(
+        kinechain::forward_kinematics_to(&chain, &mut data, &q[1..], top),
+        Err(StateError::WrongLengthParts { .. })
+    ));
+}

@@ -128,17 +128,48 @@ pub(crate) fn transpose_chunk<N: LaneNum>(
 ) -> bool {
     let dof = q.len();
     let n = qs.len() / dof;
-    N::transpose(q, qs, std::array::from_fn(|l| (c * LANES + l).min(n - 1)));
-    prefetch(
-        qs.get((c + PREFETCH_CHUNKS) * LANES * dof..)
-            .unwrap_or_default(),
-        LANES * dof,
-    );
+    let rows = std::array::from_fn(|l| (c * LANES + l).min(n - 1));
+    // A few entries of long rows (a robot's link in a scene) one by one; otherwise whole rows,
+    // in vectors (what is not read is cheaper moved than picked out).
+    match check.and_then(|c| c.entries) {
+        Some(entries) if 4 * entries.len() <= dof => transpose_entries::<N>(q, qs, rows, entries),
+        _ => {
+            N::transpose(q, qs, rows);
+            prefetch(
+                qs.get((c + PREFETCH_CHUNKS) * LANES * dof..)
+                    .unwrap_or_default(),
+                LANES * dof,
+            );
+        }
+    }
     let mut ok = true;
     for qp in N::cast(q).chunks_exact(dof) {
         ok &= LaneCheck::admits(check, qp);
     }
     ok
+}
+
+/// [`LaneNum::transpose`] of `entries` only (the others are left as they are): what a one-link
+/// kernel reads of a scene's configurations, entry by entry into the layout [`LaneNum::cast`]
+/// reads (part `p`'s entry `j` at value `p · dof + j`).
+#[inline(always)]
+fn transpose_entries<N: LaneNum>(
+    q: &mut [Lanes],
+    qs: &[f64],
+    rows: [usize; LANES],
+    entries: &[usize],
+) {
+    let dof = q.len();
+    let width = LANES / N::PARTS;
+    let flat = Lanes::flat_mut(q);
+    for part in 0..N::PARTS {
+        for &j in entries {
+            let at = (part * dof + j) * width;
+            for (l, x) in flat[at..at + width].iter_mut().enumerate() {
+                *x = qs[rows[part * width + l] * dof + j];
+            }
+        }
+    }
 }
 
 /// `(sin θ, cos θ)` of `body` in all eight lanes of a chunk (`q` its joint values as

@@ -38,6 +38,8 @@ pub struct BatchData {
     /// the base to it.
     pub(crate) link_frames: Vec<Frame<Lanes>>,
     pub(crate) path: Vec<usize>,
+    /// What that path reads of `q`.
+    pub(crate) reads: crate::eval::layout::chain::PathReads,
     /// The all-links kernel's frames of the bodies read again, when it streams ([`streams`]).
     pub(crate) kept: Vec<Frame<Lanes>>,
     /// The rate batches' ω and v, and α and a, of each body, chunk-major like `frames`; and one
@@ -66,6 +68,7 @@ impl BatchData {
             q_lanes: vec![Lanes::splat(0.0); BLOCK * chain.nq()],
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
+            reads: crate::eval::layout::chain::PathReads::new(chain),
             kept: Vec::new(),
             velocities: Vec::new(),
             accelerations: Vec::new(),
@@ -196,6 +199,21 @@ pub(crate) fn first_error(
     Ok(())
 }
 
+/// [`first_error`] for a one-link kernel whose path reads `reads` (its check, [`LaneCheck`]'s
+/// `entries`).
+pub(crate) fn first_error_on_path(
+    chain: &Chain,
+    qs: &[f64],
+    policy: LimitPolicy,
+    reads: &crate::eval::layout::chain::PathReads,
+) -> Result<(), BatchError> {
+    for (index, q) in qs.chunks_exact(chain.nq()).enumerate() {
+        crate::eval::checks::check_q_entries(chain, q, reads, policy)
+            .map_err(|source| BatchError { index, source })?;
+    }
+    Ok(())
+}
+
 /// What a chunk kernel checks on its lanes after transposing them: every entry finite, and
 /// within the chain's limit columns under [`LimitPolicy::Enforce`], and a floating joint's
 /// quaternion near unit length (the decisions of [`check_q`], made on eight configurations per
@@ -205,6 +223,9 @@ pub(crate) struct LaneCheck<'a> {
     pub(crate) limits: Option<&'a DenseLimits>,
     /// The first entry of each quaternion in `q` ([`crate::Model::quaternions`]).
     pub(crate) quaternions: &'a [(crate::model::chain::JointId, usize)],
+    /// The entries a one-link kernel reads, when not all of `q` ([`Chain::path_reads`]): only
+    /// they are transposed and checked (and `quaternions` are theirs).
+    pub(crate) entries: Option<&'a [usize]>,
 }
 
 impl<'a> LaneCheck<'a> {
@@ -216,13 +237,33 @@ impl<'a> LaneCheck<'a> {
             (LimitPolicy::Ignore, _) => Some(LaneCheck {
                 limits: None,
                 quaternions,
+                entries: None,
             }),
             (LimitPolicy::Enforce, Some(limits)) => Some(LaneCheck {
                 limits: Some(limits),
                 quaternions,
+                entries: None,
             }),
             (LimitPolicy::Enforce, None) => None,
         }
+    }
+
+    /// The check of a one-link kernel whose path reads `reads`: [`LaneCheck::of`], on those
+    /// entries only (when they are not all of `q` and the lanes can check them).
+    pub(crate) fn for_path(
+        chain: &'a Chain,
+        policy: LimitPolicy,
+        reads: &'a crate::eval::layout::chain::PathReads,
+    ) -> Option<LaneCheck<'a>> {
+        let check = LaneCheck::of(chain, policy)?;
+        Some(match reads.all {
+            true => check,
+            false => LaneCheck {
+                quaternions: &reads.quaternions,
+                entries: Some(&reads.entries),
+                ..check
+            },
+        })
     }
 
     /// Whether every lane of every entry of `q` passes.
@@ -232,16 +273,23 @@ impl<'a> LaneCheck<'a> {
         let Some(check) = check else {
             return ok;
         };
-        match check.limits {
-            None => {
+        match (check.limits, check.entries) {
+            (None, None) => {
                 for &x in q {
                     ok &= N::admitted(x, 1.0, 0.0, f64::NEG_INFINITY, f64::INFINITY);
                 }
             }
-            Some(limits) => {
+            (Some(limits), None) => {
                 for (j, &x) in q.iter().enumerate() {
                     let (scale, offset, lower, upper) = limits.entry(j);
                     ok &= N::admitted(x, scale, offset, lower, upper);
+                }
+            }
+            (limits, Some(entries)) => {
+                for &j in entries {
+                    let (scale, offset, lower, upper) =
+                        limits.map_or((1.0, 0.0, f64::NEG_INFINITY, f64::INFINITY), |l| l.entry(j));
+                    ok &= N::admitted(q[j], scale, offset, lower, upper);
                 }
             }
         }

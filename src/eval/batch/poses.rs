@@ -7,7 +7,9 @@
 
 use crate::eval::batch::blocks::{block_path, chunk_poses};
 use crate::eval::batch::data::BLOCK;
-use crate::eval::batch::data::{BatchData, BatchError, LaneCheck, kept_len, streams};
+use crate::eval::batch::data::{
+    BatchData, BatchError, LaneCheck, first_error_on_path, kept_len, streams,
+};
 use crate::eval::batch::threads::{par_chunks_checked, worth_parallel};
 use crate::eval::kernel::frame::Frame;
 use crate::eval::layout::body::Placement;
@@ -140,7 +142,7 @@ pub fn forward_kinematics_batch_par<'a>(
     // Ordinary stores, even where one thread streams (see `streams`).
     let all_ok = par_chunks_checked(
         chain,
-        data.limit_policy,
+        (data.limit_policy, LaneCheck::of(chain, data.limit_policy)),
         qs,
         1,
         bodies,
@@ -273,20 +275,41 @@ fn batch_to<'a>(
     link: LinkId,
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
-    chain.body_path(chain.carrier(link).body, &mut data.path);
+    let body = chain.carrier(link).body;
+    chain.body_path(body, &mut data.path);
+    // Only what the path reads of `q` is transposed and checked (a robot's link in a scene of
+    // many costs what it costs alone).
+    chain.path_reads(body, &mut data.reads);
+    // Out of `data` while the kernels borrow it (put back below, its room kept).
+    let reads = std::mem::take(&mut data.reads);
+    let result = path_kernels(chain, data, qs, &reads, parallel);
+    data.reads = reads;
+    result?;
+    Ok(BatchLinkPoses { chain, data, link })
+}
+
+/// The kernels of [`batch_to`] on the path in `data.path`, which reads `reads`.
+fn path_kernels(
+    chain: &Chain,
+    data: &mut BatchData,
+    qs: &[f64],
+    reads: &crate::eval::layout::chain::PathReads,
+    parallel: bool,
+) -> Result<(), BatchError> {
     let parallel = parallel && worth_parallel(qs, chain.nq(), data.path.len());
-    let check = LaneCheck::of(chain, data.limit_policy);
+    let policy = data.limit_policy;
+    let check = LaneCheck::for_path(chain, policy, reads);
     let chunks = data.prepare(chain, qs, !parallel && check.is_none())?;
     let zero = Frame::splat(&Transform::IDENTITY);
     data.link_frames.resize(chunks, zero);
     let path = &data.path;
-    if parallel {
+    let all_ok = if parallel {
         // Groups of fewer chunks than a block when blocks would give a thread fewer than two
         // (a long chain's batch of a few dozen configurations).
         let per_item = (chunks / (2 * rayon::current_num_threads())).clamp(1, BLOCK);
-        let all_ok = par_chunks_checked(
+        par_chunks_checked(
             chain,
-            data.limit_policy,
+            (policy, check),
             qs,
             per_item,
             path.len(),
@@ -294,20 +317,21 @@ fn batch_to<'a>(
             per_item,
             || vec![Lanes::splat(0.0); per_item * chain.nq()],
             |check, q_lanes, c0, out| block_path(chain, check, path, q_lanes, qs, c0, out),
-        );
-        if !all_ok {
-            data.first_error(chain, qs)?;
-        }
+        )
     } else {
         let mut all_ok = true;
         for (b, out) in data.link_frames[..chunks].chunks_mut(BLOCK).enumerate() {
             all_ok &= block_path(chain, check, path, &mut data.q_lanes, qs, b * BLOCK, out);
         }
-        if !all_ok {
-            data.first_error(chain, qs)?;
+        all_ok
+    };
+    if !all_ok {
+        match check.and_then(|c| c.entries) {
+            Some(_) => first_error_on_path(chain, qs, policy, reads)?,
+            None => data.first_error(chain, qs)?,
         }
     }
-    Ok(BatchLinkPoses { chain, data, link })
+    Ok(())
 }
 
 #[cfg(test)]

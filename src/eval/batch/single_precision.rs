@@ -35,7 +35,9 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::eval::batch::blocks::transpose_chunk;
-use crate::eval::batch::data::{BatchError, LaneCheck, batch_rows, first_error};
+use crate::eval::batch::data::{
+    BatchError, LaneCheck, batch_rows, first_error, first_error_on_path,
+};
 use crate::eval::batch::fold::{block_len, fold_blocks};
 use crate::eval::batch::lanes32::{F16, Lanes32, WIDTH, Wide32, sin_cos};
 use crate::eval::batch::poses::lane_pose;
@@ -95,6 +97,8 @@ pub struct BatchData {
     /// the base to it.
     pub(crate) link_frames: Vec<Frame<F16>>,
     pub(crate) path: Vec<usize>,
+    /// What that path reads of `q`.
+    pub(crate) reads: crate::eval::layout::chain::PathReads,
     scratch: Scratch,
     pub(crate) len: usize,
     pub(crate) bodies: usize,
@@ -110,6 +114,7 @@ impl BatchData {
             frames: Vec::new(),
             link_frames: Vec::new(),
             path: Vec::with_capacity(chain.bodies.len()),
+            reads: crate::eval::layout::chain::PathReads::new(chain),
             scratch: Scratch::new(chain.nq()),
             len: 0,
             bodies: chain.bodies.len(),
@@ -189,7 +194,7 @@ fn all_links<'a>(
     run_chunks(
         chain,
         qs,
-        data.limit_policy,
+        (data.limit_policy, check, None),
         &mut data.scratch,
         parallel,
         bodies,
@@ -248,9 +253,27 @@ fn batch_to<'a>(
     link: LinkId,
     parallel: bool,
 ) -> Result<BatchLinkPoses<'a>, BatchError> {
-    chain.body_path(chain.carrier(link).body, &mut data.path);
+    let body = chain.carrier(link).body;
+    chain.body_path(body, &mut data.path);
+    // Only what the path reads of `q` is transposed and checked (see the `f64` batch).
+    chain.path_reads(body, &mut data.reads);
+    let reads = std::mem::take(&mut data.reads);
+    let result = path_kernels(chain, data, qs, &reads, parallel);
+    data.reads = reads;
+    result?;
+    Ok(BatchLinkPoses { chain, data, link })
+}
+
+/// The kernels of [`batch_to`] on the path in `data.path`, which reads `reads`.
+fn path_kernels(
+    chain: &Chain,
+    data: &mut BatchData,
+    qs: &[f64],
+    reads: &crate::eval::layout::chain::PathReads,
+    parallel: bool,
+) -> Result<(), BatchError> {
     let parallel = parallel && worth_parallel(qs, chain.nq(), data.path.len());
-    let check = LaneCheck::of(chain, data.limit_policy);
+    let check = LaneCheck::for_path(chain, data.limit_policy, reads);
     let chunks = data.prepare(chain, qs, check, parallel)?;
     data.link_frames
         .resize(chunks, Frame::splat(&Transform::IDENTITY));
@@ -258,7 +281,7 @@ fn batch_to<'a>(
     run_chunks(
         chain,
         qs,
-        data.limit_policy,
+        (data.limit_policy, check, Some(reads)),
         &mut data.scratch,
         parallel,
         path.len(),
@@ -277,8 +300,7 @@ fn batch_to<'a>(
                 &mut out[0],
             )
         },
-    )?;
-    Ok(BatchLinkPoses { chain, data, link })
+    )
 }
 
 block_eval!(Single, WIDTH, Frame<F16>);
@@ -363,7 +385,11 @@ pub fn forward_kinematics_batch_fold_par<T: Send>(
 fn run_chunks(
     chain: &Chain,
     qs: &[f64],
-    policy: LimitPolicy,
+    (policy, check, reads): (
+        LimitPolicy,
+        Option<LaneCheck<'_>>,
+        Option<&crate::eval::layout::chain::PathReads>,
+    ),
     scratch: &mut Scratch,
     parallel: bool,
     bodies: usize,
@@ -376,7 +402,7 @@ fn run_chunks(
         // Items of two eight-row chunks (one of sixteen configurations), as the f64 batch counts.
         par_chunks_checked(
             chain,
-            policy,
+            (policy, check),
             qs,
             2,
             bodies,
@@ -386,17 +412,16 @@ fn run_chunks(
             |check, s, c0, out| eval(check, s, c0 / 2, out),
         )
     } else {
-        let check = LaneCheck::of(chain, policy);
         let mut all_ok = true;
         for (c, out) in outs.chunks_exact_mut(width).enumerate() {
             all_ok &= eval(check, scratch, c, out);
         }
         all_ok
     };
-    if all_ok {
-        Ok(())
-    } else {
-        first_error(chain, qs, policy)
+    match (all_ok, check.and_then(|c| c.entries).and(reads)) {
+        (true, _) => Ok(()),
+        (false, Some(reads)) => first_error_on_path(chain, qs, policy, reads),
+        (false, None) => first_error(chain, qs, policy),
     }
 }
 
@@ -479,23 +504,41 @@ fn load_chunk<A: Arith>(
     for (half, lanes) in raw.chunks_exact_mut(dof).enumerate() {
         ok &= transpose_chunk::<A::Lanes>(check, lanes, qs, 2 * c + half);
     }
+    // A one-link kernel's entries only (`check`'s, when not all of `q`).
+    match check.and_then(|c| c.entries) {
+        Some(entries) => to_lane_order::<A>(raw, q64, q32, entries.iter().copied()),
+        None => to_lane_order::<A>(raw, q64, q32, 0..dof),
+    }
+    ok
+}
+
+/// Entries `entries` of the transposed rows `raw` in lane order, in `f64` (`q64`) and `f32`
+/// (`q32`).
+#[inline(always)]
+fn to_lane_order<A: Arith>(
+    raw: &[Lanes],
+    q64: &mut [Lanes],
+    q32: &mut [F16],
+    entries: impl Iterator<Item = usize> + Clone,
+) {
+    let dof = q32.len();
     let (lo, hi) = q64.split_at_mut(dof);
     for (half, out) in [lo, hi].into_iter().enumerate() {
         let parts = A::Lanes::cast(&raw[half * dof..(half + 1) * dof]);
-        for (j, x) in out.iter_mut().enumerate() {
+        for j in entries.clone() {
             for part in 0..A::Lanes::PARTS {
-                parts[part * dof + j].put(x, part);
+                parts[part * dof + j].put(&mut out[j], part);
             }
         }
     }
     let (lo, hi) = q64.split_at(dof);
-    for (j, x) in q32.iter_mut().enumerate() {
+    for j in entries {
+        let x = &mut q32[j];
         for l in 0..LANES {
             x.0[l] = lo[j].0[l] as f32;
             x.0[l + LANES] = hi[j].0[l] as f32;
         }
     }
-    ok
 }
 
 /// Every body's frame of chunk `c` of `qs`, written to `frames`. False if `check` rejects a

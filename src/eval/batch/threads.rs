@@ -30,12 +30,13 @@ pub(crate) fn worth_parallel(qs: &[f64], dof: usize, bodies: usize) -> bool {
 /// `outs`, on the calling thread and rayon's pool, which claim runs of groups until none is left
 /// ([`crate::eval::batch::claims::claimed_in_order`]); `bodies` are the bodies evaluated per configuration, and
 /// `buffers` each thread's scratch, made by `scratch`. Each group is checked by the kernel on
-/// its lanes, or, when the limits do not allow that, before evaluation. False when some
+/// its lanes with `check` (`LaneCheck::of` or, for one link, `LaneCheck::for_path`), or, when
+/// the limits do not allow that (`None`), before evaluation. False when some
 /// configuration is invalid (the groups after it may then be left unevaluated).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn par_chunks_checked<U: Send, S>(
     chain: &Chain,
-    policy: LimitPolicy,
+    (policy, check): (LimitPolicy, Option<LaneCheck<'_>>),
     qs: &[f64],
     per_item: usize,
     bodies: usize,
@@ -45,7 +46,6 @@ pub(crate) fn par_chunks_checked<U: Send, S>(
     eval: impl Fn(Option<LaneCheck<'_>>, &mut S, usize, &mut [U]) -> bool + Sync,
 ) -> bool {
     let dof = chain.nq();
-    let check = LaneCheck::of(chain, policy);
     let rows = per_item * LANES * dof;
     // Groups per claim: at least TASK_WORK joint evaluations (22 chunks of a six-joint arm, one
     // chunk of a chain of 128 joints or more).

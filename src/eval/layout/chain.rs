@@ -58,7 +58,84 @@ impl std::ops::Deref for Chain {
     }
 }
 
+/// The span of `q` that the bodies from the world to one body read — from the first entry any of
+/// them reads to the last (a robot's own entries, in a scene of many) — and the quaternions in
+/// it: what a one-link evaluation reads and checks, so that a link of one robot in a scene of
+/// many costs what it costs alone. Computed by [`Chain::path_reads`] into buffers sized once.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PathReads {
+    /// The body they are for (`Some(None)`: a link fixed to the world; `None`: nothing yet).
+    body: Option<Option<usize>>,
+    /// The span's entries, in order.
+    pub(crate) entries: Vec<usize>,
+    pub(crate) quaternions: Vec<(JointId, usize)>,
+    /// The span's limit columns four entries at a time, as [`DenseLimits::blocks`] gives them for
+    /// all of `q` (when the chain has dense limits), for a check in vectors.
+    pub(crate) columns: Vec<[[f64; 4]; 4]>,
+    /// The span is all of `q` (a single robot's links mostly): the full checks apply.
+    pub(crate) all: bool,
+}
+
+impl PathReads {
+    /// Empty buffers with room for `chain`'s entries (filling them never allocates).
+    pub(crate) fn new(chain: &Chain) -> PathReads {
+        PathReads {
+            body: None,
+            entries: Vec::with_capacity(chain.nq()),
+            quaternions: Vec::with_capacity(chain.quaternions().len()),
+            columns: Vec::with_capacity(chain.nq().div_ceil(4)),
+            all: false,
+        }
+    }
+}
+
 impl Chain {
+    /// `reads` ← what the path from the world to `body` reads (unchanged if it holds that
+    /// already).
+    #[inline]
+    pub(crate) fn path_reads(&self, body: Option<usize>, reads: &mut PathReads) {
+        if reads.body != Some(body) {
+            self.find_path_reads(body, reads);
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn find_path_reads(&self, body: Option<usize>, reads: &mut PathReads) {
+        reads.entries.clear();
+        reads.quaternions.clear();
+        let (mut first, mut last) = (usize::MAX, 0);
+        let mut k = body;
+        while let Some(b) = k {
+            for i in self.bodies[b].variables() {
+                (first, last) = (first.min(i), last.max(i));
+            }
+            k = self.bodies[b].parent;
+        }
+        if first <= last {
+            reads.entries.extend(first..=last);
+        }
+        reads.all = reads.entries.len() == self.nq();
+        reads.quaternions.extend(
+            self.quaternions()
+                .iter()
+                .filter(|(_, i)| (first..=last).contains(i)),
+        );
+        reads.columns.clear();
+        for group in reads.entries.chunks(4) {
+            let mut block = DenseLimits::FREE;
+            if let Some(limits) = &self.dense_limits {
+                for (k, &i) in group.iter().enumerate() {
+                    let (scale, offset, lower, upper) = limits.entry(i);
+                    (block[0][k], block[1][k], block[2][k], block[3][k]) =
+                        (scale, offset, lower, upper);
+                }
+            }
+            reads.columns.push(block);
+        }
+        reads.body = Some(body);
+    }
+
     /// The validated model: joints, links, names, the layout of `q` (also reached through the
     /// chain itself, which dereferences to it).
     #[must_use]

@@ -26,6 +26,8 @@ pub struct Data {
     pub(crate) cos: Vec<Lanes>,
     /// Scratch: bodies on the path to a queried link, or dirty flags of an incremental update.
     pub(crate) path: Vec<usize>,
+    /// What the path to the link of the last one-link evaluation reads of `q`.
+    pub(crate) reads: crate::eval::layout::chain::PathReads,
     pub(crate) dirty: Vec<bool>,
     /// Joint positions of the last full evaluation, for incremental updates.
     pub(crate) last_q: Vec<f64>,
@@ -48,6 +50,7 @@ impl Data {
             sin: vec![Lanes([0.0; LANES]); trig],
             cos: vec![Lanes([1.0; LANES]); trig],
             path: Vec::with_capacity(n),
+            reads: crate::eval::layout::chain::PathReads::new(chain),
             dirty: vec![true; n],
             last_q: vec![0.0; chain.nq()],
             poses_valid: false,

@@ -1,6 +1,10 @@
 //! Forward kinematics along the chain: every link's pose (eqs. 2.109, 2.119, 2.129), and on
 //! request its velocity and acceleration (eqs. 2.120–2.127), in one pass from the base outwards.
 //!
+//! Longer than 800 lines: the entry points (all links, one link, incremental, rates) and their
+//! dispatched kernels share the private steps of the pass (the trigonometry in chunks, the
+//! composition of a prefix, the floating base's frame), which split files would have to expose.
+//!
 //! Three levels, each selected by the function called, so that a pose query does no velocity
 //! work and a velocity query no acceleration work:
 //!
@@ -34,7 +38,7 @@
 //! ```
 //! (tangential, normal, Coriolis and local terms of eq. 2.75).
 
-use crate::eval::checks::{LimitPolicy, admitted, check_q, check_values};
+use crate::eval::checks::{LimitPolicy, admitted, check_q, check_q_entries, check_values};
 use crate::eval::error::StateError;
 use crate::eval::kernel::pose_columns::Frame4;
 use crate::eval::kernel::rates_columns::Rates4;
@@ -203,10 +207,17 @@ pub fn forward_kinematics_to(
 ) -> Result<Transform, StateError> {
     data.assert_matches(chain);
     let l = chain.carrier(link);
+    // Only the entries of `q` the path reads are checked (a robot's link in a scene of many
+    // costs what it costs alone); all of them, as `forward_kinematics` does, for the links of
+    // most robots.
+    chain.path_reads(l.body, &mut data.reads);
     let Some(body) = l.body else {
-        check_q(chain, q, data.limit_policy)?;
+        check_q_entries(chain, q, &data.reads, data.limit_policy)?;
         return Ok(l.offset.to_transform());
     };
+    if !data.reads.all {
+        return part_of_q_to(chain, data, q, body, &l.offset);
+    }
     let done = match kernel_check(chain, q, data.limit_policy) {
         Some(limits) => poses_path_admitted(chain, data, q, body, limits),
         None => false,
@@ -219,6 +230,38 @@ pub fn forward_kinematics_to(
     Ok(crate::eval::kernel::pose_columns::link_pose(
         &data.world_from_body[body],
         &l.offset,
+    ))
+}
+
+/// [`forward_kinematics_to`] of a link whose path reads part of `q` only (a robot's link in a
+/// scene): those entries checked, then the path evaluated. Out of line, so that the usual case
+/// keeps its code.
+#[inline(never)]
+fn part_of_q_to(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    body: usize,
+    offset: &crate::eval::layout::body::Placement,
+) -> Result<Transform, StateError> {
+    // The entries checked in vectors in the kernel's dispatched call when the limits have
+    // columns (the usual case); else, or on failure, as `check_q` checks (naming the entry).
+    let limits = match (data.limit_policy, &chain.dense_limits) {
+        (LimitPolicy::Enforce, Some(_)) => Some(true),
+        (LimitPolicy::Enforce, None) => None,
+        (LimitPolicy::Ignore, _) => Some(false),
+    };
+    let done = limits.is_some_and(|with| {
+        q.len() == chain.nq() && poses_part_admitted(chain, data, q, body, with)
+    });
+    if !done {
+        check_q_entries(chain, q, &data.reads, data.limit_policy)?;
+        poses_path(chain, data, q, body);
+    }
+    data.poses_valid = false;
+    Ok(crate::eval::kernel::pose_columns::link_pose(
+        &data.world_from_body[body],
+        offset,
     ))
 }
 
@@ -332,6 +375,23 @@ fn poses_all_admitted_generic<A: Arith>(
     let admitted = admitted::<A>(q, limits);
     if admitted {
         poses_all_generic::<A>(chain, data, q);
+    }
+    admitted
+}
+
+/// [`poses_path_generic`] if the span of `q` in `data.reads` passes its checks (its limits when
+/// `limits`), in the same dispatched call.
+#[inline(always)]
+fn poses_part_admitted_generic<A: Arith>(
+    chain: &Chain,
+    data: &mut Data,
+    q: &[f64],
+    body: usize,
+    limits: bool,
+) -> bool {
+    let admitted = crate::eval::checks::admitted_entries::<A>(q, &data.reads, limits);
+    if admitted {
+        poses_path_generic::<A>(chain, data, q, body);
     }
     admitted
 }
@@ -738,6 +798,8 @@ fma_dispatch!(fn poses_path(chain: &Chain, data: &mut Data, q: &[f64], body: usi
 fma_dispatch!(fn poses_all_admitted(chain: &Chain, data: &mut Data, q: &[f64], limits: Option<&DenseLimits>) -> bool => poses_all_admitted_generic);
 
 fma_dispatch!(fn poses_path_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, limits: Option<&DenseLimits>) -> bool => poses_path_admitted_generic);
+
+fma_dispatch!(fn poses_part_admitted(chain: &Chain, data: &mut Data, q: &[f64], body: usize, limits: bool) -> bool => poses_part_admitted_generic);
 
 fma_dispatch!(fn poses_incremental(chain: &Chain, data: &mut Data, q: &[f64], first: usize) => poses_incremental_generic);
 
