@@ -12,8 +12,13 @@
 //! | mimic | none | its own value `m q + o` / `m q̇` | the same as Pinocchio |
 //! | fixed | none | none | none |
 //! | floating | `x y z qw qx qy qz` / `v ω` (world) | `x y z qx qy qz qw` / `R̄ᵀ v, R̄ᵀ ω` | `x y z qw qx qy qz` / `v, R̄ᵀ ω` |
+//! | ball | `qw qx qy qz` / `ω` (world) | `qx qy qz qw` / `R̄ᵀ ω` | `qw qx qy qz` / `R̄ᵀ ω` |
 //!
-//! `R̄` is the floating body's rotation in the world. Pinocchio's joint velocity and acceleration
+//! `R̄` is the rotation in the world of the joint's frame after its motion. A floating or ball
+//! joint below another joint has its rates relative to its parent link, in world axes (the
+//! parent's own motion excluded), so that `R̄ᵀ` gives Pinocchio's free-flyer and spherical
+//! joint velocities, which are relative to the parent in the joint's frame; MuJoCo puts free
+//! joints only on bodies whose parent is the world. Pinocchio's joint velocity and acceleration
 //! of a free-flyer are the body-frame twist and its time derivative: with `u = R̄ᵀ w` for a world
 //! vector `w`, `u̇ = R̄ᵀ (ẇ − ω × w)` (eq. 2.29, `R̄ᵀ dR̄/dt = [ω̄]×`), so its acceleration is
 //! `R̄ᵀ (q̈_v − ω × q̇_v)` and `R̄ᵀ q̈_ω`; MuJoCo's free joint keeps the world linear velocity and

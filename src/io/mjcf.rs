@@ -123,6 +123,7 @@ fn read_model(
     reader.link_names.extend(names.links());
     reader.joint_names.extend(names.joints.iter().cloned());
     reader.b.link("world");
+    reader.fusestatic(&scene);
     for b in 0..scene.bodies.len() {
         reader.body(&scene, &names, b)?;
     }
@@ -160,6 +161,40 @@ impl Reader<'_> {
             _ => String::new(),
         };
         format!("{file}line {} column {}", at.line, at.column)
+    }
+
+    /// `fusestatic`: MuJoCo fuses bodies without joints into their parents, and renumbers the
+    /// bodies and sites after them. Their frames do not move, so kinechain keeps such bodies as
+    /// links; names made from ids then may not be MuJoCo's ids, which a warning says.
+    fn fusestatic(&mut self, scene: &Scene<'_>) {
+        let Some(at) = self.sources[0].compiler.fusestatic else {
+            return;
+        };
+        let bodies = &scene.bodies[1..];
+        let is_static = |b: &scene::Body<'_>| {
+            b.joints.is_empty()
+                && b.item
+                    .el
+                    .attribute("mocap")
+                    .is_none_or(|(v, _)| v != "true")
+        };
+        let unnamed_bodies = bodies.iter().filter(|b| b.item.name.is_none()).count();
+        let unnamed_sites = (scene.bodies.iter())
+            .flat_map(|b| &b.sites)
+            .filter(|s| s.name.is_none())
+            .count();
+        if bodies.iter().any(is_static) && unnamed_bodies + unnamed_sites > 0 {
+            self.warn(
+                at,
+                format!(
+                    "fusestatic: MuJoCo fuses bodies without joints into their parents, which \
+                     renumbers bodies and sites; kinechain keeps those bodies as links (their \
+                     frames are the same) and names the {unnamed_bodies} unnamed bodies and \
+                     {unnamed_sites} unnamed sites by their ids without fusion (body#ID, \
+                     site#ID), which may not be MuJoCo's: name them to refer to them"
+                ),
+            );
+        }
     }
 
     fn warn(&mut self, at: tree::At, message: String) {

@@ -672,3 +672,88 @@ fn couplings_on_request_make_followers_of_linear_joint_equalities() {
     // Without the option the same file loads, the coupling reported.
     assert!(mjcf(&bent).warnings()[0].contains("1 joint"));
 }
+
+#[test]
+fn fusestatic_keeps_static_bodies_and_says_when_ids_may_differ() {
+    // MuJoCo fuses `S` (no joints) into `A`: its bodies are world, A, C and the unnamed one
+    // (id 3). kinechain keeps `S` as a link where MuJoCo's frames put it, so the unnamed body
+    // is `body#4`, and a warning at the compiler says so.
+    let text = r#"<mujoco>
+  <compiler fusestatic="true"/>
+  <worldbody>
+    <body name="A">
+      <joint name="a" axis="1 0 0"/>
+      <body name="S" pos="0 0 1">
+        <site name="s1"/>
+        <body name="C" pos="0 1 0"><joint name="c"/></body>
+      </body>
+      <body pos="1 0 0"><joint/><site/></body>
+    </body>
+  </worldbody>
+</mujoco>"#;
+    let chain = mjcf(text);
+    assert_eq!(
+        kinechain::regression::variable_names(&chain),
+        ["a", "c", "joint#2"]
+    );
+    assert!(chain.link_id("S").is_ok() && chain.link_id("body#4").is_ok());
+    let said: Vec<_> = chain
+        .warnings()
+        .iter()
+        .filter(|w| w.contains("fusestatic"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", chain.warnings());
+    assert!(said[0].starts_with("line 2 column 13:"), "{}", said[0]);
+    assert!(
+        said[0].contains("1 unnamed bodies and 1 unnamed sites"),
+        "{}",
+        said[0]
+    );
+    // Without unnamed elements, or without a body to fuse, names are MuJoCo's: no warning.
+    let named = text.replace("<body pos=\"1 0 0\"><joint/><site/></body>", "");
+    assert!(mjcf(&named).warnings().is_empty());
+    let nothing_to_fuse = text.replace("<site name=\"s1\"/>", "<joint name=\"s\"/>");
+    assert!(mjcf(&nothing_to_fuse).warnings().is_empty());
+}
+
+#[test]
+fn menageries_single_cube_scene_loads_with_the_cube_last_in_q() {
+    // The Panda (an include of an include) and one unnamed free body after it: q is MuJoCo's
+    // qpos (nq 16), the cube's free joint is unnamed, so `joint#9` (MuJoCo's id 9), and each
+    // keyframe puts the cube where its last seven entries say.
+    let chain =
+        Chain::from_file(data_dir().join("menagerie/franka_emika_panda/mjx_single_cube.xml"))
+            .unwrap();
+    assert_eq!((chain.nq(), chain.nv()), (16, 15));
+    let names = kinechain::regression::variable_names(&chain);
+    assert_eq!(names[0], "joint1");
+    assert_eq!(
+        names[9..],
+        [
+            "joint#9.x",
+            "joint#9.y",
+            "joint#9.z",
+            "joint#9.qw",
+            "joint#9.qx",
+            "joint#9.qy",
+            "joint#9.qz"
+        ]
+    );
+    let keys: Vec<&str> = chain.keyframes().iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(keys, ["home", "pickup", "pickup1"]);
+    for (_, q) in chain.keyframes() {
+        let (p, r) = pose(&chain, q, "box");
+        assert!(close(&p, &Vector3::new(q[9], q[10], q[11])), "{p}");
+        let quat = kinechain::nalgebra::UnitQuaternion::from_quaternion(
+            kinechain::nalgebra::Quaternion::new(q[12], q[13], q[14], q[15]),
+        );
+        assert!(close_m(&r, quat.to_rotation_matrix().matrix()), "{r}");
+    }
+    // The mocap target stays where the file puts it.
+    assert!(
+        chain
+            .warnings()
+            .iter()
+            .any(|w| w.contains("'mocap_target' is a mocap body"))
+    );
+}

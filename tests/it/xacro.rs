@@ -499,7 +499,7 @@ fn comments_stay_or_go_as_xacro_decides_and_namespaces_are_lifted() {
     );
     let path = dir.write(
         "r.urdf.xacro",
-        &robot(
+        robot(
             r#"  <!-- kept: a blank line follows -->
 
   <!-- dropped -->

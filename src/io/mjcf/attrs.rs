@@ -25,6 +25,9 @@ pub(crate) struct Compiler {
     pub(crate) inertiafromgeom: Option<bool>,
     /// `inertiagrouprange` (default 0 5): the geom groups that count for a body's inertia.
     pub(crate) inertiagrouprange: [i64; 2],
+    /// Where `fusestatic="true"` is set, if it is: MuJoCo then fuses bodies without joints into
+    /// their parents, which moves no frame but renumbers bodies and sites.
+    pub(crate) fusestatic: Option<At>,
 }
 
 impl Default for Compiler {
@@ -36,6 +39,7 @@ impl Default for Compiler {
             alignfree: false,
             inertiafromgeom: None,
             inertiagrouprange: [0, 5],
+            fusestatic: None,
         }
     }
 }
@@ -80,6 +84,9 @@ impl Compiler {
         if let Some((v, at)) = el.attribute("inertiagrouprange") {
             let [lo, hi] = reals::<2>(v, at, "inertiagrouprange")?;
             self.inertiagrouprange = [lo as i64, hi as i64];
+        }
+        if let Some((v, at)) = el.attribute("fusestatic") {
+            self.fusestatic = boolean(v, at, "fusestatic")?.then_some(at);
         }
         // MuJoCo refuses global coordinates; "local" is the only meaning kinechain reads.
         if let Some((v, at)) = el.attribute("coordinate")

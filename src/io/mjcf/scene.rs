@@ -143,7 +143,7 @@ pub(crate) fn collect(sources: &[Source]) -> Result<Scene<'_>, Problem> {
         joint_log: Vec::new(),
     };
     for w in main.children_named("worldbody") {
-        for (name, at) in w.attributes.iter().map(|(n, _, at)| (n, at)) {
+        if let Some((name, _, at)) = w.attributes.first() {
             return Err(Problem::at(
                 *at,
                 format!("<worldbody> has attribute '{name}'; the world body takes none"),
@@ -518,7 +518,7 @@ impl<'a> Collector<'a> {
                         break;
                     };
                     let item = &mut self.bodies[b].joints[j];
-                    if item.el as *const Element != el {
+                    if !std::ptr::eq(item.el, el) {
                         break;
                     }
                     item.keys.retain(|(n, _)| *n != name);

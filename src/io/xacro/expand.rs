@@ -1098,7 +1098,7 @@ impl Expander {
         call: Element,
         env: Env,
         scope: Env,
-    ) -> Result<(Vec<Node>, Vec<(String, String)>)> {
+    ) -> Result<(Vec<Node>, Attributes)> {
         let table = self.new_table(Some(scope.table), false);
         let macros = self.new_macro_table(Some(scope.macros));
         let mut params = m.params.clone();
