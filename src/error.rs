@@ -76,4 +76,7 @@ pub enum Error {
     /// A regression record, verification or comparison could not be made.
     #[error(transparent)]
     Regression(#[from] crate::regression::RegressionError),
+    /// An inverse-kinematics problem or solve that cannot be posed.
+    #[error(transparent)]
+    Ik(#[from] crate::ik::IkError),
 }

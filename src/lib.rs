@@ -45,6 +45,7 @@
 pub mod cli;
 pub mod error;
 pub mod eval;
+pub mod ik;
 pub mod io;
 #[doc(hidden)]
 pub mod measure;

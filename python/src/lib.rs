@@ -20,6 +20,7 @@ mod chain;
 mod errors;
 mod files;
 mod fk;
+mod ik;
 mod jacobian;
 mod layouts;
 mod links;

@@ -220,7 +220,7 @@ impl Chain {
     }
 
     /// `[lower, upper]` of each entry of `q`, bounds that pass the checks' own arithmetic.
-    fn admitted_ranges(&self) -> Vec<(f64, f64)> {
+    pub(crate) fn admitted_ranges(&self) -> Vec<(f64, f64)> {
         let mut ranges = vec![(f64::NEG_INFINITY, f64::INFINITY); self.nq()];
         for c in &self.limit_checks {
             let range = &mut ranges[c.index];
