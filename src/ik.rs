@@ -195,7 +195,7 @@ impl Default for Options {
             position_tolerance: 1e-6,
             rotation_tolerance: 1e-6,
             iterations_per_attempt: 40,
-            max_attempts: 50,
+            max_attempts: 100,
             seed: 0,
             time_limit: None,
             closest: None,

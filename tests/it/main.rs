@@ -25,6 +25,7 @@ mod evaluation_modes;
 mod floating;
 mod free;
 mod fuzz_pass;
+mod ik;
 mod interop;
 mod k_crosscheck;
 mod layering;
