@@ -1,12 +1,22 @@
 """Type stubs of the compiled half of kinechain (the Chain class and the exceptions)."""
 
-from typing import Any, Iterable, Optional, Tuple, Union
+from typing import Any, Iterable, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
 
 
 __version__: str
+
+class IkResult:
+    """What Chain.ik found: q, success, position_error (m), rotation_error (rad), iterations,
+    restarts (one row, or N rows)."""
+    q: npt.NDArray[np.float64]
+    success: Any
+    position_error: Any
+    rotation_error: Any
+    iterations: Any
+    restarts: Any
 
 class Error(ValueError):
     """Any error of kinechain."""
@@ -178,6 +188,28 @@ class Chain:
 
         frame="world": v of the link origin (or of point, in link coordinates) and omega in
         world axes; frame="link": both in the link's own axes."""
+    def ik(
+        self,
+        target: Any,
+        link: Union[str, Sequence[str]],
+        q0: Optional[npt.ArrayLike] = None,
+        *,
+        base: Any = None,
+        point: Any = None,
+        weights: Any = None,
+        threads: Optional[int] = None,
+        seed: int = 0,
+        position_tolerance: float = 1e-6,
+        rotation_tolerance: float = 1e-6,
+        iterations: int = 40,
+        max_attempts: int = 100,
+        time_limit: Optional[float] = None,
+        closest: Optional[str] = None,
+        locked: Optional[Sequence[str]] = None,
+        start: str = "mid",
+    ) -> "IkResult":
+        """Joint values that put link (or links) at target: (4, 4) / (N, 4, 4) poses or (3,) /
+        (N, 3) positions, in the world or in base's frame; see kinechain._ik.ik."""
     def __reduce__(self) -> Tuple[Any, Tuple[str, str]]: ...
     def __eq__(self, other: object) -> bool: ...
     def __hash__(self) -> int: ...
