@@ -67,6 +67,9 @@ pub(super) enum Command {
     },
     /// Poses (and velocities, accelerations) of the links at a configuration.
     Fk(FkArgs),
+    /// The joint values that put a link at a target (inverse kinematics): one --target, or a
+    /// --batch file of them. Exits 1 if a target is not reached (its closest result printed).
+    Ik(IkArgs),
     /// Write the robot as URDF (DH tables and the axis form; the links keep their names and
     /// poses).
     Convert {
@@ -234,6 +237,53 @@ pub(super) struct FkArgs {
     /// orientation coordinates (null, or `undefined` in a table, where undefined).
     #[arg(long, value_enum, default_value_t = Orientation::Matrix)]
     pub(super) orientation: Orientation,
+}
+
+#[derive(Debug, clap::Args)]
+pub(super) struct IkArgs {
+    /// Robot file (.yaml/.yml DH table, .urdf, .xacro or MJCF .xml).
+    pub(super) robot: PathBuf,
+    /// The link to place.
+    #[arg(long)]
+    pub(super) link: String,
+    /// The target: `x,y,z` (a position, the orientation free), `x,y,z,roll,pitch,yaw` (m, rad,
+    /// as URDF's rpy), `x,y,z,qw,qx,qy,qz`, or the 16 entries of a 4 × 4 matrix row by row;
+    /// numbers separated by commas or spaces, or a JSON array.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "batch",
+        conflicts_with = "batch"
+    )]
+    pub(super) target: Option<String>,
+    /// A file with one target per line (the forms of --target; a first line of column names is
+    /// skipped); `-` reads standard input, writing each result before reading the next.
+    #[arg(long)]
+    pub(super) batch: Option<PathBuf>,
+    /// The seed (the forms of fk's --q; default: the middle of each joint's limits).
+    #[arg(long, allow_hyphen_values = true)]
+    pub(super) q0: Option<String>,
+    /// The link whose frame the target is given in (default: the world).
+    #[arg(long)]
+    pub(super) base: Option<String>,
+    /// A joint that does not move (it keeps the seed's value); repeatable.
+    #[arg(long = "lock", value_name = "JOINT")]
+    pub(super) locked: Vec<String>,
+    /// Position tolerance (m).
+    #[arg(long, default_value_t = 1e-6)]
+    pub(super) position_tolerance: f64,
+    /// Rotation tolerance (rad).
+    #[arg(long, default_value_t = 1e-6)]
+    pub(super) rotation_tolerance: f64,
+    /// Attempts in all (the first from the seed, the others from random configurations).
+    #[arg(long, default_value_t = 100)]
+    pub(super) max_attempts: usize,
+    /// Seed of the restarts' random configurations.
+    #[arg(long, default_value_t = 0)]
+    pub(super) seed: u64,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = OutputFormat::Json)]
+    pub(super) format: OutputFormat,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

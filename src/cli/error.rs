@@ -12,6 +12,9 @@ pub enum CliError {
     /// The robot file could not be loaded.
     #[error(transparent)]
     Load(#[from] crate::io::error::LoadError),
+    /// An inverse-kinematics target, option or solve that failed.
+    #[error("{0}")]
+    Ik(String),
     /// A joint-space vector could not be read.
     #[error(transparent)]
     Input(#[from] InputError),

@@ -9,6 +9,7 @@ mod common;
 mod error;
 mod fk;
 mod format;
+mod ik;
 mod info;
 mod limits;
 mod query;

@@ -111,6 +111,7 @@ pub(super) fn run(
     match command {
         Command::Info { robot, format } => info(&load(&robot, options)?, format, out),
         Command::Fk(args) => fk(&args, options, out),
+        Command::Ik(args) => crate::cli::ik::ik(&args, options, out),
         Command::Bench {
             robot,
             level,

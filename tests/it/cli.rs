@@ -2273,3 +2273,146 @@ fn xacro_files_expand_and_load_with_args_and_package_paths() {
     let out = kinechain(&["expand", ur, args[0], args[1], args[2], args[3], "-o", ur]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn ik_reaches_a_pose_that_fk_then_confirms_in_every_target_form() {
+    // Where fk puts the UR5's tool at some q, as a matrix, xyz + rpy and xyz + quaternion.
+    let q = "[0.3, -1.1, 1.2, -0.4, 1.0, 0.2]";
+    let fk = &ok_json(&["fk", "robots/ur5.yaml", "--q", q, "--link", "tool0"])[0];
+    let m: Vec<f64> = fk["links"]["tool0"]["pose"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| numbers(r))
+        .collect();
+    let matrix = serde_json::to_string(&m).unwrap();
+    let r = kinechain::nalgebra::Matrix3::from_row_slice(&[
+        m[0], m[1], m[2], m[4], m[5], m[6], m[8], m[9], m[10],
+    ]);
+    let e = kinechain::orientation::EulerParameters::from_matrix(&r);
+    let v = e.as_vector();
+    let quaternion = format!(
+        "{},{},{},{},{},{},{}",
+        m[3], m[7], m[11], v[0], v[1], v[2], v[3]
+    );
+    let (roll, pitch, yaw) =
+        kinechain::nalgebra::Rotation3::from_matrix_unchecked(r).euler_angles();
+    let rpy = format!("{} {} {} {roll} {pitch} {yaw}", m[3], m[7], m[11]);
+    for target in [&matrix, &quaternion, &rpy] {
+        let out = &ok_json(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool0",
+            "--target",
+            target,
+        ])[0];
+        assert_eq!(out["success"], true, "{target}");
+        assert!(out["position_error"].as_f64().unwrap() <= 1e-6);
+        let q = serde_json::to_string(&out["q"]).unwrap();
+        let back = &ok_json(&["fk", "robots/ur5.yaml", "--q", &q, "--link", "tool0"])[0];
+        let got: Vec<f64> = back["links"]["tool0"]["pose"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| numbers(r))
+            .collect();
+        for (a, b) in got.iter().zip(&m) {
+            assert!((a - b).abs() < 2e-6, "{target}: {a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn ik_batches_lines_exits_1_for_an_unreached_target_and_names_bad_input() {
+    let scratch = Scratch::new("ik-cli");
+    let file = scratch.write("targets.csv", "x,y,z\n0.4,0.2,0.3\n5,5,5\n");
+    let out = kinechain(&["ik", "robots/ur5.yaml", "--link", "tool0", "--batch", &file]);
+    assert_eq!(out.status.code(), Some(1));
+    let lines = json_lines(out.stdout);
+    assert_eq!(lines.len(), 2);
+    assert_eq!(
+        (lines[0]["line"].as_u64(), lines[0]["success"].as_bool()),
+        (Some(2), Some(true))
+    );
+    assert_eq!(lines[1]["success"], false);
+    assert!(lines[1]["position_error"].as_f64().unwrap() > 6.0);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("1 of 2 targets not reached"));
+    let csv = ok_text(&[
+        "ik",
+        "robots/ur5.yaml",
+        "--link",
+        "tool0",
+        "--target",
+        "0.4,0.2,0.3",
+        "--format",
+        "csv",
+    ]);
+    assert!(
+        csv.starts_with("success,position_error,rotation_error,iterations,restarts,shoulder_pan,"),
+        "{csv}"
+    );
+    assert!(
+        error(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool9",
+            "--target",
+            "0,0,0"
+        ])
+        .contains("tool9")
+    );
+    assert!(
+        error(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool0",
+            "--target",
+            "1,2"
+        ])
+        .contains("2 numbers")
+    );
+    assert!(
+        error(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool0",
+            "--target",
+            "0,0,0,2,0,0,0"
+        ])
+        .contains("norm")
+    );
+    assert!(
+        error(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool0",
+            "--target",
+            "0.4,0.2,0.3",
+            "--q0",
+            "9,0,0,0,0,0"
+        ])
+        .contains("shoulder_pan")
+    );
+    assert!(
+        error(&[
+            "ik",
+            "robots/ur5.yaml",
+            "--link",
+            "tool0",
+            "--target",
+            "0.4,0.2,0.3",
+            "--lock",
+            "nope"
+        ])
+        .contains("nope")
+    );
+    let bad = scratch.write("bad.txt", "0.4,0.2,zero\n");
+    assert!(
+        error(&["ik", "robots/ur5.yaml", "--link", "tool0", "--batch", &bad]).contains("line 1")
+    );
+}
