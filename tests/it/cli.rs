@@ -2283,7 +2283,7 @@ fn ik_reaches_a_pose_that_fk_then_confirms_in_every_target_form() {
         .as_array()
         .unwrap()
         .iter()
-        .flat_map(|r| numbers(r))
+        .flat_map(numbers)
         .collect();
     let matrix = serde_json::to_string(&m).unwrap();
     let r = kinechain::nalgebra::Matrix3::from_row_slice(&[
@@ -2315,7 +2315,7 @@ fn ik_reaches_a_pose_that_fk_then_confirms_in_every_target_form() {
             .as_array()
             .unwrap()
             .iter()
-            .flat_map(|r| numbers(r))
+            .flat_map(numbers)
             .collect();
         for (a, b) in got.iter().zip(&m) {
             assert!((a - b).abs() < 2e-6, "{target}: {a} vs {b}");
