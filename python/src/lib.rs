@@ -29,6 +29,7 @@ mod methods;
 mod orientation;
 mod outputs;
 mod regression;
+mod relative;
 mod results;
 mod robot;
 mod run;

@@ -25,7 +25,7 @@ pub(crate) struct Links {
 }
 
 impl Links {
-    fn new(
+    pub(crate) fn new(
         py: Python<'_>,
         chain: &Inner,
         names: Vec<String>,

@@ -13,7 +13,7 @@ use pyo3::types::PyString;
 impl Chain {
     /// Poses (and with `qd`, `qdd` velocities and accelerations) of the links; see the
     /// package's documentation of `Chain.fk`.
-    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, check_limits=true, threads=None, out=None))]
+    #[pyo3(signature = (q, qd=None, qdd=None, *, links=None, base=None, check_limits=true, threads=None, out=None))]
     #[allow(clippy::too_many_arguments)]
     fn fk<'py>(
         &self,
@@ -22,10 +22,27 @@ impl Chain {
         qd: Option<&Bound<'py, PyAny>>,
         qdd: Option<&Bound<'py, PyAny>>,
         links: Option<&Bound<'py, PyAny>>,
+        base: Option<&str>,
         check_limits: bool,
         threads: Option<&Bound<'py, PyAny>>,
         out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<FkResult> {
+        if let Some(base) = base {
+            if out.is_some() {
+                return Err(crate::errors::Error::new_err(
+                    "out= is not taken with base=",
+                ));
+            }
+            return crate::relative::fk_relative(
+                &self.robot,
+                py,
+                (q, qd, qdd),
+                links,
+                base,
+                policy(check_limits),
+                threads,
+            );
+        }
         crate::fk::fk(
             &self.robot,
             py,
@@ -101,7 +118,7 @@ impl Chain {
     /// coordinates) and ω in world axes; `frame="link"`: both in the link's own axes. A batch
     /// runs the batch kernels without the GIL and writes straight into the returned array (or
     /// into `out`, a C-contiguous float64 array of that shape).
-    #[pyo3(signature = (q, link, *, frame="world", point=None, check_limits=true, threads=None, out=None))]
+    #[pyo3(signature = (q, link, *, frame="world", point=None, base=None, check_limits=true, threads=None, out=None))]
     #[allow(clippy::too_many_arguments)]
     fn jacobian<'py>(
         &self,
@@ -110,10 +127,28 @@ impl Chain {
         link: &str,
         frame: &str,
         point: Option<[f64; 3]>,
+        base: Option<&str>,
         check_limits: bool,
         threads: Option<&Bound<'py, PyAny>>,
         out: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Py<PyAny>> {
+        if let Some(base) = base {
+            if out.is_some() {
+                return Err(crate::errors::Error::new_err(
+                    "out= is not taken with base=",
+                ));
+            }
+            return crate::relative::jacobian_relative(
+                &self.robot,
+                py,
+                q,
+                link,
+                base,
+                point,
+                frame,
+                policy(check_limits),
+            );
+        }
         crate::jacobian::jacobian(
             &self.robot,
             py,

@@ -143,3 +143,37 @@ def test_errors_are_exceptions_naming_what_is_wrong():
         c.ik([t, np.stack([t, t])], ["tool0", "wrist_3_link"])
     with pytest.raises(kc.Error, match="list of 2"):
         c.ik(t, ["tool0", "wrist_3_link"])
+
+
+def test_fk_and_jacobian_relative_to_a_base_link_agree_with_world_quantities():
+    g1 = robot("g1.urdf", floating_base=True)
+    q = g1.random(5, seed=11, base=(-0.3, 0.3))
+    rng = np.random.default_rng(12)
+    qd, qdd = rng.standard_normal((5, g1.nv)), rng.standard_normal((5, g1.nv))
+    links = ["left_rubber_hand", "right_ankle_roll_link"]
+    rel = g1.fk(q, qd, qdd, links=links, base="torso_link")
+    world = g1.fk(q, qd, qdd, links=links + ["torso_link"])
+    tb = world.poses[:, 2]
+    assert rel.links == links and rel.poses.shape == (5, 2, 4, 4) and rel.a.shape == (5, 2, 3)
+    np.testing.assert_allclose(rel.poses, np.linalg.inv(tb)[:, None] @ world.poses[:, :2], atol=1e-12)
+    # Velocities: finite differences of the relative pose along q + qd t (no floating motion
+    # in qd for this check: the base's position and quaternion rates follow qd's convention).
+    qd[:, :6] = 0.0
+    qdd[:, :6] = 0.0
+    rel = g1.fk(q, qd, qdd, links=links, base="torso_link")
+    h = 1e-6
+    plus = g1.fk(q + h * np.pad(qd, ((0, 0), (1, 0))), links=links, base="torso_link").poses
+    minus = g1.fk(q - h * np.pad(qd, ((0, 0), (1, 0))), links=links, base="torso_link").poses
+    np.testing.assert_allclose(rel.v, (plus - minus)[..., :3, 3] / (2 * h), atol=1e-6)
+    # The relative Jacobian maps qd to the relative twist.
+    j = g1.jacobian(q, "left_rubber_hand", base="torso_link")
+    assert j.shape == (5, 6, g1.nv)
+    twist = np.einsum("nij,nj->ni", j, qd)
+    np.testing.assert_allclose(twist[:, :3], rel.v[:, 0], atol=1e-12)
+    np.testing.assert_allclose(twist[:, 3:], rel.omega[:, 0], atol=1e-12)
+    single = g1.jacobian(q[0], "left_rubber_hand", base="torso_link")
+    np.testing.assert_array_equal(single, j[0])
+    with pytest.raises(kc.Error, match="no_such"):
+        g1.fk(q, links=links, base="no_such")
+    with pytest.raises(kc.Error, match="frame"):
+        g1.jacobian(q, "left_rubber_hand", base="torso_link", frame="link")

@@ -213,6 +213,10 @@ pub(super) struct FkArgs {
     /// Only these links (repeatable); only the joints they depend on are evaluated.
     #[arg(long = "link", value_name = "NAME")]
     pub(super) links: Vec<String>,
+    /// Results relative to this link, in its frame: poses `base_from_link`, and the velocities,
+    /// accelerations and Jacobians of the motion relative to it.
+    #[arg(long, value_name = "LINK")]
+    pub(super) base: Option<String>,
     /// A point fixed on a link, in link coordinates (m): prints its position, and its velocity and
     /// acceleration when --qd/--qdd are given (repeatable).
     #[arg(long = "point", value_name = "LINK:X,Y,Z", allow_hyphen_values = true)]

@@ -12,6 +12,9 @@ pub enum CliError {
     /// The robot file could not be loaded.
     #[error(transparent)]
     Load(#[from] crate::io::error::LoadError),
+    /// Options that are not taken together.
+    #[error("{0}")]
+    Unsupported(&'static str),
     /// An inverse-kinematics target, option or solve that failed.
     #[error("{0}")]
     Ik(String),

@@ -34,9 +34,18 @@ pub(super) fn jacobians_from(
     poses: &Poses,
     velocities: Option<&Velocities>,
     jacobians: &mut [JacobianResult],
+    base: Option<LinkId>,
 ) -> Result<(), CliError> {
+    if base.is_some() && velocities.is_some() && !jacobians.is_empty() {
+        return Err(CliError::Unsupported(
+            "--jacobian with --base and --qd: the rate of a relative Jacobian is not computed",
+        ));
+    }
     for r in jacobians.iter_mut() {
-        poses.jacobian_into(r.link, &mut r.j);
+        match base {
+            Some(b) => r.j = poses.jacobian_relative(r.link, b, crate::eval::JacobianFrame::World),
+            None => poses.jacobian_into(r.link, &mut r.j),
+        }
         r.with_rate = velocities.is_some();
         if let Some(v) = velocities {
             v.jacobian_dot_into(r.link, &mut r.j_dot);
@@ -75,8 +84,14 @@ pub(super) fn evaluate(
     c: &Configuration,
     links: &[LinkId],
     points: &[Point],
+    base: Option<LinkId>,
     out: &mut Outputs,
 ) -> Result<(), CliError> {
+    if base.is_some() && !points.is_empty() {
+        return Err(CliError::Unsupported(
+            "--point with --base: points are printed in world coordinates",
+        ));
+    }
     let Outputs {
         links: results,
         points: point_results,
@@ -95,7 +110,9 @@ pub(super) fn evaluate(
         (None, Some(_)) => return Err(CliError::QddWithoutQd),
         // Only the paths to the links asked for, unless a point or a Jacobian needs the poses
         // view of a whole evaluation.
-        (None, None) if !links.is_empty() && points.is_empty() && jacobians.is_empty() => {
+        (None, None)
+            if !links.is_empty() && points.is_empty() && jacobians.is_empty() && base.is_none() =>
+        {
             for &l in wanted {
                 let pose = forward_kinematics_to(chain, data, &c.q, l)?;
                 results.push((l, pose, None, None));
@@ -103,12 +120,14 @@ pub(super) fn evaluate(
         }
         (None, None) => {
             let poses = forward_kinematics(chain, data, &c.q)?;
-            jacobians_from(chain, &poses, None, jacobians)?;
-            results.extend(
-                wanted
-                    .iter()
-                    .map(|&l| (l, poses.world_from_link(l), None, None)),
-            );
+            jacobians_from(chain, &poses, None, jacobians, base)?;
+            results.extend(wanted.iter().map(|&l| {
+                let pose = match base {
+                    Some(b) => poses.base_from_link(b, l),
+                    None => poses.world_from_link(l),
+                };
+                (l, pose, None, None)
+            }));
             point_results.extend(points.iter().map(|p| {
                 PointResult {
                     position: poses
@@ -122,12 +141,16 @@ pub(super) fn evaluate(
         }
         (Some(qd), None) => {
             let v = forward_velocities(chain, data, &c.q, qd)?;
-            jacobians_from(chain, &v.poses(), Some(&v), jacobians)?;
-            results.extend(
-                wanted
-                    .iter()
-                    .map(|&l| (l, v.world_from_link(l), Some(v.velocity(l)), None)),
-            );
+            jacobians_from(chain, &v.poses(), Some(&v), jacobians, base)?;
+            results.extend(wanted.iter().map(|&l| match base {
+                Some(b) => (
+                    l,
+                    v.poses().base_from_link(b, l),
+                    Some(v.velocity_relative(l, b)),
+                    None,
+                ),
+                None => (l, v.world_from_link(l), Some(v.velocity(l)), None),
+            }));
             point_results.extend(points.iter().map(|p| {
                 let m = v.point(p.link, &p.u);
                 PointResult {
@@ -139,14 +162,20 @@ pub(super) fn evaluate(
         }
         (Some(qd), Some(qdd)) => {
             let a = forward_accelerations(chain, data, &c.q, qd, qdd)?;
-            jacobians_from(chain, &a.poses(), Some(&a.velocities()), jacobians)?;
-            results.extend(wanted.iter().map(|&l| {
-                (
+            jacobians_from(chain, &a.poses(), Some(&a.velocities()), jacobians, base)?;
+            results.extend(wanted.iter().map(|&l| match base {
+                Some(b) => (
+                    l,
+                    a.poses().base_from_link(b, l),
+                    Some(a.velocity_relative(l, b)),
+                    Some(a.acceleration_relative(l, b)),
+                ),
+                None => (
                     l,
                     a.world_from_link(l),
                     Some(a.velocity(l)),
                     Some(a.acceleration(l)),
-                )
+                ),
             }));
             point_results.extend(points.iter().map(|p| {
                 let m = a.point(p.link, &p.u);
@@ -218,6 +247,8 @@ pub(super) fn jacobians_table(chain: &Chain, jacobians: &[JacobianResult], buf: 
 /// What `fk` prints for each configuration (`--link`, `--point`, `--jacobian`), with the
 /// buffers of the results.
 pub(super) struct Request {
+    /// `--base`: the link whose frame the results are in.
+    pub(super) base: Option<LinkId>,
     pub(super) links: Vec<LinkId>,
     pub(super) points: Vec<Point>,
     pub(super) outputs: Outputs,
@@ -265,7 +296,9 @@ impl Request {
                 })
                 .collect(),
         };
+        let base = args.base.as_deref().map(|b| chain.link_id(b)).transpose()?;
         Ok(Request {
+            base,
             links,
             points,
             outputs,
@@ -277,7 +310,7 @@ impl Request {
     /// batch kernels can evaluate (a chain without moving joints has empty configurations, which
     /// a flat batch cannot count).
     pub(super) fn every_link(&self, chain: &Chain) -> bool {
-        self.links.is_empty() && self.points.is_empty() && chain.dof() > 0
+        self.links.is_empty() && self.points.is_empty() && self.base.is_none() && chain.dof() > 0
     }
 
     /// Evaluates `c` and writes its results in the format `args` asks for, headed by the batch
@@ -296,7 +329,15 @@ impl Request {
                 "prints link poses; velocities and accelerations need json or table",
             ));
         }
-        evaluate(chain, data, c, &self.links, &self.points, &mut self.outputs)?;
+        evaluate(
+            chain,
+            data,
+            c,
+            &self.links,
+            &self.points,
+            self.base,
+            &mut self.outputs,
+        )?;
         let Outputs {
             links: results,
             points: point_results,

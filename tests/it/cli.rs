@@ -2416,3 +2416,57 @@ fn ik_batches_lines_exits_1_for_an_unreached_target_and_names_bad_input() {
         error(&["ik", "robots/ur5.yaml", "--link", "tool0", "--batch", &bad]).contains("line 1")
     );
 }
+
+#[test]
+fn fk_base_prints_poses_and_rates_in_the_base_links_frame() {
+    let q = "[0.3, -0.4, 0.1, -2.0, 0.2, 1.8, 0.6, 0.03]";
+    let qd = "[0.1, 0.2, -0.3, 0.1, 0.0, 0.2, -0.1, 0.0]";
+    let world = &ok_json(&[
+        "fk",
+        "robots/panda.urdf",
+        "--q",
+        q,
+        "--qd",
+        qd,
+        "--link",
+        "panda_hand",
+        "--link",
+        "panda_link3",
+    ])[0];
+    let rel = &ok_json(&[
+        "fk",
+        "robots/panda.urdf",
+        "--q",
+        q,
+        "--qd",
+        qd,
+        "--link",
+        "panda_hand",
+        "--base",
+        "panda_link3",
+    ])[0];
+    let m = |v: &Value| {
+        let rows: Vec<f64> = v.as_array().unwrap().iter().flat_map(numbers).collect();
+        kinechain::nalgebra::Matrix4::from_row_slice(&rows)
+    };
+    let (hand, base) = (
+        m(&world["links"]["panda_hand"]["pose"]),
+        m(&world["links"]["panda_link3"]["pose"]),
+    );
+    let want = base.try_inverse().unwrap() * hand;
+    let got = m(&rel["links"]["panda_hand"]["pose"]);
+    assert!((got - want).abs().max() < 1e-12, "{got} vs {want}");
+    assert!(rel["links"]["panda_hand"]["omega"].is_array());
+    let e = error(&[
+        "fk",
+        "robots/panda.urdf",
+        "--q",
+        q,
+        "--base",
+        "panda_link3",
+        "--point",
+        "panda_hand:0,0,0.1",
+    ]);
+    assert!(e.contains("--point with --base"), "{e}");
+    assert!(error(&["fk", "robots/panda.urdf", "--q", q, "--base", "nope"]).contains("nope"));
+}

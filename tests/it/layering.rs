@@ -18,11 +18,12 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// Each top-level module and the modules it may use.
-const ALLOWED: [(&str, &[&str]); 9] = [
+const ALLOWED: [(&str, &[&str]); 10] = [
     ("orientation", &[]),
     ("model", &["orientation"]),
     ("eval", &["orientation", "model"]),
     ("io", &["orientation", "model", "eval"]),
+    ("ik", &["orientation", "model", "eval"]),
     ("measure", &["orientation", "model", "eval"]),
     ("reference", &["orientation", "model", "eval", "measure"]),
     (
@@ -38,6 +39,7 @@ const ALLOWED: [(&str, &[&str]); 9] = [
             "io",
             "measure",
             "regression",
+            "ik",
         ],
     ),
     (
@@ -51,6 +53,7 @@ const ALLOWED: [(&str, &[&str]); 9] = [
             "reference",
             "regression",
             "error",
+            "ik",
         ],
     ),
 ];

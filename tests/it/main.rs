@@ -37,6 +37,7 @@ mod rates;
 mod reference;
 #[cfg(feature = "cli")]
 mod regression;
+mod relative;
 mod render;
 mod robots;
 mod rotation;

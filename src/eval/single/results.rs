@@ -62,6 +62,58 @@ impl<'a> Poses<'a> {
         }
     }
 
+    /// Pose of `link` in `base`'s frame: `base_from_link = world_from_baseᵀ · world_from_link`
+    /// (the inverse of eq. 2.109's transform, then the composition).
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links.
+    #[must_use]
+    pub fn base_from_link(&self, base: LinkId, link: LinkId) -> Transform {
+        self.world_from_link(base).inverse() * self.world_from_link(link)
+    }
+
+    /// The Jacobian of `link`'s motion relative to `base`, in `base`'s axes (6 × dof, rows
+    /// `[v; ω]`): `[v; ω]_rel = J q̇` with `ω_rel = R_bᵀ (ω − ω_b)` and `v_rel = R_bᵀ (v − v_b −
+    /// ω_b × r)`, the rates of `base_from_link`'s rotation and origin (`r` the link origin's
+    /// offset from the base origin, world axes; eqs. 2.41 and 2.120 for a point seen from a
+    /// moving frame). With `JacobianFrame::Point(ū)` the point's velocity replaces the origin's;
+    /// `JacobianFrame::Link` is refused here (take `Link` rows from a world-axes Jacobian).
+    ///
+    /// # Panics
+    /// If a link comes from another chain with more links, or `frame` is `Link`.
+    #[must_use]
+    pub fn jacobian_relative(
+        &self,
+        link: LinkId,
+        base: LinkId,
+        frame: JacobianFrame,
+    ) -> nalgebra::Matrix6xX<f64> {
+        assert!(
+            frame != JacobianFrame::Link,
+            "jacobian_relative takes World or Point"
+        );
+        let mut j = self.jacobian_in(link, frame);
+        let jb = self.jacobian(base);
+        let pose = self.world_from_link(link);
+        let b = self.world_from_link(base);
+        let p = add3(pose.p, pose.apply(frame.point()));
+        let r = crate::model::transform::sub3(p, b.p);
+        let rt = b.rotation().transpose();
+        for c in 0..j.ncols() {
+            let wb = Vector3::new(jb[(3, c)], jb[(4, c)], jb[(5, c)]);
+            let v = Vector3::new(j[(0, c)], j[(1, c)], j[(2, c)])
+                - Vector3::new(jb[(0, c)], jb[(1, c)], jb[(2, c)])
+                - wb.cross(&Vector3::from(r));
+            let w = Vector3::new(j[(3, c)], j[(4, c)], j[(5, c)]) - wb;
+            let (v, w) = (rt * v, rt * w);
+            for k in 0..3 {
+                j[(k, c)] = v[k];
+                j[(3 + k, c)] = w[k];
+            }
+        }
+        j
+    }
+
     /// Writes the pose of each of `links` as a 4 × 4 homogeneous matrix (world frame,
     /// row-major, last row `0 0 0 1`), link `k`'s 16 entries from `16 k`: a C-ordered
     /// `(links.len(), 4, 4)` array. The entries are those of
@@ -385,6 +437,20 @@ impl<'a> Velocities<'a> {
         })
     }
 
+    /// The motion of `link` relative to `base`, in `base`'s axes: `ω_rel = R_bᵀ (ω − ω_b)` and
+    /// `v_rel = R_bᵀ (v − v_b − ω_b × r)`, `r = o − o_b` (eq. 2.120 with the base as the moving
+    /// reference): the rates of [`Poses::base_from_link`]'s rotation and origin.
+    #[must_use]
+    pub fn velocity_relative(&self, link: LinkId, base: LinkId) -> LinkVelocity {
+        let (l, b) = (self.velocity(link), self.velocity(base));
+        let r = self.world_from_link(link).translation() - self.world_from_link(base).translation();
+        let rt = self.world_from_link(base).rotation().transpose();
+        LinkVelocity {
+            omega: rt * (l.omega - b.omega),
+            v: rt * (l.v - b.v - b.omega.cross(&r)),
+        }
+    }
+
     /// The same as [`Velocities::velocity`] with components in the link's own frame:
     /// `ω̄ = Aᵀ ω` (eq. 2.41) and `v̄ = Aᵀ v`.
     #[must_use]
@@ -540,6 +606,37 @@ impl<'a> Accelerations<'a> {
             let r = self.acceleration(l);
             [r.alpha, r.a]
         })
+    }
+
+    /// [`Velocities::velocity_relative`] of the same evaluation.
+    #[must_use]
+    pub fn velocity_relative(&self, link: LinkId, base: LinkId) -> LinkVelocity {
+        self.velocities().velocity_relative(link, base)
+    }
+
+    /// The acceleration of `link` relative to `base`, in `base`'s axes: the second rates of
+    /// [`Poses::base_from_link`]'s origin and the first of its angular velocity,
+    /// `α_rel = R_bᵀ (α − α_b − ω_b × ω)` and
+    /// `a_rel = R_bᵀ (a − a_b − α_b × r − ω_b × (ω_b × r) − 2 ω_b × (ṙ − ω_b × r))`, `r = o − o_b`,
+    /// `ṙ = v − v_b` (eq. 2.127's terms with the base as the moving reference: the transport,
+    /// centripetal and Coriolis accelerations taken away).
+    #[must_use]
+    pub fn acceleration_relative(&self, link: LinkId, base: LinkId) -> LinkAcceleration {
+        let (vl, vb) = (self.velocity(link), self.velocity(base));
+        let (al, ab) = (self.acceleration(link), self.acceleration(base));
+        let r = self.world_from_link(link).translation() - self.world_from_link(base).translation();
+        let rt = self.world_from_link(base).rotation().transpose();
+        let w = vb.omega;
+        let r_dot = vl.v - vb.v;
+        LinkAcceleration {
+            alpha: rt * (al.alpha - ab.alpha - w.cross(&vl.omega)),
+            a: rt
+                * (al.a
+                    - ab.a
+                    - ab.alpha.cross(&r)
+                    - w.cross(&w.cross(&r))
+                    - 2.0 * w.cross(&(r_dot - w.cross(&r)))),
+        }
     }
 
     /// The same as [`Accelerations::velocity`] with components in the link's own frame.
