@@ -41,6 +41,45 @@ pub(super) fn cholesky_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
     true
 }
 
+/// [`cholesky_solve`] for order 6 in fixed-size arrays (the loops unrolled), with one division
+/// per row: `A` by its lower triangle, rows by rows.
+pub(super) fn cholesky_solve6(a: &mut [[f64; 6]; 6], b: &mut [f64; 6]) -> bool {
+    let mut inv = [0.0; 6];
+    for i in 0..6 {
+        for j in 0..=i {
+            let mut sum = a[i][j];
+            for k in 0..j {
+                sum -= a[i][k] * a[j][k];
+            }
+            if i == j {
+                if sum.is_nan() || sum <= 0.0 {
+                    return false;
+                }
+                let d = sum.sqrt();
+                a[i][i] = d;
+                inv[i] = 1.0 / d;
+            } else {
+                a[i][j] = sum * inv[j];
+            }
+        }
+    }
+    for i in 0..6 {
+        let mut sum = b[i];
+        for k in 0..i {
+            sum -= a[i][k] * b[k];
+        }
+        b[i] = sum * inv[i];
+    }
+    for i in (0..6).rev() {
+        let mut sum = b[i];
+        for k in i + 1..6 {
+            sum -= a[k][i] * b[k];
+        }
+        b[i] = sum * inv[i];
+    }
+    true
+}
+
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

@@ -16,8 +16,8 @@ use super::goal::{
     Goal, IkError, Options, Prepared, Solution, check_options, check_target, start_of,
 };
 use super::math::{
-    cholesky_solve, dot, mat3_apply, mul_rt, mul_tr, normalize4, quat_exp, quat_mul,
-    right_jacobian_inverse, rotation_log, transpose_apply,
+    cholesky_solve, cholesky_solve6, dot, mat3_apply, mul_rt, mul_tr, normalize4, quat_exp,
+    quat_mul, right_jacobian_inverse, rotation_log, transpose_apply,
 };
 use super::variables::{Var, distance, variables, wrap};
 
@@ -484,25 +484,42 @@ impl<'c> Solver<'c> {
     /// [`Solver::solve_step`] for one goal of six rows on at least six joints, in fixed-size
     /// arithmetic (the usual problem: a pose of an arm's tool).
     fn solve_step6(&mut self, lambda: f64) -> bool {
-        let mut a = nalgebra::Matrix6::<f64>::identity() * lambda;
-        for (c, col) in self.j.chunks_exact(6).enumerate() {
-            if !self.held[c] {
-                let v = nalgebra::Vector6::from_column_slice(col);
-                a.syger(1.0, &v, &v, 1.0);
+        // J̃ J̃ᵀ + λ I: the lower triangle, a sum of the columns' outer products.
+        let mut a = [[0.0; 6]; 6];
+        for (col, held) in self.j.chunks_exact(6).zip(&self.held) {
+            if !*held {
+                for r1 in 0..6 {
+                    for r2 in 0..=r1 {
+                        a[r1][r2] += col[r1] * col[r2];
+                    }
+                }
             }
         }
-        let Some(cholesky) = a.cholesky() else {
+        for (k, row) in a.iter_mut().enumerate() {
+            row[k] += lambda;
+        }
+        let mut y = [0.0; 6];
+        y.copy_from_slice(&self.e[..6]);
+        if !cholesky_solve6(&mut a, &mut y) {
             self.step.fill(0.0);
             return false;
-        };
-        let y = cholesky.solve(&nalgebra::Vector6::from_column_slice(&self.e));
+        }
         for ((s, col), held) in self
             .step
             .iter_mut()
             .zip(self.j.chunks_exact(6))
             .zip(&self.held)
         {
-            *s = if *held { 0.0 } else { dot(col, y.as_slice()) };
+            *s = if *held {
+                0.0
+            } else {
+                col[0] * y[0]
+                    + col[1] * y[1]
+                    + col[2] * y[2]
+                    + col[3] * y[3]
+                    + col[4] * y[4]
+                    + col[5] * y[5]
+            };
         }
         true
     }
