@@ -118,6 +118,10 @@ def main():
         if pytracik is not None:
             solver = pytracik.TRAC_IK(base, tip, urdf_of(os.path.join(ROOT, path)), BUDGET, TOL / np.sqrt(3), pytracik.SolveType.Speed)
             nj = pytracik.get_num_joints(solver)
+            # pytracik 0.0.3 reads the Panda's limits as 0 (its URDF has safety_controller soft
+            # limits): the file's limits, set explicitly for every robot.
+            pytracik.set_joint_limits(solver, chain.lower[:nj], chain.upper[:nj])
+            assert np.array_equal(pytracik.get_joint_lower_bounds(solver), chain.lower[:nj])
             fk_gap = max(np.abs(pytracik.fk(solver, q[:nj]) - chain.pose(q, tip)).max() for q in qs[:50])
             assert fk_gap < 1e-12, f"TRAC-IK's FK differs from kinechain's by {fk_gap}"
 
