@@ -115,6 +115,26 @@ def ik(
     ``success`` is False and ``q`` the best found. Raises ``StateError`` for targets that are not
     rigid transforms or a seed that is out of limits or of the wrong length, ``Error`` for unknown
     links or joints and bad options."""
+    if (
+        type(link) is str
+        and type(target) is np.ndarray
+        and target.shape == (4, 4)
+        and target.dtype == np.float64
+        and base is None
+        and point is None
+        and weights is None
+        and (q0 is None or (type(q0) is np.ndarray and q0.ndim == 1))
+    ):
+        # One pose of one link: the common call, without the general shape handling.
+        q, success, pe, re, its, rs = self._ik(
+            [link], [None], [(0.0, 0.0, 0.0)], [_POSE_ONLY], target, 1,
+            None if q0 is None else q0.reshape(1, -1),
+            seed=int(seed), threads=threads,
+            position_tolerance=float(position_tolerance), rotation_tolerance=float(rotation_tolerance),
+            iterations=int(iterations), max_attempts=int(max_attempts), time_limit=time_limit,
+            closest=closest, locked=list(locked or ()), start=start,
+        )
+        return IkResult(q[0], bool(success[0]), pe[0, 0], re[0, 0], int(its[0]), int(rs[0]))
     several = not isinstance(link, str)
     links = list(link) if several else [link]
     if several and (not isinstance(target, (list, tuple)) or len(target) != len(links)):

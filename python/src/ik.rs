@@ -135,7 +135,7 @@ impl Chain {
             locked,
             start,
         };
-        let solver = Solver::new(chain, goals, options).map_err(|e| ik_error(&e))?;
+        let mut solver = Solver::new(chain, goals, options).map_err(|e| ik_error(&e))?;
         let t = float_array(targets, "target")?;
         let t = t.as_slice()?;
         if t.len() != n * k * 16 {
@@ -190,7 +190,7 @@ impl Chain {
         let mut its = vec![0u32; n];
         let mut rs = vec![0u32; n];
         let mut signals = Signals::default();
-        let out = BatchOut {
+        let mut out = BatchOut {
             q: &mut q,
             success: &mut success,
             position_error: &mut pe,
@@ -198,24 +198,36 @@ impl Chain {
             iterations: &mut its,
             restarts: &mut rs,
         };
-        let threads = if n <= 1 { Some(1) } else { threads };
-        let result = py.detach(|| {
-            with_workers(threads, |workers: Workers<'_>| {
-                solve_batch(
-                    &solver,
-                    &transforms,
-                    seeds.as_deref(),
-                    out,
-                    workers,
-                    &mut signals,
-                )
-            })
-        })?;
-        if let Err(e) = result {
-            if let (IkError::Interrupted, Some(raised)) = (&e, signals.raised) {
-                return Err(raised);
+        // One row: solved here with this solver (a batch would copy it for its worker).
+        if n == 1 {
+            let s = py
+                .detach(|| solver.solve(&transforms, seeds.as_deref()))
+                .map_err(|e| ik_error(&e))?;
+            out.q.copy_from_slice(&s.q);
+            out.success[0] = s.success;
+            out.position_error.copy_from_slice(&s.position_error);
+            out.rotation_error.copy_from_slice(&s.rotation_error);
+            out.iterations[0] = u32::try_from(s.iterations).unwrap_or(u32::MAX);
+            out.restarts[0] = u32::try_from(s.restarts).unwrap_or(u32::MAX);
+        } else {
+            let result = py.detach(|| {
+                with_workers(threads, |workers: Workers<'_>| {
+                    solve_batch(
+                        &solver,
+                        &transforms,
+                        seeds.as_deref(),
+                        out,
+                        workers,
+                        &mut signals,
+                    )
+                })
+            })?;
+            if let Err(e) = result {
+                if let (IkError::Interrupted, Some(raised)) = (&e, signals.raised) {
+                    return Err(raised);
+                }
+                return Err(ik_error(&e));
             }
-            return Err(ik_error(&e));
         }
         let shape2 = |v: Vec<f64>, cols: usize| PyArray1::from_vec(py, v).reshape([n, cols]);
         Ok((
