@@ -190,7 +190,7 @@ impl Chain {
         let mut its = vec![0u32; n];
         let mut rs = vec![0u32; n];
         let mut signals = Signals::default();
-        let mut out = BatchOut {
+        let out = BatchOut {
             q: &mut q,
             success: &mut success,
             position_error: &mut pe,

@@ -141,6 +141,7 @@ pub(crate) fn fk_relative<'py>(
 
 /// `Chain.jacobian(..., base=)`: `(6, dof)` or `(N, 6, dof)`, rows `[v; ω]` of the motion
 /// relative to `base`, in its axes.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn jacobian_relative<'py>(
     robot: &Robot,
     py: Python<'py>,

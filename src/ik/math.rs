@@ -43,6 +43,7 @@ pub(super) fn cholesky_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
 
 /// [`cholesky_solve`] for order 6 in fixed-size arrays (the loops unrolled), with one division
 /// per row: `A` by its lower triangle, rows by rows.
+#[allow(clippy::needless_range_loop)] // the indices are the algorithm's, as in `cholesky_solve`
 pub(super) fn cholesky_solve6(a: &mut [[f64; 6]; 6], b: &mut [f64; 6]) -> bool {
     let mut inv = [0.0; 6];
     for i in 0..6 {
