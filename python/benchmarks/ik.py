@@ -94,6 +94,48 @@ def run(name, solve, chain, link, targets, seeds):
             f"{times.mean():.1f}", f"{1e6 / times.mean():,.0f}"]
 
 
+def clik(pin, chain, tip, urdf):
+    """Pinocchio's closed-loop IK example (damped least squares on log6 of the frame error,
+    Jlog6, integrate), with the joint limits clipped after each step, until the shared tolerance
+    or the budget. Its model is checked to give kinechain's poses first."""
+    model = pin.buildModelFromXML(urdf)
+    data = model.createData()
+    fid = model.getFrameId(tip, pin.BODY)
+    nj = sum(1 for n in chain.q_names)  # kinechain's q; Pinocchio's is as long, or longer (mimic)
+    k = min(nj, model.nq)
+
+    def to_pin(q):
+        qp = pin.neutral(model)
+        qp[:k] = q[:k]
+        return qp
+
+    for q in chain.random(20, seed=9):
+        pin.framesForwardKinematics(model, data, to_pin(q))
+        gap = np.abs(data.oMf[fid].homogeneous - chain.pose(q, tip)).max()
+        assert gap < 1e-12, f"Pinocchio's FK differs from kinechain's by {gap}"
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+
+    def solve(t, s):
+        goal = pin.SE3(t[:3, :3], t[:3, 3])
+        q = to_pin(s)
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < BUDGET:
+            pin.framesForwardKinematics(model, data, q)
+            i_m_d = data.oMf[fid].actInv(goal)
+            err = pin.log(i_m_d).vector
+            if np.linalg.norm(err[:3]) < TOL / 2 and np.linalg.norm(err[3:]) < TOL / 2:
+                out = s.copy()
+                out[:k] = q[:k]
+                return out
+            j = pin.computeFrameJacobian(model, data, q, fid)
+            j = -pin.Jlog6(i_m_d.inverse()) @ j
+            v = -j.T @ np.linalg.solve(j @ j.T + 1e-12 * np.eye(6), err)
+            q = np.clip(pin.integrate(model, q, v * 0.1), lo, hi)
+        return None
+
+    return solve
+
+
 def main():
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 2000
     robots = [("panda", "robots/panda.urdf", "panda_link0", "panda_hand"),
@@ -136,6 +178,12 @@ def main():
                 out[:nj] = q
                 return out
             rows.append(run("TRAC-IK (pytracik, Speed, eps 1e-6/√3 per component)", tracik, chain, tip, targets, seeds))
+        try:
+            import pinocchio as pin
+        except ImportError:
+            pin = None
+        if pin is not None:
+            rows.append(run("Pinocchio CLIK (its example: DT 0.1, damping 1e-12, limits clipped)", clik(pin, chain, tip, urdf_of(os.path.join(ROOT, path))), chain, tip, targets, seeds))
         for r in rows:
             print(f"| {label} | " + " | ".join(r) + " |")
         # Batches on all cores from tracking seeds, and from random seeds.

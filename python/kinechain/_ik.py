@@ -115,6 +115,8 @@ def ik(
     ``success`` is False and ``q`` the best found. Raises ``StateError`` for targets that are not
     rigid transforms or a seed that is out of limits or of the wrong length, ``Error`` for unknown
     links or joints and bad options."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+        raise Error(f"seed must be an integer in [0, 2**64), not {seed!r}")
     if (
         type(link) is str
         and type(target) is np.ndarray

@@ -177,3 +177,17 @@ def test_fk_and_jacobian_relative_to_a_base_link_agree_with_world_quantities():
         g1.fk(q, links=links, base="no_such")
     with pytest.raises(kc.Error, match="frame"):
         g1.jacobian(q, "left_rubber_hand", base="torso_link", frame="link")
+
+
+def test_options_out_of_range_raise_kinechain_errors():
+    c = robot("ur5.yaml")
+    t = c.pose(c.neutral(), "tool0")
+    for kw in (dict(seed=-1), dict(seed=2**64), dict(seed=1.5), dict(weights=[0] * 6), dict(time_limit=-1),
+               dict(iterations=0), dict(max_attempts=0), dict(start="zero")):
+        with pytest.raises(kc.Error):
+            c.ik(t, "tool0", **kw)
+    with pytest.raises(kc.StateError, match="NaN") as e:
+        c.ik(t, "tool0", np.full(6, np.nan))
+    assert str(e.value).count("is NaN") == 1, "the cause is said once"
+    r = c.ik(np.zeros((0, 4, 4)), "tool0")
+    assert r.q.shape == (0, 6) and r.success.shape == (0,)

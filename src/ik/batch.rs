@@ -73,9 +73,9 @@ pub fn solve_batch(
     need("restarts", n, out.restarts.len())?;
     for (row, t) in targets.chunks_exact(k).enumerate() {
         for (index, t) in t.iter().enumerate() {
-            check_target(t).map_err(|source| IkError::Row {
+            check_target(t).map_err(|why| IkError::Row {
                 row,
-                source: Box::new(IkError::Target { index, source }),
+                error: Box::new(IkError::Target { index, why }),
             })?;
         }
     }
@@ -83,7 +83,7 @@ pub fn solve_batch(
         for (row, q) in seeds.chunks_exact(nq.max(1)).enumerate().take(n) {
             check_q(solver.chain, q, LimitPolicy::Enforce).map_err(|e| IkError::Row {
                 row,
-                source: Box::new(IkError::Seed(e)),
+                error: Box::new(IkError::Seed(e)),
             })?;
         }
     }

@@ -212,16 +212,16 @@ pub enum IkError {
         goals: usize,
     },
     /// A target matrix is not a rigid transform.
-    #[error("target {index}: {source}")]
+    #[error("target {index}: {why}")]
     Target {
         /// Index of the target.
         index: usize,
         /// Why.
-        source: NotRigid,
+        why: NotRigid,
     },
     /// The seed cannot be evaluated: wrong length, non-finite, or outside a joint's limits.
     #[error("seed q0: {0}")]
-    Seed(#[source] StateError),
+    Seed(StateError),
     /// An input or output array of a batch has the wrong length.
     #[error("{what} has {got} entries, expected {expected}")]
     Length {
@@ -233,12 +233,12 @@ pub enum IkError {
         got: usize,
     },
     /// A row of a batch cannot be solved (its targets or seed).
-    #[error("row {row}: {source}")]
+    #[error("row {row}: {error}")]
     Row {
         /// The row.
         row: usize,
         /// Why.
-        source: Box<IkError>,
+        error: Box<IkError>,
     },
     /// The batch was stopped by its [`Interrupt`](crate::eval::batch::Interrupt).
     #[error("the solve was interrupted")]

@@ -246,7 +246,7 @@ impl<'c> Solver<'c> {
             });
         }
         for (index, t) in targets.iter().enumerate() {
-            check_target(t).map_err(|source| IkError::Target { index, source })?;
+            check_target(t).map_err(|why| IkError::Target { index, why })?;
         }
         match q0 {
             Some(q) => {
