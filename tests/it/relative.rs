@@ -151,3 +151,31 @@ fn relative_poses_rates_and_jacobians_are_the_rates_of_base_from_link() {
         &[("panda_hand", "panda_link3")],
     );
 }
+
+#[test]
+fn a_relative_jacobian_in_link_axes_is_the_base_axes_one_turned_into_the_link() {
+    let chain = repo_chain("robots/panda.urdf");
+    let (l, b) = (
+        chain.link_id("panda_hand").unwrap(),
+        chain.link_id("panda_link3").unwrap(),
+    );
+    let mut data = Data::new(&chain);
+    let q = chain.random_configurations(1, 5, (-1.0, 1.0));
+    let poses = forward_kinematics(&chain, &mut data, &q).unwrap();
+    let in_base = poses.jacobian_relative(l, b, JacobianFrame::World);
+    let in_link = poses.jacobian_relative(l, b, JacobianFrame::Link);
+    let turn: Matrix3<f64> = poses.base_from_link(b, l).rotation().transpose();
+    for c in 0..chain.dof() {
+        for half in [0, 3] {
+            let want = turn
+                * Vector3::new(
+                    in_base[(half, c)],
+                    in_base[(half + 1, c)],
+                    in_base[(half + 2, c)],
+                );
+            for k in 0..3 {
+                assert!((in_link[(half + k, c)] - want[k]).abs() < 1e-14);
+            }
+        }
+    }
+}

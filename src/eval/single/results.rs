@@ -77,10 +77,11 @@ impl<'a> Poses<'a> {
     /// ω_b × r)`, the rates of `base_from_link`'s rotation and origin (`r` the link origin's
     /// offset from the base origin, world axes; eqs. 2.41 and 2.120 for a point seen from a
     /// moving frame). With `JacobianFrame::Point(ū)` the point's velocity replaces the origin's;
-    /// `JacobianFrame::Link` is refused here (take `Link` rows from a world-axes Jacobian).
+    /// with `JacobianFrame::Link` both halves are in the link's own axes instead of the base's
+    /// (turned by `(R_bᵀ R)ᵀ`).
     ///
     /// # Panics
-    /// If a link comes from another chain with more links, or `frame` is `Link`.
+    /// If a link comes from another chain with more links.
     #[must_use]
     pub fn jacobian_relative(
         &self,
@@ -88,17 +89,24 @@ impl<'a> Poses<'a> {
         base: LinkId,
         frame: JacobianFrame,
     ) -> nalgebra::Matrix6xX<f64> {
-        assert!(
-            frame != JacobianFrame::Link,
-            "jacobian_relative takes World or Point"
-        );
+        let in_link_axes = frame == JacobianFrame::Link;
+        let frame = if in_link_axes {
+            JacobianFrame::World
+        } else {
+            frame
+        };
         let mut j = self.jacobian_in(link, frame);
         let jb = self.jacobian(base);
         let pose = self.world_from_link(link);
         let b = self.world_from_link(base);
         let p = add3(pose.p, pose.apply(frame.point()));
         let r = crate::model::transform::sub3(p, b.p);
-        let rt = b.rotation().transpose();
+        // Base axes, or the link's: `Aᵀ` of the frame the rows are written in.
+        let rt = if in_link_axes {
+            pose.rotation().transpose()
+        } else {
+            b.rotation().transpose()
+        };
         for c in 0..j.ncols() {
             let wb = Vector3::new(jb[(3, c)], jb[(4, c)], jb[(5, c)]);
             let v = Vector3::new(j[(0, c)], j[(1, c)], j[(2, c)])
