@@ -5,9 +5,8 @@ use crate::eval::jacobian::stored_jacobian;
 use crate::eval::layout::chain::Chain;
 use crate::eval::layout::stored::transform;
 use crate::eval::sampling::{SplitMix, between, range};
-use crate::eval::{Data, JacobianFrame, LimitPolicy};
+use crate::eval::{Data, JacobianFrame, LimitPolicy, Poses};
 use crate::eval::{check_q, forward_kinematics, forward_kinematics_to};
-use crate::model::chain::LinkId;
 use crate::model::transform::{Transform, add3, cross3, sub3};
 use std::f64::consts::TAU;
 use std::time::Instant;
@@ -646,7 +645,11 @@ impl<'c> Solver<'c> {
                     Err(_) => return f64::INFINITY,
                 }
             } else {
-                stored_link_pose(chain, &self.data, goal.link)
+                Poses {
+                    chain,
+                    data: &self.data,
+                }
+                .world_from_link(goal.link)
             };
             let p = add3(pose.p, pose.apply(goal.point));
             let frame = if goal.point == [0.0; 3] {
@@ -667,7 +670,11 @@ impl<'c> Solver<'c> {
             let (p, r) = match goal.base {
                 None => (p, pose.r),
                 Some(base) => {
-                    let b = stored_link_pose(chain, &self.data, base);
+                    let b = Poses {
+                        chain,
+                        data: &self.data,
+                    }
+                    .world_from_link(base);
                     let offset = sub3(p, b.p);
                     if jacobian {
                         stored_jacobian(
@@ -784,16 +791,5 @@ pub(super) fn gather(
         let mut v = [0.0; 3];
         v[k] = dx;
         rest.push((v, body, q));
-    }
-}
-
-/// A link's world pose from the stored body frames of the last evaluation.
-pub(super) fn stored_link_pose(chain: &Chain, data: &Data, link: LinkId) -> Transform {
-    let l = chain.carrier(link);
-    match l.body {
-        Some(b) => {
-            crate::eval::kernel::pose_columns::link_pose(&data.world_from_body[b], &l.offset)
-        }
-        None => l.offset.to_transform(),
     }
 }

@@ -43,25 +43,22 @@ pub(super) fn wrap(q: &mut [f64], vars: &[Var]) {
     }
 }
 pub(super) fn distance(metric: Distance, q: &[f64], seed: &[f64], vars: &[Var]) -> f64 {
-    let mut entries = Vec::with_capacity(vars.len());
-    for v in vars {
-        match *v {
-            Var::Scalar { q: i, .. } => entries.push(i),
-            Var::Shift { q: i, k, .. } => entries.push(i + k),
-            Var::Turn { q: i, k, .. } => {
-                entries.push(i + k + 1);
-                if k == 0 {
-                    entries.push(i);
-                }
-            }
-        }
-    }
-    let d = entries.iter().map(|&i| (q[i] - seed[i]).abs());
+    // The entries of `q` the variables move (a quaternion's w with its first turn), unallocated.
+    let entries = vars.iter().flat_map(|v| {
+        let (first, second) = match *v {
+            Var::Scalar { q: i, .. } => (i, None),
+            Var::Shift { q: i, k, .. } => (i + k, None),
+            Var::Turn { q: i, k, .. } => (i + k + 1, (k == 0).then_some(i)),
+        };
+        std::iter::once(first).chain(second)
+    });
+    let d = entries.map(|i| (q[i] - seed[i]).abs());
     match metric {
         Distance::L2 => d.map(|x| x * x).sum::<f64>().sqrt(),
         Distance::LInf => d.fold(0.0, f64::max),
     }
 }
+
 /// The variables the goals depend on (the joints on their links' and base links' paths), not
 /// locked, with their column in the full Jacobian, in `q̇` order.
 pub(super) fn variables(

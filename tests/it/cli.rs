@@ -2323,6 +2323,13 @@ fn ik_reaches_a_pose_that_fk_then_confirms_in_every_target_form() {
     }
 }
 
+/// `error` of `kinechain ik robots/ur5.yaml --link tool0` with `rest`.
+fn ur5_tool_ik_error(rest: &[&str]) -> String {
+    let mut args = vec!["ik", "robots/ur5.yaml", "--link", "tool0"];
+    args.extend_from_slice(rest);
+    error(&args)
+}
+
 #[test]
 fn ik_batches_lines_exits_1_for_an_unreached_target_and_names_bad_input() {
     let scratch = Scratch::new("ik-cli");
@@ -2363,58 +2370,15 @@ fn ik_batches_lines_exits_1_for_an_unreached_target_and_names_bad_input() {
         ])
         .contains("tool9")
     );
+    assert!(ur5_tool_ik_error(&["--target", "1,2"]).contains("2 numbers"));
+    assert!(ur5_tool_ik_error(&["--target", "0,0,0,2,0,0,0"]).contains("norm"));
     assert!(
-        error(&[
-            "ik",
-            "robots/ur5.yaml",
-            "--link",
-            "tool0",
-            "--target",
-            "1,2"
-        ])
-        .contains("2 numbers")
+        ur5_tool_ik_error(&["--target", "0.4,0.2,0.3", "--q0", "9,0,0,0,0,0"])
+            .contains("shoulder_pan")
     );
-    assert!(
-        error(&[
-            "ik",
-            "robots/ur5.yaml",
-            "--link",
-            "tool0",
-            "--target",
-            "0,0,0,2,0,0,0"
-        ])
-        .contains("norm")
-    );
-    assert!(
-        error(&[
-            "ik",
-            "robots/ur5.yaml",
-            "--link",
-            "tool0",
-            "--target",
-            "0.4,0.2,0.3",
-            "--q0",
-            "9,0,0,0,0,0"
-        ])
-        .contains("shoulder_pan")
-    );
-    assert!(
-        error(&[
-            "ik",
-            "robots/ur5.yaml",
-            "--link",
-            "tool0",
-            "--target",
-            "0.4,0.2,0.3",
-            "--lock",
-            "nope"
-        ])
-        .contains("nope")
-    );
+    assert!(ur5_tool_ik_error(&["--target", "0.4,0.2,0.3", "--lock", "nope"]).contains("nope"));
     let bad = scratch.write("bad.txt", "0.4,0.2,zero\n");
-    assert!(
-        error(&["ik", "robots/ur5.yaml", "--link", "tool0", "--batch", &bad]).contains("line 1")
-    );
+    assert!(ur5_tool_ik_error(&["--batch", &bad]).contains("line 1"));
 }
 
 #[test]
