@@ -41,40 +41,54 @@ pub(super) fn cholesky_solve(a: &mut [f64], m: usize, b: &mut [f64]) -> bool {
     true
 }
 
-/// [`cholesky_solve`] for order 6 in fixed-size arrays (the loops unrolled), with one division
-/// per row: `A` by its lower triangle, rows by rows.
+/// [`cholesky_solve`] for order 6, `A` by its lower triangle in rows padded to eight lanes, with
+/// one division per row. Every loop has constant bounds (the inner ones masked), so that the
+/// factorisation unrolls into straight-line code.
 #[allow(clippy::needless_range_loop)] // the indices are the algorithm's, as in `cholesky_solve`
-pub(super) fn cholesky_solve6(a: &mut [[f64; 6]; 6], b: &mut [f64; 6]) -> bool {
+#[inline(always)]
+pub(super) fn cholesky_solve6(a: &mut [[f64; 8]; 6], b: &mut [f64; 6]) -> bool {
     let mut inv = [0.0; 6];
-    for i in 0..6 {
-        for j in 0..=i {
-            let mut sum = a[i][j];
-            for k in 0..j {
-                sum -= a[i][k] * a[j][k];
+    for j in 0..6 {
+        // Column j: its diagonal, then the entries below it.
+        let mut d = a[j][j];
+        for k in 0..6 {
+            if k < j {
+                d -= a[j][k] * a[j][k];
             }
-            if i == j {
-                if sum.is_nan() || sum <= 0.0 {
-                    return false;
+        }
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j][j] = d;
+        inv[j] = 1.0 / d;
+        for i in 0..6 {
+            if i > j {
+                let mut sum = a[i][j];
+                for k in 0..6 {
+                    if k < j {
+                        sum -= a[i][k] * a[j][k];
+                    }
                 }
-                let d = sum.sqrt();
-                a[i][i] = d;
-                inv[i] = 1.0 / d;
-            } else {
                 a[i][j] = sum * inv[j];
             }
         }
     }
     for i in 0..6 {
         let mut sum = b[i];
-        for k in 0..i {
-            sum -= a[i][k] * b[k];
+        for k in 0..6 {
+            if k < i {
+                sum -= a[i][k] * b[k];
+            }
         }
         b[i] = sum * inv[i];
     }
     for i in (0..6).rev() {
         let mut sum = b[i];
-        for k in i + 1..6 {
-            sum -= a[k][i] * b[k];
+        for k in 0..6 {
+            if k > i {
+                sum -= a[k][i] * b[k];
+            }
         }
         b[i] = sum * inv[i];
     }

@@ -104,8 +104,16 @@ impl Clone for Solver<'_> {
 pub(super) const LAMBDA_FLOOR: f64 = 1e-12;
 
 /// Accepted steps in a row that each lower `E` by less than 1 % end an attempt: the search is
-/// at a local minimum (most often against a joint limit) and a restart does better.
+/// at a local minimum (most often against a joint limit) and a restart does better. (Fewer
+/// end attempts sooner — 3 takes the Panda's 2 000 random targets from 42.8 to 36.8 iterations
+/// a solve — but leave a failure's answer short of its least-squares minimum.)
 pub(super) const STALL: usize = 6;
+
+/// Every other restart draws each joint uniformly from the middle part of its range, this
+/// fraction of it (starts near a limit end at that limit more often); the others from the whole
+/// range (targets whose answers lie at the limits need those). Panda, 2 000 random targets:
+/// always the whole range 42.8 iterations a solve, always the middle half 35.4.
+pub(super) const RESTART_SPAN: f64 = 0.5;
 
 impl<'c> Solver<'c> {
     /// A solver for `goals` on `chain`.
@@ -274,7 +282,7 @@ impl<'c> Solver<'c> {
                 if out_of_time(began) {
                     break;
                 }
-                self.restart(&mut q, &mut rng);
+                self.restart(&mut q, &mut rng, attempts % 2 == 1);
             }
             attempts += 1;
             let (ok, used) = self.attempt(&mut q, targets, began);
@@ -320,13 +328,17 @@ impl<'c> Solver<'c> {
             .sum()
     }
 
-    /// A random configuration within the limits for the moving scalar entries; the others (locked
-    /// joints, floating and ball joints) keep the start's values.
-    fn restart(&self, q: &mut [f64], rng: &mut SplitMix) {
+    /// A random configuration within the limits for the moving scalar entries (in the middle
+    /// [`RESTART_SPAN`] of each range if `middle`); the others (locked joints, floating and ball joints) keep
+    /// the start's values.
+    fn restart(&self, q: &mut [f64], rng: &mut SplitMix, middle: bool) {
+        let span = if middle { RESTART_SPAN } else { 1.0 };
         q.copy_from_slice(&self.start);
         for v in &self.vars {
             if let Var::Scalar { q: i, lo, hi, .. } = *v {
                 let (a, b) = range(lo, hi);
+                let m = 0.5 * (a + b);
+                let (a, b) = (m + span * (a - m), m + span * (b - m));
                 q[i] = between(a, b, rng.unit()).clamp(lo, hi);
             }
         }
@@ -483,44 +495,7 @@ impl<'c> Solver<'c> {
     /// [`Solver::solve_step`] for one goal of six rows on at least six joints, in fixed-size
     /// arithmetic (the usual problem: a pose of an arm's tool).
     fn solve_step6(&mut self, lambda: f64) -> bool {
-        // J̃ J̃ᵀ + λ I: the lower triangle, a sum of the columns' outer products.
-        let mut a = [[0.0; 6]; 6];
-        for (col, held) in self.j.chunks_exact(6).zip(&self.held) {
-            if !*held {
-                for r1 in 0..6 {
-                    for r2 in 0..=r1 {
-                        a[r1][r2] += col[r1] * col[r2];
-                    }
-                }
-            }
-        }
-        for (k, row) in a.iter_mut().enumerate() {
-            row[k] += lambda;
-        }
-        let mut y = [0.0; 6];
-        y.copy_from_slice(&self.e[..6]);
-        if !cholesky_solve6(&mut a, &mut y) {
-            self.step.fill(0.0);
-            return false;
-        }
-        for ((s, col), held) in self
-            .step
-            .iter_mut()
-            .zip(self.j.chunks_exact(6))
-            .zip(&self.held)
-        {
-            *s = if *held {
-                0.0
-            } else {
-                col[0] * y[0]
-                    + col[1] * y[1]
-                    + col[2] * y[2]
-                    + col[3] * y[3]
-                    + col[4] * y[4]
-                    + col[5] * y[5]
-            };
-        }
-        true
+        step6(&self.j, &self.held, lambda, &self.e, &mut self.step)
     }
 
     /// `self.candidate` ← `q` moved by `self.step`, each scalar cut at its limits. Marks as held
@@ -754,6 +729,47 @@ impl<'c> Solver<'c> {
         }
         cost
     }
+}
+
+crate::eval::simd::isa::fma_dispatch!(avx2 fn step6(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut [f64]) -> bool => step6_generic);
+
+/// The damped step of one six-row goal, `step = J̃ᵀ (J̃ J̃ᵀ + λ I)⁻¹ e` (`J̃`: `j`, six rows by
+/// columns, with the `held` columns zeroed). False, with a zero step, if the system cannot be
+/// solved. Compiled per instruction set (wider vectors, no fused operations: the same bits on
+/// every CPU).
+#[inline(always)]
+fn step6_generic<A>(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut [f64]) -> bool {
+    // J̃ J̃ᵀ + λ I, a sum of the columns' outer products, by rows padded to eight lanes (constant
+    // bounds: it stays in vector registers).
+    let mut a = [[0.0; 8]; 6];
+    for (col, held) in j.chunks_exact(6).zip(held) {
+        let mut c = [0.0; 8];
+        if !*held {
+            c[..6].copy_from_slice(col);
+        }
+        for (row, x) in a.iter_mut().zip(c) {
+            for (y, z) in row.iter_mut().zip(c) {
+                *y += x * z;
+            }
+        }
+    }
+    for (k, row) in a.iter_mut().enumerate() {
+        row[k] += lambda;
+    }
+    let mut y = [0.0; 6];
+    y.copy_from_slice(&e[..6]);
+    if !cholesky_solve6(&mut a, &mut y) {
+        step.fill(0.0);
+        return false;
+    }
+    for ((s, col), held) in step.iter_mut().zip(j.chunks_exact(6)).zip(held) {
+        *s = if *held {
+            0.0
+        } else {
+            col[0] * y[0] + col[1] * y[1] + col[2] * y[2] + col[3] * y[3] + col[4] * y[4] + col[5] * y[5]
+        };
+    }
+    true
 }
 
 /// `a` ← the Jacobian of the relative motion: with `J_b` the base's (world axes, at its origin)
