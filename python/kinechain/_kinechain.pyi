@@ -109,6 +109,13 @@ class Chain:
     def link_names(self) -> list[str]:
         """Every link, in the chain's order."""
     @property
+    def joints(self) -> list[dict[str, Any]]:
+        """The tree: each joint's name, type, parent and child links, axis, origin and post
+        (4 × 4), theta and d at q = 0, its first index in q (or None) and its mimic (or None)."""
+    @property
+    def parents(self) -> dict[str, Optional[str]]:
+        """Each link's parent link (None for the root)."""
+    @property
     def lower(self) -> npt.NDArray[np.float64]:
         """Smallest admitted value of each entry of q (-inf where unlimited)."""
     @property

@@ -21,10 +21,10 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from . import Chain
-from ._kinechain import LogError, _read_joint_states
+from ._kinechain import LogError, StateError, _read_joint_states
 from . import table as _table
 
-__all__ = ["joint_states", "lerobot", "lerobot_names", "lerobot_files", "LogError"]
+__all__ = ["joint_states", "write_tf", "lerobot", "lerobot_names", "lerobot_files", "LogError"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -212,3 +212,66 @@ def lerobot(
                        calibration=calibration, fixed=fixed, on_error=on_error, threads=threads)
     return out.to_pandas() if to == "pandas" else out
 
+
+
+def write_tf(
+    chain: Chain,
+    source: Any,
+    path: PathLike,
+    *,
+    topic: str = "/joint_states",
+    time: str = "time",
+    q_column: Optional[str] = None,
+    names: Any = None,
+    units: str = "rad",
+    calibration: Optional[Mapping[str, Any]] = None,
+    fixed: Optional[Mapping[str, float]] = None,
+    frame_prefix: str = "",
+    world_frame: str = "world",
+) -> Dict[str, int]:
+    """Writes what ``robot_state_publisher`` would have published for a joint log to the MCAP
+    file ``path`` (a ROS 2 bag that Foxglove, Lichtblick, RViz through ``ros2 bag play`` and
+    Rerun read): ``/tf`` (``tf2_msgs/msg/TFMessage``, one message per row, stamped with its time,
+    one transform per moving joint: parent link → child link), ``/tf_static`` (the fixed joints,
+    once, recorded transient local) and ``/robot_description`` (``std_msgs/msg/String``: the
+    URDF the chain was read from, or the one ``kinechain convert`` writes for the other formats).
+
+    ``source`` is the path of a ROS bag (the ``sensor_msgs/JointState`` messages of ``topic``),
+    or a table (pandas or pyarrow: a LeRobot episode's Parquet file, a log) with a ``time``
+    column — int64 nanoseconds, or float seconds (LeRobot's ``timestamp``) — and the joint
+    values ``kinechain.table.poses`` reads (``q_column``, ``names``, ``units``, ``calibration``,
+    ``fixed`` as there). Rows whose joint values are not all known are left out. Frame ids are
+    link names after ``frame_prefix``; a floating base moves in ``world_frame``. ``path`` is
+    never one of the files read.
+
+    Returns ``{"messages": …, "moving": …, "fixed": …}``. Raises ``LogError`` for an unreadable
+    bag or one that lacks a joint, ``StateError`` for a table that lacks one or a row the chain
+    refuses (named by index and time)."""
+    inputs: List[str] = []
+    if isinstance(source, (str, os.PathLike)):
+        inputs.append(os.fspath(source))
+        bag = joint_states(source, topic, to="arrow")
+        if bag.num_rows == 0:
+            # An empty topic names no joints: the file still gets the static frames.
+            messages, moving, fixed_joints = chain._write_tf([], np.zeros((0, chain.nq)), os.fspath(path), inputs,
+                                                             frame_prefix, world_frame)
+            return {"messages": messages, "moving": moving, "fixed": fixed_joints}
+        lacking = [n for n in chain.q_names if n not in bag.column_names]
+        if lacking:
+            raise LogError(f"{os.fspath(source)}: topic {topic} has no joint {lacking[0]!r} "
+                           f"(it has {', '.join(c for c in bag.column_names if c != 'time')})")
+        source, time = bag, "time"
+    arrow = _table._is_arrow(source)
+    column_names = list(source.column_names) if arrow else [str(c) for c in source.columns]
+    if time not in column_names:
+        raise StateError(f"no column {time!r} for the time (columns: {', '.join(column_names)})")
+    stamps = np.asarray(source.column(time).to_numpy(zero_copy_only=False) if arrow else source[time].to_numpy())
+    if stamps.dtype.kind == "f":
+        stamps = np.round(stamps * 1e9)
+    stamps = stamps.astype(np.int64)
+    q, _, _ = _table._joint_values(source, chain, q_column, arrow, names, units, calibration, fixed)
+    known = ~np.isnan(q).any(axis=1)
+    stamps, q = stamps[known], np.ascontiguousarray(q[known])
+    messages, moving, fixed_joints = chain._write_tf(stamps.tolist(), q, os.fspath(path), inputs, frame_prefix,
+                                                     world_frame)
+    return {"messages": messages, "moving": moving, "fixed": fixed_joints}

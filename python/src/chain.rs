@@ -31,6 +31,11 @@ pub(crate) struct Chain {
 }
 
 impl Chain {
+    /// The URDF text the chain was read from (after xacro), if it was read from URDF.
+    pub(crate) fn urdf_text(&self) -> Option<String> {
+        (self.format == "urdf").then(|| self.source.clone())
+    }
+
     fn new(
         py: Python<'_>,
         inner: Inner,
@@ -344,6 +349,76 @@ impl Chain {
     #[getter]
     fn joint_names(&self) -> Vec<String> {
         variable_names(&self.robot.inner)
+    }
+
+    /// The tree: every joint (fixed and mimic ones too) in the chain's order as a dict of its
+    /// `name`, `type`, `parent` and `child` links, `axis` (joint frame), `origin` and `post`
+    /// (4 × 4 nested lists: the child's frame is `parent · origin · M(θ, d) · post`, `M` the
+    /// motion about and along `axis`, eq. 2.119), `theta` and `d` at `q = 0`, `q` (the index of
+    /// its first entry of `q`, or None) and `mimic` (`joint`, `multiplier`, `offset`, or None).
+    #[getter]
+    fn joints<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+        let chain = &self.robot.inner;
+        let matrix = |t: &kinechain::Transform| -> Vec<[f64; 4]> {
+            (0..4)
+                .map(|i| {
+                    if i < 3 {
+                        [t.r[0][i], t.r[1][i], t.r[2][i], t.p[i]]
+                    } else {
+                        [0.0, 0.0, 0.0, 1.0]
+                    }
+                })
+                .collect()
+        };
+        chain
+            .description()
+            .joints()
+            .iter()
+            .map(|spec| {
+                let d = pyo3::types::PyDict::new(py);
+                d.set_item("name", &spec.name)?;
+                d.set_item("type", spec.kind.as_str())?;
+                d.set_item("parent", &spec.parent)?;
+                d.set_item("child", &spec.child)?;
+                d.set_item("axis", spec.axis.to_vec())?;
+                d.set_item("origin", matrix(&spec.origin))?;
+                d.set_item("post", matrix(&spec.post))?;
+                d.set_item("theta", spec.theta)?;
+                d.set_item("d", spec.d)?;
+                let q = chain
+                    .joint_id(&spec.name)
+                    .ok()
+                    .and_then(|j| chain.joint(j).q_index());
+                d.set_item("q", q)?;
+                match &spec.mimic {
+                    Some(m) => {
+                        let mimic = pyo3::types::PyDict::new(py);
+                        mimic.set_item("joint", &m.joint)?;
+                        mimic.set_item("multiplier", m.multiplier)?;
+                        mimic.set_item("offset", m.offset)?;
+                        d.set_item("mimic", mimic)?;
+                    }
+                    None => d.set_item("mimic", py.None())?,
+                }
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// Each link's parent link (None for the root).
+    #[getter]
+    fn parents(&self) -> std::collections::HashMap<String, Option<String>> {
+        let chain = &self.robot.inner;
+        chain
+            .links()
+            .iter()
+            .map(|l| {
+                let parent = l
+                    .parent_joint()
+                    .map(|j| chain.link(chain.joint(j).parent()).name().to_string());
+                (l.name().to_string(), parent)
+            })
+            .collect()
     }
 
     /// Every link, in the chain's order.

@@ -34,6 +34,7 @@ mod results;
 mod robot;
 mod run;
 mod spare;
+mod tf;
 
 use chain::Chain;
 use errors::{Error, LoadError, LogError, StateError};

@@ -210,6 +210,18 @@ pub(super) struct FkArgs {
     /// The topic of --bag.
     #[arg(long, requires = "bag", default_value = crate::io::bag::DEFAULT_TOPIC)]
     pub(super) topic: String,
+    /// With --bag: instead of printing results, write what robot_state_publisher would have
+    /// published for the log to this MCAP file (a ROS 2 bag): /tf (one tf2_msgs/TFMessage per
+    /// JointState message, one transform per moving joint), /tf_static (the fixed joints, once,
+    /// transient local) and /robot_description (the URDF). Never over an input.
+    #[arg(long, value_name = "OUT.mcap", requires = "bag", conflicts_with_all = ["links", "base", "points", "jacobians", "keep_going"])]
+    pub(super) tf: Option<PathBuf>,
+    /// With --tf: put this before every frame id (several robots in one file).
+    #[arg(long, requires = "tf", default_value = "")]
+    pub(super) frame_prefix: String,
+    /// With --tf: the frame a floating base moves in.
+    #[arg(long, requires = "tf", default_value = "world")]
+    pub(super) world_frame: String,
     /// Only these links (repeatable); only the joints they depend on are evaluated.
     #[arg(long = "link", value_name = "NAME")]
     pub(super) links: Vec<String>,

@@ -92,3 +92,37 @@ pub(super) fn fk_bag(
     }
     Ok(())
 }
+
+/// `fk --bag IN --tf OUT`: the log's TF, written to `OUT` ([`crate::io::tf`]); a line on standard
+/// error says what was written.
+pub(super) fn tf_bag(chain: &Chain, args: &FkArgs, path: &Path, tf: &Path) -> Result<(), CliError> {
+    use crate::io::tf::{TfOptions, rows_of_log, write_tf};
+    let log = read_joint_states(path, &JointStateOptions::new(&args.topic))?;
+    let (time, q) = rows_of_log(chain, &log)?;
+    let skipped = log.len() - time.len();
+    let description = if args.robot.extension().is_some_and(|e| e == "urdf") {
+        std::fs::read_to_string(&args.robot).ok()
+    } else {
+        None
+    };
+    let options = TfOptions {
+        frame_prefix: args.frame_prefix.clone(),
+        world_frame: args.world_frame.clone(),
+        description,
+    };
+    let summary = write_tf(chain, &time, &q, tf, &[path, &args.robot], &options)?;
+    let _ = writeln!(
+        std::io::stderr(),
+        "{}: {} /tf message(s) of {} transform(s), /tf_static of {}, /robot_description{}",
+        tf.display(),
+        summary.messages,
+        summary.moving,
+        summary.fixed,
+        if skipped > 0 {
+            format!(" ({skipped} message(s) before every joint had a value: skipped)")
+        } else {
+            String::new()
+        }
+    );
+    Ok(())
+}

@@ -81,6 +81,9 @@ pub enum CliError {
     /// A ROS bag could not be read as joint states.
     #[error(transparent)]
     Bag(#[from] crate::io::bag::BagError),
+    /// A TF file that could not be written.
+    #[error(transparent)]
+    Tf(#[from] crate::io::tf::TfError),
     /// The bag's topic does not name every joint of the chain.
     #[error(
         "{}: topic {topic} has no values for joints {} (its joints: {})",

@@ -25,6 +25,9 @@ pub(super) fn fk(
     if args.format == OutputFormat::Csv {
         write_line(out, &csv_header(&chain, args))?;
     }
+    if let (Some(path), Some(tf)) = (&args.bag, &args.tf) {
+        return crate::cli::bag::tf_bag(&chain, args, path, tf);
+    }
     if let Some(path) = &args.bag {
         return fk_bag(&chain, args, &mut data, &mut request, path, out);
     }

@@ -52,6 +52,7 @@ pub(super) fn info(
                         m.insert("nq".into(), json!(j.nq()));
                     }
                     m.insert("limits".into(), limits_json(j));
+                    tree_json(chain, j, &mut m);
                     Value::Object(m)
                 })
                 .collect();
@@ -60,6 +61,7 @@ pub(super) fn info(
                     let mut m = Map::new();
                     m.insert("name".into(), json!(j.name()));
                     m.insert("type".into(), json!(j.kind().as_str()));
+                    tree_json(chain, j, &mut m);
                     if let Some(mimic) = j.mimic() {
                         m.insert(
                             "mimic".into(),
@@ -178,5 +180,25 @@ fn quaternion_note(chain: &crate::eval::Chain) -> String {
     match parts.as_slice() {
         [] => String::new(),
         _ => format!("; q has {} entries ({})", chain.nq(), parts.join("; ")),
+    }
+}
+
+/// The joint's place in the tree: its `parent` and `child` links, `axis` (joint frame), and
+/// `origin` and `post` as 4 × 4 rows (the child's frame is `parent · origin · M(θ, d) · post`,
+/// eq. 2.119), with `theta` and `d` at `q = 0`.
+fn tree_json(chain: &Chain, j: &crate::Joint, m: &mut Map<String, Value>) {
+    m.insert("parent".into(), json!(chain.link(j.parent()).name()));
+    m.insert("child".into(), json!(chain.link(j.child()).name()));
+    m.insert("axis".into(), json!(j.axis()));
+    if let Some(spec) = chain
+        .description()
+        .joints()
+        .iter()
+        .find(|s| s.name == j.name())
+    {
+        m.insert("origin".into(), json!(spec.origin.to_rows()));
+        m.insert("post".into(), json!(spec.post.to_rows()));
+        m.insert("theta".into(), json!(spec.theta));
+        m.insert("d".into(), json!(spec.d));
     }
 }

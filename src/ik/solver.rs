@@ -766,7 +766,12 @@ fn step6_generic<A>(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut
         *s = if *held {
             0.0
         } else {
-            col[0] * y[0] + col[1] * y[1] + col[2] * y[2] + col[3] * y[3] + col[4] * y[4] + col[5] * y[5]
+            col[0] * y[0]
+                + col[1] * y[1]
+                + col[2] * y[2]
+                + col[3] * y[3]
+                + col[4] * y[4]
+                + col[5] * y[5]
         };
     }
     true

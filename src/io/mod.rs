@@ -10,6 +10,8 @@ pub mod input;
 mod mjcf;
 pub mod output;
 pub mod render;
+#[cfg(feature = "logs")]
+pub mod tf;
 mod urdf;
 pub mod xacro;
 pub(crate) mod xml;

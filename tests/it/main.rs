@@ -44,5 +44,7 @@ mod rotation;
 mod state_errors;
 #[cfg(feature = "reference")]
 mod stress;
+#[cfg(feature = "logs")]
+mod tf;
 mod urdf_reading;
 mod xacro;
