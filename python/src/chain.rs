@@ -359,17 +359,7 @@ impl Chain {
     #[getter]
     fn joints<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
         let chain = &self.robot.inner;
-        let matrix = |t: &kinechain::Transform| -> Vec<[f64; 4]> {
-            (0..4)
-                .map(|i| {
-                    if i < 3 {
-                        [t.r[0][i], t.r[1][i], t.r[2][i], t.p[i]]
-                    } else {
-                        [0.0, 0.0, 0.0, 1.0]
-                    }
-                })
-                .collect()
-        };
+        let matrix = |t: &kinechain::Transform| t.to_rows().to_vec();
         chain
             .description()
             .joints()
