@@ -4,7 +4,9 @@
    ``kinechain.table`` (no row loop), against the per-row Python loop it replaces, same run.
 2. An MCAP bag of 1 M ``JointState`` messages (the Panda's 7 arm joints, CDR, zstd chunks) to
    ``panda_hand`` poses: ``kc.logs.joint_states`` then ``kc.table.poses``, one core; against
-   ``mcap-ros2-support``'s decoder on the first 100 000 messages.
+   ``mcap-ros2-support``'s decoder on the first 100 000 messages; and to TF
+   (``kc.logs.write_tf``). ``python python/benchmarks/logs.py N bag`` runs this part alone on N
+   messages.
 3. A LeRobot-layout dataset of ROWS rows (default 2 M; 16 Parquet files) to end-effector poses:
    ``kc.logs.lerobot`` on one core, and ``dask_poses.py``'s ``map_partitions`` (to Parquet) on
    a LocalCluster of two worker processes.
@@ -130,8 +132,16 @@ def bag(n):
                 break
 
     slow = best(python_decoder, rounds=1) * n / m
+    # TF out: the log (with the gripper's value) to /tf, /tf_static and /robot_description.
+    out = path + ".tf.mcap"
+    table = log.append_column("panda_finger_joint1", pa.array(np.zeros(log.num_rows)))
+    tf = best(lambda: kc.logs.write_tf(chain, table, out), rounds=2)
+    tf_size = os.path.getsize(out) / 2**20
+    os.remove(out)
     size = os.path.getsize(path) / 2**20
     os.remove(path)
+    print(f"   TF out (kc.logs.write_tf: 9 moving joints a message, LZ4 chunks), 1 thread: {n / tf / 1e6:.2f} M msgs/s "
+          f"({tf_size:.0f} MiB); read + TF: {n / (read + tf) / 1e6:.2f} M msgs/s")
     print(f"2. MCAP bag, {n} JointState messages of 7 joints ({size:.0f} MiB, zstd): read {n / read / 1e6:.2f} M msgs/s; "
           f"mcap-ros2-support's decoder {n / slow / 1e6:.3f} M msgs/s ({slow / read:.0f}x slower); "
           f"read + panda_hand poses, 1 thread: {n / (read + poses) / 1e6:.2f} M rows/s")
@@ -172,6 +182,8 @@ def lerobot(n):
 
 def main():
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 2_000_000
+    if len(sys.argv) > 2 and sys.argv[2] == "bag":
+        return bag(n)
     print(f"CPU: {cpu()}, {os.cpu_count()} logical cores")
     lists(n)
     bag(1_000_000)

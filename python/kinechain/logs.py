@@ -253,7 +253,7 @@ def write_tf(
         bag = joint_states(source, topic, to="arrow")
         if bag.num_rows == 0:
             # An empty topic names no joints: the file still gets the static frames.
-            messages, moving, fixed_joints = chain._write_tf([], np.zeros((0, chain.nq)), os.fspath(path), inputs,
+            messages, moving, fixed_joints = chain._write_tf(np.zeros(0, np.int64), np.zeros((0, chain.nq)), os.fspath(path), inputs,
                                                              frame_prefix, world_frame)
             return {"messages": messages, "moving": moving, "fixed": fixed_joints}
         lacking = [n for n in chain.q_names if n not in bag.column_names]
@@ -272,6 +272,6 @@ def write_tf(
     q, _, _ = _table._joint_values(source, chain, q_column, arrow, names, units, calibration, fixed)
     known = ~np.isnan(q).any(axis=1)
     stamps, q = stamps[known], np.ascontiguousarray(q[known])
-    messages, moving, fixed_joints = chain._write_tf(stamps.tolist(), q, os.fspath(path), inputs, frame_prefix,
+    messages, moving, fixed_joints = chain._write_tf(np.ascontiguousarray(stamps), q, os.fspath(path), inputs, frame_prefix,
                                                      world_frame)
     return {"messages": messages, "moving": moving, "fixed": fixed_joints}

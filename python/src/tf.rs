@@ -19,7 +19,7 @@ impl Chain {
     fn _write_tf(
         &self,
         py: Python<'_>,
-        time: Vec<i64>,
+        time: numpy::PyReadonlyArray1<'_, i64>,
         q: &Bound<'_, PyAny>,
         path: PathBuf,
         inputs: Vec<PathBuf>,
@@ -27,6 +27,7 @@ impl Chain {
         world_frame: String,
     ) -> PyResult<(usize, usize, usize)> {
         let chain = &self.robot.inner;
+        let time = time.as_slice()?.to_vec();
         let q = float_array(q, "q")?;
         let q = q.as_slice()?.to_vec();
         let options = TfOptions {

@@ -738,6 +738,7 @@ crate::eval::simd::isa::fma_dispatch!(avx2 fn step6(j: &[f64], held: &[bool], la
 /// solved. Compiled per instruction set (wider vectors, no fused operations: the same bits on
 /// every CPU).
 #[inline(always)]
+#[allow(clippy::extra_unused_type_parameters)] // `fma_dispatch` names one per instruction set
 fn step6_generic<A>(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut [f64]) -> bool {
     // J̃ J̃ᵀ + λ I, a sum of the columns' outer products, by rows padded to eight lanes (constant
     // bounds: it stays in vector registers).

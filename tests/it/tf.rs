@@ -88,19 +88,17 @@ fn decode(bytes: &[u8]) -> Vec<Stamped> {
     out
 }
 
-/// The file's messages by topic, with the channels' metadata.
-fn topics(
-    path: &str,
-) -> HashMap<
+/// A topic's messages (log time, bytes), its schema ("name encoding") and its channel metadata.
+type Topic = (
+    Vec<(u64, Vec<u8>)>,
     String,
-    (
-        Vec<(u64, Vec<u8>)>,
-        String,
-        std::collections::BTreeMap<String, String>,
-    ),
-> {
+    std::collections::BTreeMap<String, String>,
+);
+
+/// The file's messages by topic, with the channels' metadata.
+fn topics(path: &str) -> HashMap<String, Topic> {
     let bytes = std::fs::read(path).unwrap();
-    let mut out: HashMap<String, (Vec<(u64, Vec<u8>)>, String, _)> = HashMap::new();
+    let mut out: HashMap<String, Topic> = HashMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let schema = m.channel.schema.as_ref().unwrap();
