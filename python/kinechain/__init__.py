@@ -22,7 +22,7 @@ import numpy as np
 
 from ._kinechain import Chain, Error, FkResult, LoadError, LogError, StateError, __version__, _expand_xacro
 
-__all__ = ["Chain", "Error", "FkResult", "IkResult", "LoadError", "LogError", "StateError", "expand_xacro", "load", "logs", "orientation", "table", "testing", "__version__"]
+__all__ = ["Chain", "Error", "FkResult", "IkResult", "LoadError", "LogError", "StateError", "View", "expand_xacro", "load", "logs", "orientation", "table", "testing", "__version__"]
 
 
 def _xacro_keywords(args: Any, package_paths: Any) -> tuple:
@@ -109,3 +109,4 @@ def _float_array(x: Any, name: str) -> np.ndarray:
 
 from . import logs, orientation, table, testing  # noqa: E402  (joint logs; orientation coordinates; tables; assertions for test suites)
 from ._ik import IkResult  # noqa: E402  (adds Chain.ik)
+from ._view import View  # noqa: E402  (adds Chain.view)

@@ -1,5 +1,6 @@
 """Type stubs of the compiled half of kinechain (the Chain class and the exceptions)."""
 
+import os
 from typing import Any, Iterable, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -7,6 +8,12 @@ import numpy.typing as npt
 
 
 __version__: str
+
+class View:
+    """A self-contained HTML page of the robot: html, _repr_html_(), save(path)."""
+    html: str
+    def _repr_html_(self) -> str: ...
+    def save(self, path: Union[str, os.PathLike[str]]) -> None: ...
 
 class IkResult:
     """What Chain.ik found: q, success, position_error (m), rotation_error (rad), iterations,
@@ -219,6 +226,8 @@ class Chain:
     ) -> "IkResult":
         """Joint values that put link (or links) at target: (4, 4) / (N, 4, 4) poses or (3,) /
         (N, 3) positions, in the world or in base's frame; see kinechain._ik.ik."""
+    def view(self, q: Optional[npt.ArrayLike] = None, *, times: Optional[npt.ArrayLike] = None) -> "View":
+        """The robot at q, or along (N, nq) rows with a timeline, as a self-contained HTML page."""
     def __reduce__(self) -> Tuple[Any, Tuple[str, str]]: ...
     def __eq__(self, other: object) -> bool: ...
     def __hash__(self) -> int: ...

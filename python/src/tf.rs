@@ -53,3 +53,23 @@ impl Chain {
         Ok((summary.messages, summary.moving, summary.fixed))
     }
 }
+
+#[pymethods]
+impl Chain {
+    /// The HTML page of `kinechain::io::view` for rows `q` (`(n, nq)`, row-major) stamped
+    /// `times` (ns) or 0.1 s apart.
+    #[pyo3(signature = (q, times=None))]
+    fn _view_html(
+        &self,
+        q: &Bound<'_, PyAny>,
+        times: Option<numpy::PyReadonlyArray1<'_, i64>>,
+    ) -> PyResult<String> {
+        let q = float_array(q, "q")?;
+        let times = match &times {
+            Some(t) => Some(t.as_slice()?),
+            None => None,
+        };
+        kinechain::io::view::page(&self.robot.inner, q.as_slice()?, times)
+            .map_err(|e| StateError::new_err(e.to_string()))
+    }
+}

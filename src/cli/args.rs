@@ -102,6 +102,24 @@ pub(super) enum Command {
         #[arg(long)]
         ignore_limits: bool,
     },
+    /// Write one self-contained HTML page that draws the robot (stick figure, link frames, joint
+    /// axes), with a slider per joint and, for a bag, a timeline; it evaluates the chain itself.
+    View {
+        /// Robot file.
+        robot: PathBuf,
+        /// Joint positions to show (same forms as for fk; default: the neutral configuration).
+        #[arg(long, allow_hyphen_values = true, conflicts_with = "bag")]
+        q: Option<String>,
+        /// A ROS bag (MCAP): its JointState messages as a trajectory with a timeline.
+        #[arg(long, value_name = "FILE")]
+        bag: Option<PathBuf>,
+        /// The topic of --bag.
+        #[arg(long, requires = "bag", default_value = crate::io::bag::DEFAULT_TOPIC)]
+        topic: String,
+        /// Output file (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
     /// Time per configuration of each evaluation mode, and its error against a high-precision
     /// evaluation of the same model; the `k` crate in the same rounds, on the robot file or (DH
     /// tables, the axis form) on the URDF `convert` writes.

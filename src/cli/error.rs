@@ -18,6 +18,9 @@ pub enum CliError {
     /// An inverse-kinematics target, option or solve that failed.
     #[error("{0}")]
     Ik(String),
+    /// A page that could not be made (`view`).
+    #[error("{0}")]
+    View(String),
     /// A joint-space vector could not be read.
     #[error(transparent)]
     Input(#[from] InputError),

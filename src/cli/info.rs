@@ -186,7 +186,7 @@ fn quaternion_note(chain: &crate::eval::Chain) -> String {
 /// The joint's place in the tree: its `parent` and `child` links, `axis` (joint frame), and
 /// `origin` and `post` as 4 × 4 rows (the child's frame is `parent · origin · M(θ, d) · post`,
 /// eq. 2.119), with `theta` and `d` at `q = 0`.
-fn tree_json(chain: &Chain, j: &crate::Joint, m: &mut Map<String, Value>) {
+fn tree_json(chain: &Chain, j: &crate::model::chain::Joint, m: &mut Map<String, Value>) {
     m.insert("parent".into(), json!(chain.link(j.parent()).name()));
     m.insert("child".into(), json!(chain.link(j.child()).name()));
     m.insert("axis".into(), json!(j.axis()));

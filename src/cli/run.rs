@@ -59,6 +59,9 @@ pub fn main_with(stdout_closed: bool) -> ExitCode {
         } | Command::Render {
             output: Some(_),
             ..
+        } | Command::View {
+            output: Some(_),
+            ..
         } | Command::Record {
             output: Some(_),
             ..
@@ -160,6 +163,40 @@ pub(super) fn run(
                     place: e.place,
                 })?;
             write_output(output.as_ref(), &robot, &drawing, out)
+        }
+        Command::View {
+            robot,
+            q,
+            bag,
+            topic,
+            output,
+        } => {
+            refuse_overwrite(output.as_ref(), &robot)?;
+            if let (Some(out), Some(bag)) = (output.as_ref(), bag.as_ref()) {
+                refuse_overwrite(Some(out), bag)?;
+            }
+            let chain = load(&robot, options)?;
+            let (rows, times) = match (&q, &bag) {
+                (_, Some(bag)) => {
+                    let log = crate::io::bag::read_joint_states(
+                        bag,
+                        &crate::io::bag::JointStateOptions::new(&topic),
+                    )?;
+                    let (time, rows) = crate::io::tf::rows_of_log(&chain, &log)?;
+                    if time.is_empty() {
+                        return Err(CliError::View(format!(
+                            "{}: no message of {topic} gives every joint of the chain a value",
+                            bag.display()
+                        )));
+                    }
+                    (rows, Some(time))
+                }
+                (Some(q), None) => (joint_vector_from_str(&chain, q, "q")?, None),
+                (None, None) => (chain.neutral(), None),
+            };
+            let page = crate::io::view::page(&chain, &rows, times.as_deref())
+                .map_err(|e| CliError::View(e.to_string()))?;
+            write_output(output.as_ref(), &robot, &page, out)
         }
         Command::Record {
             robot,

@@ -95,6 +95,53 @@ pub(super) fn cholesky_solve6(a: &mut [[f64; 8]; 6], b: &mut [f64; 6]) -> bool {
     true
 }
 
+crate::eval::simd::isa::fma_dispatch!(avx2 pub(super) fn step6(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut [f64]) -> bool => step6_generic);
+
+/// The damped step of one six-row goal, `step = J̃ᵀ (J̃ J̃ᵀ + λ I)⁻¹ e` (`J̃`: `j`, six rows by
+/// columns, with the `held` columns zeroed). False, with a zero step, if the system cannot be
+/// solved. Compiled per instruction set (wider vectors, no fused operations: the same bits on
+/// every CPU).
+#[inline(always)]
+#[allow(clippy::extra_unused_type_parameters)] // `fma_dispatch` names one per instruction set
+fn step6_generic<A>(j: &[f64], held: &[bool], lambda: f64, e: &[f64], step: &mut [f64]) -> bool {
+    // J̃ J̃ᵀ + λ I, a sum of the columns' outer products, by rows padded to eight lanes (constant
+    // bounds: it stays in vector registers).
+    let mut a = [[0.0; 8]; 6];
+    for (col, held) in j.chunks_exact(6).zip(held) {
+        let mut c = [0.0; 8];
+        if !*held {
+            c[..6].copy_from_slice(col);
+        }
+        for (row, x) in a.iter_mut().zip(c) {
+            for (y, z) in row.iter_mut().zip(c) {
+                *y += x * z;
+            }
+        }
+    }
+    for (k, row) in a.iter_mut().enumerate() {
+        row[k] += lambda;
+    }
+    let mut y = [0.0; 6];
+    y.copy_from_slice(&e[..6]);
+    if !cholesky_solve6(&mut a, &mut y) {
+        step.fill(0.0);
+        return false;
+    }
+    for ((s, col), held) in step.iter_mut().zip(j.chunks_exact(6)).zip(held) {
+        *s = if *held {
+            0.0
+        } else {
+            col[0] * y[0]
+                + col[1] * y[1]
+                + col[2] * y[2]
+                + col[3] * y[3]
+                + col[4] * y[4]
+                + col[5] * y[5]
+        };
+    }
+    true
+}
+
 pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

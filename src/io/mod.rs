@@ -13,6 +13,7 @@ pub mod render;
 #[cfg(feature = "logs")]
 pub mod tf;
 mod urdf;
+pub mod view;
 pub mod xacro;
 pub(crate) mod xml;
 

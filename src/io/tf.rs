@@ -38,8 +38,9 @@ use nalgebra::Matrix3;
 use crate::eval::{Chain, Data, Poses, forward_kinematics};
 use crate::io::bag::JointStates;
 use crate::io::output::{OutputError, write_file};
+use crate::model::chain::LinkId;
+use crate::model::joint::JointKind;
 use crate::orientation::EulerParameters;
-use crate::{JointKind, LinkId};
 
 /// The `ros2msg` definition of `tf2_msgs/msg/TFMessage` with its dependencies, in the layout
 /// rosbag2 writes (each dependency after a line of `=` and `MSG: name`).
@@ -182,7 +183,7 @@ pub enum TfError {
 /// # Errors
 /// [`TfError::Joint`] for a joint of the chain the log never names.
 pub fn rows_of_log(chain: &Chain, log: &JointStates) -> Result<(Vec<i64>, Vec<f64>), TfError> {
-    let names = crate::regression::variable_names(chain);
+    let names = chain.variable_names();
     let columns = names
         .iter()
         .map(|name| {
@@ -393,7 +394,7 @@ pub fn write_tf(
     // The fixed joints' transforms do not depend on q: evaluated once, at the neutral
     // configuration (limits not applied: it is no row of the log), stamped with the first row's
     // time (0 for an empty log, whose file has them still).
-    let mut data = Data::new(chain).with_limit_policy(crate::LimitPolicy::Ignore);
+    let mut data = Data::new(chain).with_limit_policy(crate::eval::LimitPolicy::Ignore);
     let neutral = chain.neutral();
     let poses = forward_kinematics(chain, &mut data, &neutral).map_err(|source| TfError::Row {
         row: 0,

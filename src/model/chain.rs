@@ -354,6 +354,18 @@ impl Model {
         self.variables.iter().map(|&(j, c)| (JointId(j), c))
     }
 
+    /// The name of each entry of `q`: its joint's, with `.component` for a joint of several
+    /// entries (`root.qw`, `slide.d`), as [`Model::variables`] lists them.
+    #[must_use]
+    pub fn variable_names(&self) -> Vec<String> {
+        self.variables()
+            .map(|(j, component)| {
+                let name = self.joint(j).name();
+                component.map_or_else(|| name.to_string(), |c| format!("{name}.{c}"))
+            })
+            .collect()
+    }
+
     /// For each entry of `q̇` (and `q̈`), the joint and component as [`Model::variables`] gives
     /// them (`vx`, `vy`, `vz`, `wx`, `wy`, `wz` of a floating joint).
     pub fn velocity_variables(

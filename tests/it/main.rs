@@ -47,4 +47,5 @@ mod stress;
 #[cfg(feature = "logs")]
 mod tf;
 mod urdf_reading;
+mod view;
 mod xacro;
