@@ -26,23 +26,17 @@ pub(super) fn fk_bag(
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let log = read_joint_states(path, &JointStateOptions::new(&args.topic))?;
-    let names = variable_names(chain);
-    let mut columns = Vec::with_capacity(names.len());
-    let mut missing = Vec::new();
-    for name in &names {
-        match log.names.iter().position(|n| n == name) {
-            Some(c) => columns.push(c),
-            None => missing.push(name.clone()),
+    let columns = match log.columns_of(&variable_names(chain)) {
+        Ok(columns) => columns,
+        Err(missing) => {
+            return Err(CliError::BagJoints {
+                path: path.to_path_buf(),
+                topic: args.topic.clone(),
+                missing,
+                present: log.names,
+            });
         }
-    }
-    if !missing.is_empty() {
-        return Err(CliError::BagJoints {
-            path: path.to_path_buf(),
-            topic: args.topic.clone(),
-            missing,
-            present: log.names,
-        });
-    }
+    };
     let (mut skipped, mut failed) = (0usize, 0usize);
     for (i, &time) in log.time.iter().enumerate() {
         let row = log.position_row(i);

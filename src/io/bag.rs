@@ -130,6 +130,29 @@ impl JointStates {
         self.time.is_empty()
     }
 
+    /// The log's column of each of `names` (the chain's entries of `q`, say), or the names the
+    /// log lacks.
+    ///
+    /// # Errors
+    /// The names of `names` that no message of the topic carries, in order.
+    pub fn columns_of(&self, names: &[String]) -> Result<Vec<usize>, Vec<String>> {
+        let found: Vec<Option<usize>> = names
+            .iter()
+            .map(|name| self.names.iter().position(|n| n == name))
+            .collect();
+        let missing: Vec<String> = names
+            .iter()
+            .zip(&found)
+            .filter(|(_, c)| c.is_none())
+            .map(|(n, _)| n.clone())
+            .collect();
+        if missing.is_empty() {
+            Ok(found.into_iter().flatten().collect())
+        } else {
+            Err(missing)
+        }
+    }
+
     /// Row `i`'s positions, one per name.
     ///
     /// # Panics

@@ -183,19 +183,12 @@ pub enum TfError {
 /// # Errors
 /// [`TfError::Joint`] for a joint of the chain the log never names.
 pub fn rows_of_log(chain: &Chain, log: &JointStates) -> Result<(Vec<i64>, Vec<f64>), TfError> {
-    let names = chain.variable_names();
-    let columns = names
-        .iter()
-        .map(|name| {
-            log.names
-                .iter()
-                .position(|n| n == name)
-                .ok_or_else(|| TfError::Joint {
-                    joint: name.clone(),
-                    present: log.names.clone(),
-                })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let columns = log
+        .columns_of(&chain.variable_names())
+        .map_err(|missing| TfError::Joint {
+            joint: missing.into_iter().next().unwrap_or_default(),
+            present: log.names.clone(),
+        })?;
     let (mut time, mut q) = (Vec::new(), Vec::new());
     for (i, &t) in log.time.iter().enumerate() {
         let row = log.position_row(i);
